@@ -1,0 +1,180 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_COMPUTE_GEOMETRIC_DETAILS_H
+#define CGAL_EXT_COMPUTE_GEOMETRIC_DETAILS_H
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/compute_point_set_laplacian.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+#include <CGAL/tags.h>
+
+#include <functional>
+#include <vector>
+
+namespace CGAL_ext {
+
+/// Default neighbour count of the Laplacian (DESIGN.md 2).
+constexpr unsigned int default_laplacian_neighbors = 10;
+/// Default neighbour count of jet normal estimation when a point set comes without normals.
+constexpr unsigned int default_normal_neighbors = 18;
+
+namespace internal {
+
+/// Stands for "no oriented-magnitude output".
+struct No_output_map {};
+
+template <typename Key, typename Value>
+void put(No_output_map, const Key&, const Value&) {}
+
+/// Detail vectors of a cloud, in the cloud's order, and the normals used for their orientation.
+/// Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool geometric_details(const Spatial_point_cloud& cloud, unsigned int k, const Detail_settings& settings,
+                       Progress& progress, Matrix_n3& details)
+{
+  Sparse_row_matrix K;
+  if(!build_laplacian<ConcurrencyTag>(cloud, k, settings.weights, progress, K)) return false;
+  details = apply_detail_filter<ConcurrencyTag>(K, settings.filter, cloud.positions);
+  return true;
+}
+
+template <typename ConcurrencyTag, typename PointRange, typename DetailMap, typename MagnitudeMap,
+          typename NamedParameters>
+bool compute_geometric_details_impl(const PointRange& points, unsigned int k, const Detail_settings& settings,
+                                    DetailMap detail_map, MagnitudeMap magnitude_map, const NamedParameters& np)
+{
+  using CGAL::parameters::choose_parameter;
+  using CGAL::parameters::get_parameter;
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  using Kernel = typename NP_helper::Geom_traits;
+  using Vector = typename Kernel::Vector_3;
+  using FT = typename Kernel::FT;
+  constexpr const char* who = "compute_geometric_details";
+
+  const auto point_map = NP_helper::get_const_point_map(points, np);
+  const std::function<bool(double)> callback =
+    choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
+
+  settings.validate();
+  const Spatial_point_cloud cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
+  check_neighbor_count(k, cloud.size(), who);
+
+  Progress progress(callback);
+  Matrix_n3 normals;
+  double laplacian_begin = 0;
+  if constexpr(NP_helper::has_normal_map()) {
+    normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
+  } else {
+    progress.stage(0.0, 0.5);
+    laplacian_begin = 0.5;
+    if(!estimate_oriented_normals<ConcurrencyTag>(cloud, default_normal_neighbors, progress, normals)) return false;
+  }
+  progress.stage(laplacian_begin, 1.0);
+  Matrix_n3 details;
+  if(!geometric_details<ConcurrencyTag>(cloud, k, settings, progress, details)) return false;
+
+  // Results exist only now: the caller's maps are untouched by a cancelled run.
+  std::vector<int> spatial_of(cloud.size());
+  for(std::size_t s = 0; s < cloud.size(); ++s) spatial_of[std::size_t(cloud.input_index[s])] = int(s);
+  std::size_t i = 0;
+  for(const auto& item : points) {
+    const Eigen::RowVector3d d = details.row(spatial_of[i]);
+    const double norm = d.norm();
+    put(detail_map, item, Vector(FT(d(0)), FT(d(1)), FT(d(2))));
+    put(magnitude_map, item, FT(d.dot(normals.row(spatial_of[i])) < 0 ? -norm : norm));
+    ++i;
+  }
+  return true;
+}
+
+} // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Computes the high-frequency geometric detail of every point, `delta = f(K) p`, where `K = I - W` is the
+  point-set Laplacian on the symmetrised k-nearest-neighbour graph and `f` the transfer function of
+  `settings.filter` (Miao et al. 2007, Sect. 3), and its oriented magnitude: `+||delta||` where
+  `delta . n >= 0`, `-||delta||` otherwise (positive on bumps that stand out along the normal).
+
+  Normals come from `normal_map` when given; otherwise they are estimated on an internal copy with
+  `CGAL::jet_estimate_normals` (18 neighbours) and oriented with `CGAL::mst_orient_normals`. Only the
+  oriented magnitude uses them.
+
+  \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
+          both give the same result.
+  \tparam PointRange a model of `ConstRange` whose value type is the key type of the property maps.
+  \tparam DetailMap a model of `WritablePropertyMap` with value type `geom_traits::Vector_3`.
+  \tparam MagnitudeMap a model of `WritablePropertyMap` with value type `geom_traits::FT`.
+
+  \param points the input points; not modified
+  \param k number of nearest neighbours, the point itself not counted; `1 <= k < points.size()`
+           (default in the program: `default_laplacian_neighbors` = 10)
+  \param settings transfer function and Laplacian weights (a `Detail_filter` converts implicitly)
+  \param detail_map receives the detail vector of each point
+  \param magnitude_map receives the oriented magnitude of each point (overloads without it exist)
+  \param np an optional sequence of named parameters among the ones listed below
+
+  \cgalNamedParamsBegin
+    \cgalParamNBegin{point_map}
+      \cgalParamDescription{a property map associating points to the elements of `points`}
+      \cgalParamDefault{`CGAL::Identity_property_map<geom_traits::Point_3>`}
+    \cgalParamNEnd
+    \cgalParamNBegin{normal_map}
+      \cgalParamDescription{a property map associating normals to the elements of `points`; zero or
+                            non-finite normals are an error}
+      \cgalParamDefault{normals are estimated}
+    \cgalParamNEnd
+    \cgalParamNBegin{callback}
+      \cgalParamDescription{`std::function<bool(double)>` called with the progress in [0, 1] from the calling
+                            thread; returning `false` cancels and leaves the output maps untouched}
+    \cgalParamNEnd
+    \cgalParamNBegin{geom_traits}
+      \cgalParamDescription{an instance of a geometric traits class}
+      \cgalParamDefault{a kernel deduced from the point type, using `CGAL::Kernel_traits`}
+    \cgalParamNEnd
+  \cgalNamedParamsEnd
+
+  \return false if the callback cancelled the computation, true otherwise.
+  \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range, `lambda <= 0`,
+          `mu <= lambda` (quadric and cubic orders) or a zero or non-finite normal.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename DetailMap,
+          typename MagnitudeMap, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+bool compute_geometric_details(const PointRange& points, unsigned int k, const Detail_settings& settings,
+                               DetailMap detail_map, MagnitudeMap magnitude_map,
+                               const NamedParameters& np = CGAL::parameters::default_values())
+{
+  return internal::compute_geometric_details_impl<ConcurrencyTag>(points, k, settings, detail_map, magnitude_map, np);
+}
+
+/// \cond SKIP_IN_MANUAL
+// Without the oriented magnitude.
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename DetailMap,
+          typename T, typename Tag, typename Base>
+bool compute_geometric_details(const PointRange& points, unsigned int k, const Detail_settings& settings,
+                               DetailMap detail_map, const CGAL::Named_function_parameters<T, Tag, Base>& np)
+{
+  return internal::compute_geometric_details_impl<ConcurrencyTag>(points, k, settings, detail_map,
+                                                                  internal::No_output_map(), np);
+}
+
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename DetailMap>
+bool compute_geometric_details(const PointRange& points, unsigned int k, const Detail_settings& settings,
+                               DetailMap detail_map)
+{
+  return internal::compute_geometric_details_impl<ConcurrencyTag>(points, k, settings, detail_map,
+                                                                  internal::No_output_map(),
+                                                                  CGAL::parameters::default_values());
+}
+/// \endcond
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_COMPUTE_GEOMETRIC_DETAILS_H

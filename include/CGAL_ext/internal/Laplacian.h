@@ -1,0 +1,109 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_LAPLACIAN_H
+#define CGAL_EXT_INTERNAL_LAPLACIAN_H
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <Eigen/SparseCore>
+
+#include <cmath>
+
+namespace CGAL_ext {
+namespace internal {
+
+using Sparse_row_matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+
+/// `K = I - W` on a neighbour graph whose rows are sorted and free of self-loops: each row holds the
+/// diagonal 1 and `-w_ij`, columns in increasing order. Assembled straight into compressed storage.
+template <typename ConcurrencyTag>
+Sparse_row_matrix laplacian_matrix(const Matrix_n3& positions, const Neighbor_graph& graph,
+                                   const Laplacian_weights& weights)
+{
+  const std::size_t n = graph.size();
+  Sparse_row_matrix K(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  K.resizeNonZeros(Eigen::Index(graph.indices.size() + n));
+  int* outer = K.outerIndexPtr();
+  int* inner = K.innerIndexPtr();
+  double* values = K.valuePtr();
+  for(std::size_t i = 0; i <= n; ++i) outer[i] = graph.offsets[i] + int(i);
+
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    const int d = graph.degree(i);
+    int* col = inner + outer[i];
+    double* val = values + outer[i];
+    // The diagonal goes where it keeps the row sorted.
+    const int* nb = graph.begin(i);
+    const int below = int(std::lower_bound(nb, graph.end(i), int(i)) - nb);
+    auto slot = [&](int m) { return m < below ? m : m + 1; };
+    col[below] = int(i);
+    val[below] = 1.0;
+    if(d == 0) return; // isolated point: its row is the identity, its detail is itself minus nothing
+    if(weights.weighting == Laplacian_weighting::uniform) {
+      for(int m = 0; m < d; ++m) { col[slot(m)] = nb[m]; val[slot(m)] = -1.0 / d; }
+      return;
+    }
+    double mean = 0;
+    for(int m = 0; m < d; ++m) mean += (positions.row(nb[m]) - positions.row(Eigen::Index(i))).norm();
+    mean /= d;
+    const double floor = mean * 1e-6;
+    double sum = 0;
+    for(int m = 0; m < d; ++m) {
+      const double dist = (positions.row(nb[m]) - positions.row(Eigen::Index(i))).norm();
+      const double w = mean > 0 ? std::pow(std::max(dist, floor), weights.distance_power) : 1.0;
+      col[slot(m)] = nb[m];
+      val[slot(m)] = w;
+      sum += w;
+    }
+    for(int m = 0; m < d; ++m) val[slot(m)] = -val[slot(m)] / sum;
+  });
+  return K;
+}
+
+/// `Y = K X` for an n x 3 right-hand side, row-parallel and deterministic.
+template <typename ConcurrencyTag>
+void multiply(const Sparse_row_matrix& K, const Matrix_n3& X, Matrix_n3& Y)
+{
+  Y.resize(K.rows(), 3);
+  const int* outer = K.outerIndexPtr();
+  const int* inner = K.innerIndexPtr();
+  const double* values = K.valuePtr();
+  for_range<ConcurrencyTag>(0, std::size_t(K.rows()), [&](std::size_t i) {
+    double x = 0, y = 0, z = 0;
+    for(int e = outer[i]; e < outer[i + 1]; ++e) {
+      const double w = values[e];
+      const double* row = X.data() + 3 * std::size_t(inner[e]);
+      x += w * row[0];
+      y += w * row[1];
+      z += w * row[2];
+    }
+    double* out = Y.data() + 3 * i;
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+  });
+}
+
+/// `f(K) X` for the filter's polynomial, by repeated sparse products (no matrix power is formed).
+template <typename ConcurrencyTag>
+Matrix_n3 apply_detail_filter(const Sparse_row_matrix& K, const Detail_filter& filter, const Matrix_n3& X)
+{
+  const Detail_filter::Coefficients c = filter.coefficients();
+  Matrix_n3 power, next, result;
+  multiply<ConcurrencyTag>(K, X, power); // K X
+  result = c.c1 * power;
+  for(int degree = 2; degree <= filter.degree(); ++degree) {
+    multiply<ConcurrencyTag>(K, power, next);
+    power.swap(next);
+    result += (degree == 2 ? c.c2 : c.c3) * power;
+  }
+  return result;
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_LAPLACIAN_H

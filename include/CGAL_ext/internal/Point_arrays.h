@@ -1,0 +1,127 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_POINT_ARRAYS_H
+#define CGAL_EXT_INTERNAL_POINT_ARRAYS_H
+
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/Spatial_sort_traits_adapter_3.h>
+#include <CGAL/hilbert_sort.h>
+#include <CGAL/property_map.h>
+
+#include <Eigen/Core>
+
+#include <climits>
+#include <cmath>
+#include <iterator>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// n x 3 array of doubles, one point or vector per row: the layout of every numerical core.
+using Matrix_n3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+/// The caller's points copied once into a contiguous array, kept in Hilbert (spatial) order so that
+/// neighbour queries and sparse products walk memory locally. `input_index[s]` is the position in the
+/// caller's range of the point stored at row `s`; results are written back through it, so the
+/// reordering never leaks.
+struct Spatial_point_cloud
+{
+  Matrix_n3 positions;
+  std::vector<int> input_index;
+
+  std::size_t size() const { return input_index.size(); }
+};
+
+inline std::string describe_point(std::size_t i, double x, double y, double z)
+{
+  std::ostringstream os;
+  os << "point #" << i << " (" << x << ", " << y << ", " << z << ")";
+  return os.str();
+}
+
+/// Copies and validates the points of `points` (in range order) and sorts them spatially.
+/// `who` names the calling algorithm in error messages.
+template <typename ConcurrencyTag, typename PointRange, typename PointMap>
+Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap point_map, const char* who)
+{
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  const std::size_t n = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
+  if(n == 0)
+    throw Invalid_input(std::string(who) + ": the point range is empty");
+  if(n >= std::size_t(INT_MAX))
+    throw Invalid_input(std::string(who) + ": too many points (at most 2^31 - 2 are supported)");
+
+  std::vector<SC_point> copy;
+  copy.reserve(n);
+  std::size_t i = 0;
+  for(const auto& item : points) {
+    const auto& p = get(point_map, item);
+    const double x = CGAL::to_double(p.x()), y = CGAL::to_double(p.y()), z = CGAL::to_double(p.z());
+    if(!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z)))
+      throw Invalid_input(std::string(who) + ": " + describe_point(i, x, y, z) +
+                          " has a non-finite coordinate; remove or repair such points first");
+    copy.emplace_back(x, y, z);
+    ++i;
+  }
+
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  using Traits = CGAL::Spatial_sort_traits_adapter_3<CGAL::Simple_cartesian<double>,
+                                                     typename CGAL::Pointer_property_map<SC_point>::type>;
+  // Median policy: deterministic (no random shuffle), balanced on uneven scans.
+  CGAL::hilbert_sort<ConcurrencyTag>(order.begin(), order.end(),
+                                     Traits(CGAL::make_property_map(copy)),
+                                     CGAL::Hilbert_sort_median_policy());
+  Spatial_point_cloud cloud;
+  cloud.input_index.assign(order.begin(), order.end());
+  cloud.positions.resize(Eigen::Index(n), 3);
+  for(std::size_t s = 0; s < n; ++s) {
+    const SC_point& p = copy[std::size_t(cloud.input_index[s])];
+    cloud.positions.row(Eigen::Index(s)) << p.x(), p.y(), p.z();
+  }
+  return cloud;
+}
+
+/// Reads the caller's normals in the cloud's order, normalised. Throws on a zero or non-finite normal.
+template <typename PointRange, typename NormalMap>
+Matrix_n3 gather_normals(const PointRange& points, NormalMap normal_map,
+                         const Spatial_point_cloud& cloud, const char* who)
+{
+  Matrix_n3 in_order(Eigen::Index(cloud.size()), 3);
+  std::size_t i = 0;
+  for(const auto& item : points) {
+    const auto& v = get(normal_map, item);
+    Eigen::RowVector3d n(CGAL::to_double(v.x()), CGAL::to_double(v.y()), CGAL::to_double(v.z()));
+    const double len = n.norm();
+    if(!(std::isfinite(len) && len > 0)) {
+      std::ostringstream os;
+      os << who << ": the normal of point #" << i << " is zero or not finite (" << n(0) << ", " << n(1) << ", "
+         << n(2) << "); repair the normals or let them be estimated by passing no normal_map";
+      throw Invalid_input(os.str());
+    }
+    in_order.row(Eigen::Index(i++)) = n / len;
+  }
+  Matrix_n3 sorted(in_order.rows(), 3);
+  for(std::size_t s = 0; s < cloud.size(); ++s)
+    sorted.row(Eigen::Index(s)) = in_order.row(cloud.input_index[s]);
+  return sorted;
+}
+
+/// Axis-aligned bounding-box diagonal of the rows of `m`.
+inline double bounding_box_diagonal(const Matrix_n3& m)
+{
+  if(m.rows() == 0) return 0;
+  return (m.colwise().maxCoeff() - m.colwise().minCoeff()).norm();
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_POINT_ARRAYS_H

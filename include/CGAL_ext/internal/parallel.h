@@ -1,0 +1,94 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_PARALLEL_H
+#define CGAL_EXT_INTERNAL_PARALLEL_H
+
+#include <CGAL/tags.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <type_traits>
+
+#ifdef CGAL_LINKED_WITH_TBB
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#endif
+
+namespace CGAL_ext {
+namespace internal {
+
+template <typename ConcurrencyTag>
+constexpr bool is_parallel()
+{
+#ifdef CGAL_LINKED_WITH_TBB
+  return std::is_convertible<ConcurrencyTag, CGAL::Parallel_tag>::value;
+#else
+  static_assert(!std::is_convertible<ConcurrencyTag, CGAL::Parallel_tag>::value,
+                "CGAL::Parallel_tag requested but TBB is not linked (define CGAL_LINKED_WITH_TBB)");
+  return false;
+#endif
+}
+
+/// Maps the progress of a sequence of stages onto the caller's `callback` in [0, 1] and remembers a
+/// cancellation. Only the calling thread invokes the callback (between chunks of parallel loops).
+class Progress
+{
+public:
+  explicit Progress(std::function<bool(double)> callback = {}) : m_callback(std::move(callback)) {}
+
+  /// The following reports cover [begin, end] of the whole run.
+  void stage(double begin, double end) { m_begin = begin; m_end = end; }
+
+  /// Reports a fraction of the current stage; returns false once the caller has cancelled.
+  bool report(double fraction)
+  {
+    if(m_cancelled) return false;
+    if(m_callback && !m_callback(m_begin + (m_end - m_begin) * std::clamp(fraction, 0.0, 1.0)))
+      m_cancelled = true;
+    return !m_cancelled;
+  }
+
+  bool cancelled() const { return m_cancelled; }
+
+private:
+  std::function<bool(double)> m_callback;
+  double m_begin = 0, m_end = 1;
+  std::atomic<bool> m_cancelled{false};
+};
+
+/// Runs `body(i)` for i in [begin, end), in parallel when ConcurrencyTag says so.
+template <typename ConcurrencyTag, typename Body>
+void for_range(std::size_t begin, std::size_t end, const Body& body)
+{
+#ifdef CGAL_LINKED_WITH_TBB
+  if constexpr(is_parallel<ConcurrencyTag>()) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for(std::size_t i = r.begin(); i != r.end(); ++i) body(i);
+                      });
+    return;
+  }
+#endif
+  for(std::size_t i = begin; i != end; ++i) body(i);
+}
+
+/// Runs `body(i)` for i in [0, n) in chunks, reporting progress after each chunk.
+/// Returns false (and stops early) when the caller cancels.
+template <typename ConcurrencyTag, typename Body>
+bool for_each_index(std::size_t n, Progress& progress, const Body& body)
+{
+  constexpr std::size_t chunk = std::size_t(1) << 16;
+  for(std::size_t b = 0; b < n; b += chunk) {
+    const std::size_t e = std::min(n, b + chunk);
+    for_range<ConcurrencyTag>(b, e, body);
+    if(!progress.report(double(e) / double(n))) return false;
+  }
+  return progress.report(1.0);
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_PARALLEL_H

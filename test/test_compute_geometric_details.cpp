@@ -1,0 +1,237 @@
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_point_set_laplacian.h>
+#include <CGAL_ext/generated_shapes.h>
+
+#include "test_support.h"
+
+#include <CGAL/Point_set_3.h>
+#include <CGAL/property_map.h>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <boost/iterator/counting_iterator.hpp>
+
+#include <cstdio>
+#include <utility>
+
+using namespace CGAL_ext;
+
+namespace {
+const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
+
+struct Details
+{
+  std::vector<Vector> vectors;
+  std::vector<double> magnitudes;
+};
+
+/// Index range + vector-backed maps: the plainest way to call a CGAL point-set algorithm.
+template <typename Tag = CGAL::Parallel_if_available_tag>
+Details details_of(const shapes::Oriented_sample<Kernel>& s, unsigned k, const Detail_settings& settings,
+                   bool with_normals = true)
+{
+  const std::vector<std::size_t> indices(boost::counting_iterator<std::size_t>(0),
+                                         boost::counting_iterator<std::size_t>(s.points.size()));
+  Details d;
+  d.vectors.resize(indices.size());
+  d.magnitudes.resize(indices.size());
+  const auto points = CGAL::make_property_map(s.points);
+  bool done;
+  if(with_normals)
+    done = compute_geometric_details<Tag>(indices, k, settings, CGAL::make_property_map(d.vectors),
+                                          CGAL::make_property_map(d.magnitudes),
+                                          CGAL::parameters::point_map(points).normal_map(CGAL::make_property_map(s.normals)));
+  else
+    done = compute_geometric_details<Tag>(indices, k, settings, CGAL::make_property_map(d.vectors),
+                                          CGAL::make_property_map(d.magnitudes), CGAL::parameters::point_map(points));
+  EXPECT_TRUE(done);
+  return d;
+}
+
+std::vector<double> normal_components(const Details& d, const shapes::Oriented_sample<Kernel>& s)
+{
+  std::vector<double> out;
+  for(std::size_t i = 0; i < d.vectors.size(); ++i) out.push_back(d.vectors[i] * s.normals[i]);
+  return out;
+}
+
+/// An output map for a range of pairs, indexed by the element's address in the vector.
+template <typename Element, typename Value>
+struct Address_indexed_map
+{
+  using key_type = Element;
+  using value_type = Value;
+  using reference = Value&;
+  using category = boost::writable_property_map_tag;
+  const Element* base;
+  std::vector<Value>* values;
+  friend void put(const Address_indexed_map& m, const Element& e, const Value& v) { (*m.values)[std::size_t(&e - m.base)] = v; }
+};
+} // namespace
+
+TEST(Geometric_details, interior_details_vanish_on_a_regular_grid_with_its_full_8_neighbourhood)
+{
+  const auto grid = shapes::bumpy_grid<Kernel>(21, 21, 0.1);
+  for(Laplacian_weights w : {Laplacian_weights{}, Laplacian_weights{Laplacian_weighting::distance_power, -1.0}})
+    for(Detail_order o : all_orders) {
+      const Details d = details_of(grid, 8, Detail_settings({o, 0.8, 1.6}, w));
+      // Border points have fewer than 8 neighbours within sqrt(2), so their k nearest reach 2 rings inwards and
+      // symmetrisation adds those links to rings 1-2; f(K) then spreads that degree() rings further.
+      const int margin = 2 + Detail_filter({o}).degree();
+      for(int j = margin; j < 21 - margin; ++j)
+        for(int i = margin; i < 21 - margin; ++i)
+          EXPECT_LT(std::sqrt(d.vectors[std::size_t(j * 21 + i)].squared_length()), 1e-12)
+            << Detail_filter::order_name(o) << " at (" << i << ", " << j << ")";
+    }
+}
+
+TEST(Geometric_details, filter_by_sparse_products_equals_the_explicit_matrix_polynomial)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(400, 1.0, 0.05, 4.0);
+  Eigen::SparseMatrix<double, Eigen::RowMajor, int> K;
+  ASSERT_TRUE(compute_point_set_laplacian(s.points, 10, {}, K));
+  const Eigen::MatrixXd Kd(K);
+  Eigen::MatrixXd P(s.points.size(), 3);
+  for(std::size_t i = 0; i < s.points.size(); ++i) P.row(Eigen::Index(i)) << s.points[i].x(), s.points[i].y(), s.points[i].z();
+  for(Detail_order o : all_orders) {
+    const double l = 0.3, m = 1.8;
+    Eigen::MatrixXd F; // the paper's polynomials, written out
+    if(o == Detail_order::linear) F = Kd / l;
+    if(o == Detail_order::quadric) F = (1 / l + 1 / m) * Kd - (1 / (l * m)) * Kd * Kd;
+    if(o == Detail_order::cubic) F = (1 / (l * l) + 1 / (l * m) + 1 / (m * m)) * Kd * Kd - (1 / (l * m)) * (1 / l + 1 / m) * Kd * Kd * Kd;
+    const Eigen::MatrixXd expected = F * P;
+    const Details d = details_of(s, 10, Detail_filter{o, l, m});
+    double err = 0;
+    for(std::size_t i = 0; i < d.vectors.size(); ++i)
+      err = std::max(err, (Eigen::RowVector3d(d.vectors[i].x(), d.vectors[i].y(), d.vectors[i].z()) - expected.row(Eigen::Index(i))).norm());
+    EXPECT_LT(err, 1e-12 * expected.norm()) << Detail_filter::order_name(o);
+  }
+}
+
+TEST(Geometric_details, normal_component_follows_the_bump_height_on_a_bumpy_sphere)
+{
+  // Bumps of a wavelength of about 4 average spacings: delta . n must follow the known height field.
+  for(Detail_order o : all_orders) {
+    const auto s = shapes::bumpy_sphere<Kernel>(20000, 1.0, 0.01, 4.0);
+    const double r = pearson(normal_components(details_of(s, 10, Detail_filter{o, 0.8, 1.6}), s), s.bump_height);
+    EXPECT_GE(r, 0.85) << Detail_filter::order_name(o);
+    std::printf("[ details ] %-7s wavelength 4 spacings: Pearson(delta.n, height) = %.3f\n", Detail_filter::order_name(o), r);
+  }
+  // How the correlation falls as the bumps get smoother (reported, not asserted).
+  for(double wavelength : {6.0, 8.0, 12.0, 16.0, 32.0}) {
+    const auto s = shapes::bumpy_sphere<Kernel>(20000, 1.0, 0.01, wavelength);
+    std::printf("[ details ] wavelength %4.0f spacings: Pearson linear %.3f quadric %.3f cubic %.3f\n", wavelength,
+                pearson(normal_components(details_of(s, 10, Detail_filter{Detail_order::linear, 0.8, 1.6}), s), s.bump_height),
+                pearson(normal_components(details_of(s, 10, Detail_filter{Detail_order::quadric, 0.8, 1.6}), s), s.bump_height),
+                pearson(normal_components(details_of(s, 10, Detail_filter{Detail_order::cubic, 0.8, 1.6}), s), s.bump_height));
+  }
+}
+
+TEST(Geometric_details, oriented_magnitude_is_signed_by_the_normal)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.0, 4.0); // a plain sphere: p - mean(neighbours) points outwards
+  const Details d = details_of(s, 10, Detail_filter{Detail_order::linear, 0.8, 1.6});
+  auto flipped = s;
+  for(Vector& n : flipped.normals) n = -n;
+  const Details f = details_of(flipped, 10, Detail_filter{Detail_order::linear, 0.8, 1.6});
+  for(std::size_t i = 0; i < d.vectors.size(); ++i) {
+    EXPECT_NEAR(std::abs(d.magnitudes[i]), std::sqrt(d.vectors[i].squared_length()), 1e-15);
+    EXPECT_GT(d.magnitudes[i], 0.0);
+    EXPECT_EQ(f.magnitudes[i], -d.magnitudes[i]);
+  }
+}
+
+TEST(Geometric_details, estimated_normals_give_outward_magnitudes_when_none_are_given)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(5000, 1.0, 0.02, 4.0);
+  const Details given = details_of(s, 10, Detail_filter{}), estimated = details_of(s, 10, Detail_filter{}, false);
+  // Where the detail is nearly tangent its sign is decided by tiny normal differences: compare the rest.
+  std::size_t compared = 0, same_sign = 0;
+  for(std::size_t i = 0; i < given.magnitudes.size(); ++i) {
+    EXPECT_EQ(given.vectors[i], estimated.vectors[i]); // the vectors do not depend on the normals
+    const double normal_part = std::abs(given.vectors[i] * s.normals[i]) / std::abs(given.magnitudes[i]);
+    if(normal_part < 0.3) continue;
+    ++compared;
+    same_sign += (given.magnitudes[i] > 0) == (estimated.magnitudes[i] > 0);
+  }
+  EXPECT_GE(compared, given.magnitudes.size() / 2);
+  EXPECT_GE(double(same_sign) / double(compared), 0.99);
+}
+
+TEST(Geometric_details, same_result_through_Point_set_3_pairs_and_sequential_or_parallel)
+{
+  const auto s = shapes::bumpy_tube<Kernel>(6000);
+  const Detail_settings settings(Detail_filter{Detail_order::cubic, 0.3, 1.8});
+  const Details reference = details_of<CGAL::Sequential_tag>(s, 12, settings);
+  const Details parallel = details_of<CGAL::Parallel_if_available_tag>(s, 12, settings);
+
+  CGAL::Point_set_3<Point> ps;
+  ps.add_normal_map();
+  for(std::size_t i = 0; i < s.points.size(); ++i) ps.insert(s.points[i], s.normals[i]);
+  auto detail = ps.add_property_map<Vector>("detail", CGAL::NULL_VECTOR).first;
+  auto magnitude = ps.add_property_map<double>("detail_magnitude", 0).first;
+  ASSERT_TRUE(compute_geometric_details(ps, 12, settings, detail, magnitude, ps.parameters()));
+
+  using Pwn = std::pair<Point, Vector>;
+  std::vector<Pwn> pwn;
+  for(std::size_t i = 0; i < s.points.size(); ++i) pwn.emplace_back(s.points[i], s.normals[i]);
+  Details pairs;
+  pairs.vectors.resize(pwn.size());
+  pairs.magnitudes.resize(pwn.size());
+  ASSERT_TRUE(compute_geometric_details(pwn, 12, settings, Address_indexed_map<Pwn, Vector>{pwn.data(), &pairs.vectors},
+                                        Address_indexed_map<Pwn, double>{pwn.data(), &pairs.magnitudes},
+                                        CGAL::parameters::point_map(CGAL::First_of_pair_property_map<Pwn>())
+                                          .normal_map(CGAL::Second_of_pair_property_map<Pwn>())));
+  std::size_t i = 0;
+  for(auto it = ps.begin(); it != ps.end(); ++it, ++i) {
+    ASSERT_EQ(reference.vectors[i], parallel.vectors[i]);
+    ASSERT_EQ(reference.magnitudes[i], parallel.magnitudes[i]);
+    ASSERT_EQ(reference.vectors[i], detail[*it]);
+    ASSERT_EQ(reference.magnitudes[i], magnitude[*it]);
+    ASSERT_EQ(reference.vectors[i], pairs.vectors[i]);
+    ASSERT_EQ(reference.magnitudes[i], pairs.magnitudes[i]);
+  }
+}
+
+TEST(Geometric_details, cancelled_run_leaves_the_outputs_untouched)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(150000);
+  std::vector<std::size_t> indices(s.points.size());
+  std::iota(indices.begin(), indices.end(), 0);
+  std::vector<Vector> out(indices.size(), Vector(7, 7, 7));
+  int calls = 0;
+  const bool done = compute_geometric_details(indices, 10, Detail_filter{}, CGAL::make_property_map(out),
+                                              CGAL::parameters::point_map(CGAL::make_property_map(s.points))
+                                                .normal_map(CGAL::make_property_map(s.normals))
+                                                .callback([&](double) { return ++calls < 2; }));
+  EXPECT_FALSE(done);
+  for(const Vector& v : out) ASSERT_EQ(v, Vector(7, 7, 7));
+}
+
+TEST(Geometric_details, bad_input_throws_a_clear_error)
+{
+  std::vector<Point> pts = shapes::bumpy_sphere<Kernel>(50).points;
+  std::vector<Vector> out(pts.size());
+  std::vector<std::size_t> idx(pts.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(pts));
+  auto expect_error = [&](auto&& call, const char* needle) {
+    try {
+      call();
+      ADD_FAILURE() << "no error for " << needle;
+    } catch(const Invalid_input& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  const std::vector<std::size_t> none;
+  expect_error([&] { compute_geometric_details(none, 10, Detail_filter{}, CGAL::make_property_map(out), np); }, "empty");
+  expect_error([&] { compute_geometric_details(idx, 50, Detail_filter{}, CGAL::make_property_map(out), np); }, "k = 50");
+  expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{Detail_order::quadric, 0.0, 1.6}, CGAL::make_property_map(out), np); }, "lambda");
+  expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{Detail_order::cubic, 0.8, 0.8}, CGAL::make_property_map(out), np); }, "mu");
+  std::vector<Vector> normals(pts.size(), Vector(0, 0, 1));
+  normals[3] = CGAL::NULL_VECTOR;
+  expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{}, CGAL::make_property_map(out), np.normal_map(CGAL::make_property_map(normals))); }, "normal of point #3");
+  pts[9] = Point(std::numeric_limits<double>::infinity(), 0, 0);
+  expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{}, CGAL::make_property_map(out), np); }, "point #9");
+}
