@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <random>
 #include <vector>
 
 namespace CGAL_ext {
@@ -107,21 +108,23 @@ Oriented_sample<Kernel> bumpy_grid(std::size_t nx, std::size_t ny, double spacin
 /*!
   A tentacle like the paper's Fig. 8: a tube bent along a quarter circle of radius `bend_radius`, its own radius
   tapering from `tube_radius` to a third of it, with bumps of relative height `amplitude` in a
-  `rings` x `around` pattern; open at both ends. Sampled on a regular grid of the arc-length and angle
-  parameters with about `n` points.
+  `rings` x `around` pattern; open at both ends. About `n` samples on rings one spacing apart, each sample
+  moved along the surface by up to `jitter` spacings (fixed seed), as a scanner's samples are: a perfect
+  lattice makes the k nearest neighbours break ties arbitrarily.
 */
 template <typename Kernel>
 Oriented_sample<Kernel> bumpy_tube(std::size_t n, double bend_radius = 1.0, double tube_radius = 0.25,
-                                   double amplitude = 0.08, int rings = 14, int around = 8)
+                                   double amplitude = 0.06, int rings = 40, int around = 14, double jitter = 0.3)
 {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> uniform(-jitter, jitter);
   Oriented_sample<Kernel> out;
   const double length = bend_radius * detail::pi / 2;
-  const double mean_circumference = 2 * detail::pi * tube_radius * (2.0 / 3.0);
-  // Grid of nu x nv with nu / nv matching length / circumference.
-  const std::size_t nv = std::size_t(std::max(8.0, std::sqrt(double(n) * mean_circumference / length)));
-  const std::size_t nu = std::max<std::size_t>(8, n / nv);
-  out.average_spacing = std::sqrt(length * mean_circumference / double(nu * nv));
   auto radius_at = [&](double t) { return tube_radius * (1 - (2.0 / 3.0) * t); };
+  // Isotropic sampling: rings one spacing apart, each with as many samples as its circumference holds.
+  const double area = length * 2 * detail::pi * tube_radius * (2.0 / 3.0);
+  const double h = std::sqrt(area / double(n));
+  out.average_spacing = h;
   auto bump = [&](double t, double a) { return amplitude * std::sin(rings * detail::pi * t) * std::sin(around * a); };
   auto frame = [&](double t, double a, Eigen::Vector3d& centre, Eigen::Vector3d& radial) {
     const double phi = t * detail::pi / 2;
@@ -134,13 +137,18 @@ Oriented_sample<Kernel> bumpy_tube(std::size_t n, double bend_radius = 1.0, doub
     frame(t, a, c, r);
     return Eigen::Vector3d(c + radius_at(t) * (1 + bump(t, a)) * r);
   };
-  for(std::size_t i = 0; i < nu; ++i)
+  const std::size_t nu = std::max<std::size_t>(8, std::size_t(length / h));
+  for(std::size_t i = 0; i < nu; ++i) {
+    const double t_ring = (double(i) + 0.5) / double(nu);
+    const std::size_t nv = std::max<std::size_t>(8, std::size_t(std::lround(2 * detail::pi * radius_at(t_ring) / h)));
     for(std::size_t j = 0; j < nv; ++j) {
-      const double t = (double(i) + 0.5) / double(nu), a = 2 * detail::pi * (double(j) + 0.5 * double(i % 2)) / double(nv);
+      const double t = std::clamp(t_ring + uniform(rng) / double(nu), 0.0, 1.0);
+      const double a = 2 * detail::pi * (double(j) + 0.5 * double(i % 2) + uniform(rng)) / double(nv);
       Eigen::Vector3d c, r;
       frame(t, a, c, r);
       out.push_back(f(t, a), detail::parametric_normal(f, t, a, 1e-5, 1e-5, r), radius_at(t) * bump(t, a));
     }
+  }
   return out;
 }
 

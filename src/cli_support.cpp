@@ -1,0 +1,111 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "cli_support.h"
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <system_error>
+#include <unistd.h>
+
+namespace point_detail {
+namespace fs = std::filesystem;
+
+namespace {
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted = true; }
+} // namespace
+
+void install_interrupt_handler() { std::signal(SIGINT, on_sigint); }
+bool interrupted() { return g_interrupted; }
+
+std::function<bool(double)> Progress_printer::stage(const std::string& name)
+{
+  finish();
+  m_name = name;
+  m_last = -1;
+  return [this](double fraction) {
+    if(interrupted()) return false;
+    if(m_quiet) return true;
+    const bool tty = isatty(fileno(stderr));
+    const int percent = int(fraction * 100.0 + 1e-9);
+    if(tty) {
+      if(percent == m_last) return true;
+      const int width = 30, filled = percent * width / 100;
+      std::fprintf(stderr, "\r%-12s [%s%s] %3d%%", m_name.c_str(), std::string(std::size_t(filled), '#').c_str(),
+                   std::string(std::size_t(width - filled), ' ').c_str(), percent);
+      m_open = true;
+    } else {
+      if(percent / 10 == m_last / 10 && m_last >= 0) return true;
+      std::fprintf(stderr, "%s: %d%%\n", m_name.c_str(), percent / 10 * 10);
+    }
+    m_last = percent;
+    return true;
+  };
+}
+
+void Progress_printer::finish()
+{
+  if(m_open) std::fputc('\n', stderr);
+  m_open = false;
+}
+
+Output_files::~Output_files()
+{
+  std::error_code ec;
+  for(const auto& f : m_files) fs::remove(f.first, ec); // left over only when commit() was not reached
+}
+
+fs::path Output_files::add(const fs::path& destination)
+{
+  std::error_code ec;
+  for(const fs::path& input : m_inputs)
+    if(fs::exists(destination, ec) && fs::equivalent(input, destination, ec))
+      throw Cli_error("output " + destination.string() + " is the input file; choose another output name");
+  for(const auto& f : m_files)
+    if(fs::weakly_canonical(f.second, ec) == fs::weakly_canonical(destination, ec))
+      throw Cli_error("output " + destination.string() + " is named twice");
+  const fs::path dir = destination.has_parent_path() ? destination.parent_path() : fs::path(".");
+  if(!fs::is_directory(dir, ec))
+    throw Cli_error("cannot write " + destination.string() + ": directory " + dir.string() + " does not exist");
+  if(fs::is_directory(destination, ec))
+    throw Cli_error("cannot write " + destination.string() + ": it is a directory");
+  std::random_device rd;
+  const fs::path temporary = dir / ("." + destination.filename().string() + "." + std::to_string(rd()) + ".tmp");
+  m_files.emplace_back(temporary, destination);
+  return temporary;
+}
+
+void Output_files::commit()
+{
+  if(interrupted()) throw Cancelled();
+  for(const auto& f : m_files) {
+    std::error_code ec;
+    fs::rename(f.first, f.second, ec);
+    if(ec) throw Cli_error("cannot write " + f.second.string() + ": " + ec.message());
+  }
+  m_files.clear();
+}
+
+void write_file(const fs::path& path, const std::string& bytes)
+{
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  out.close();
+  if(!out) throw Cli_error("cannot write " + path.string() + " (disk full or not writable?)");
+}
+
+Report::Report(std::string command)
+{
+  m_json["command"] = std::move(command);
+  m_json["timings_s"] = nlohmann::json::object();
+}
+
+void Report::record(const std::string& stage, std::chrono::steady_clock::time_point start)
+{
+  m_json["timings_s"][stage] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace point_detail

@@ -1,0 +1,99 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+// What every subcommand of point-detail shares: errors, whole-or-nothing output files, progress and Ctrl-C, reports.
+#ifndef POINT_DETAIL_CLI_SUPPORT_H
+#define POINT_DETAIL_CLI_SUPPORT_H
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace point_detail {
+
+/// A problem the user can fix (bad file, bad option): printed as one line, exit code 1.
+struct Cli_error : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/// Thrown when Ctrl-C or a callback stopped the run: nothing is written, exit code 130.
+struct Cancelled : std::runtime_error
+{
+  Cancelled() : std::runtime_error("cancelled") {}
+};
+
+/// Installs the SIGINT handler that turns Ctrl-C into a cancellation at the next progress report.
+void install_interrupt_handler();
+bool interrupted();
+
+/// Progress of one named stage on stderr: a bar on a terminal, a line per 10 % otherwise.
+class Progress_printer
+{
+public:
+  explicit Progress_printer(bool quiet) : m_quiet(quiet) {}
+  /// A callback for the library (`false` after Ctrl-C).
+  std::function<bool(double)> stage(const std::string& name);
+  void finish();
+
+private:
+  bool m_quiet;
+  std::string m_name;
+  int m_last = -1;
+  bool m_open = false;
+};
+
+/// Collects output files as temporaries next to their destinations and renames them all at the end, so a
+/// failed or cancelled run leaves no partial file. Refuses to write over any input.
+class Output_files
+{
+public:
+  explicit Output_files(std::vector<std::filesystem::path> inputs) : m_inputs(std::move(inputs)) {}
+  ~Output_files();
+  /// Checks `destination` (not an input, directory exists) and returns the temporary path to write to.
+  std::filesystem::path add(const std::filesystem::path& destination);
+  /// Renames every temporary to its destination.
+  void commit();
+
+private:
+  std::vector<std::filesystem::path> m_inputs;
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> m_files; // temporary, destination
+};
+
+/// Writes `bytes` to `path` or throws Cli_error.
+void write_file(const std::filesystem::path& path, const std::string& bytes);
+
+/// Stage timings and counts for `--report`.
+class Report
+{
+public:
+  explicit Report(std::string command);
+  /// Times `body` under `stage` and returns its result.
+  template <typename F>
+  auto time(const std::string& stage, F&& body)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    if constexpr(std::is_void_v<decltype(body())>) {
+      body();
+      record(stage, start);
+    } else {
+      auto result = body();
+      record(stage, start);
+      return result;
+    }
+  }
+  nlohmann::json& data() { return m_json; }
+  std::string dump() const { return m_json.dump(2) + "\n"; }
+
+private:
+  void record(const std::string& stage, std::chrono::steady_clock::time_point start);
+  nlohmann::json m_json;
+};
+
+} // namespace point_detail
+
+#endif

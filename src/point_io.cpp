@@ -1,0 +1,167 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "point_io.h"
+
+#include "cli_support.h"
+
+#include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Point_set_3.h>
+#include <CGAL/Point_set_3/IO.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace point_detail {
+namespace fs = std::filesystem;
+
+const std::vector<double>* Point_cloud::scalar(const std::string& name) const
+{
+  for(const auto& s : scalars)
+    if(s.first == name) return &s.second;
+  return nullptr;
+}
+
+void Point_cloud::set_scalar(const std::string& name, std::vector<double> values)
+{
+  for(auto& s : scalars)
+    if(s.first == name) { s.second = std::move(values); return; }
+  scalars.emplace_back(name, std::move(values));
+}
+
+namespace {
+
+std::string lower_extension(const fs::path& path)
+{
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext.empty() ? ext : ext.substr(1);
+}
+
+/// Area-weighted vertex normals of the faces of a mesh file, or nothing if it has no usable faces.
+std::vector<Vector> mesh_vertex_normals(const fs::path& path, std::size_t expected_vertices)
+{
+  std::vector<Point> vertices;
+  std::vector<std::vector<std::size_t>> faces;
+  if(!CGAL::IO::read_polygon_soup(path.string(), vertices, faces, CGAL::parameters::verbose(false)) || faces.empty() ||
+     vertices.size() != expected_vertices)
+    return {};
+  std::vector<Vector> normals(vertices.size(), CGAL::NULL_VECTOR);
+  for(const auto& face : faces) {
+    if(face.size() < 3) continue;
+    for(std::size_t v : face)
+      if(v >= vertices.size()) return {};
+    // Sum of fan cross products = twice the (vector) area of the polygon.
+    Vector area = CGAL::NULL_VECTOR;
+    for(std::size_t i = 1; i + 1 < face.size(); ++i)
+      area = area + CGAL::cross_product(vertices[face[i]] - vertices[face[0]], vertices[face[i + 1]] - vertices[face[0]]);
+    for(std::size_t v : face) normals[v] = normals[v] + area;
+  }
+  for(Vector& n : normals) {
+    const double len = std::sqrt(n.squared_length());
+    if(!(len > 0) || !std::isfinite(len)) return {}; // a vertex on no face: the caller estimates instead
+    n = n / len;
+  }
+  return normals;
+}
+
+template <typename T>
+bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, Point_cloud& cloud)
+{
+  auto found = ps.template property_map<T>(name);
+  if(!found.second) return false;
+  std::vector<double> values;
+  values.reserve(ps.size());
+  for(auto it = ps.begin(); it != ps.end(); ++it) values.push_back(double(found.first[*it]));
+  cloud.scalars.emplace_back(name, std::move(values));
+  return true;
+}
+
+} // namespace
+
+Point_cloud read_point_cloud(const fs::path& path)
+{
+  std::error_code ec;
+  if(!fs::exists(path, ec)) throw Cli_error("cannot read " + path.string() + ": no such file");
+  if(!fs::is_regular_file(path, ec)) throw Cli_error("cannot read " + path.string() + ": not a regular file");
+  if(!std::ifstream(path, std::ios::binary)) throw Cli_error("cannot read " + path.string() + ": permission denied");
+  const std::string ext = lower_extension(path);
+  if(ext != "ply" && ext != "off" && ext != "xyz" && ext != "pwn")
+    throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
+
+  CGAL::Point_set_3<Point, Vector> ps;
+  bool ok = false;
+  try {
+    ok = CGAL::IO::read_point_set(path.string(), ps);
+  } catch(const std::exception& e) {
+    throw Cli_error("cannot read " + path.string() + ": malformed " + ext + " file (" + e.what() + ")");
+  }
+  if(!ok) throw Cli_error("cannot read " + path.string() + ": malformed or truncated " + ext + " file");
+  if(ps.number_of_points() == 0) throw Cli_error(path.string() + " contains no points");
+
+  Point_cloud cloud;
+  cloud.points.assign(ps.points().begin(), ps.points().end());
+  if(ps.has_normal_map()) {
+    cloud.normals.assign(ps.normals().begin(), ps.normals().end());
+    cloud.normal_source = "file";
+  } else if(ext == "off" || ext == "ply") {
+    cloud.normals = mesh_vertex_normals(path, cloud.points.size());
+    if(!cloud.normals.empty()) cloud.normal_source = "mesh";
+  }
+
+  auto red = ps.property_map<unsigned char>("red"), green = ps.property_map<unsigned char>("green"),
+       blue = ps.property_map<unsigned char>("blue");
+  if(red.second && green.second && blue.second)
+    for(auto it = ps.begin(); it != ps.end(); ++it) cloud.colors.push_back({red.first[*it], green.first[*it], blue.first[*it]});
+  for(const std::string& name : ps.properties()) {
+    if(name == "index" || name == "point" || name == "normal" || name == "red" || name == "green" || name == "blue")
+      continue;
+    copy_scalar<double>(ps, name, cloud) || copy_scalar<float>(ps, name, cloud) || copy_scalar<int>(ps, name, cloud) ||
+      copy_scalar<unsigned int>(ps, name, cloud) || copy_scalar<unsigned char>(ps, name, cloud) ||
+      copy_scalar<signed char>(ps, name, cloud) || copy_scalar<short>(ps, name, cloud) ||
+      copy_scalar<unsigned short>(ps, name, cloud);
+  }
+  return cloud;
+}
+
+namespace {
+template <typename T>
+void append(std::string& out, T value)
+{
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T)); // the machine is little-endian (x86_64, aarch64)
+  out.append(bytes, sizeof(T));
+}
+} // namespace
+
+std::string ply_bytes(const Point_cloud& cloud)
+{
+  const std::size_t n = cloud.points.size();
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\ncomment written by point-detail\nelement vertex " << n << "\n"
+         << "property double x\nproperty double y\nproperty double z\n";
+  if(!cloud.normals.empty()) header << "property double nx\nproperty double ny\nproperty double nz\n";
+  for(const auto& s : cloud.scalars) header << "property double " << s.first << "\n";
+  if(!cloud.colors.empty()) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  header << "end_header\n";
+  std::string out = header.str();
+  out.reserve(out.size() + n * (24 + (cloud.normals.empty() ? 0 : 24) + 8 * cloud.scalars.size() + 3));
+  for(std::size_t i = 0; i < n; ++i) {
+    append(out, cloud.points[i].x());
+    append(out, cloud.points[i].y());
+    append(out, cloud.points[i].z());
+    if(!cloud.normals.empty()) {
+      append(out, cloud.normals[i].x());
+      append(out, cloud.normals[i].y());
+      append(out, cloud.normals[i].z());
+    }
+    for(const auto& s : cloud.scalars) append(out, s.second[i]);
+    if(!cloud.colors.empty()) out.append(reinterpret_cast<const char*>(cloud.colors[i].data()), 3);
+  }
+  return out;
+}
+
+} // namespace point_detail

@@ -1,0 +1,204 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "render.h"
+
+#include "cli_support.h"
+
+#include <CGAL/Orthogonal_k_neighbor_search.h>
+#include <CGAL/Search_traits_3.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STBI_WRITE_NO_STDIO
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace point_detail {
+
+View parse_view(const std::string& text)
+{
+  if(text == "front") return {0, 0};
+  if(text == "back") return {180, 0};
+  if(text == "left") return {-90, 0};
+  if(text == "right") return {90, 0};
+  if(text == "top") return {0, 89.9};
+  if(text == "bottom") return {0, -89.9};
+  if(text == "iso") return {35, 25};
+  std::istringstream in(text);
+  View v;
+  char comma = 0;
+  if(in >> v.azimuth >> comma >> v.elevation && comma == ',' && in.peek() == EOF && std::isfinite(v.azimuth) &&
+     std::abs(v.elevation) <= 90)
+    return v;
+  throw Cli_error("bad view '" + text + "': use front, back, left, right, top, bottom, iso or AZIMUTH,ELEVATION in degrees");
+}
+
+namespace {
+
+Color lerp(const Color& a, const Color& b, double t)
+{
+  Color c;
+  for(int i = 0; i < 3; ++i) c[std::size_t(i)] = (unsigned char)std::lround(a[std::size_t(i)] + (b[std::size_t(i)] - a[std::size_t(i)]) * t);
+  return c;
+}
+
+/// Piecewise-linear colour map over evenly spaced control colours, t in [0, 1].
+template <std::size_t N>
+Color sample(const Color (&stops)[N], double t)
+{
+  t = std::clamp(t, 0.0, 1.0) * double(N - 1);
+  const std::size_t i = std::min<std::size_t>(std::size_t(t), N - 2);
+  return lerp(stops[i], stops[i + 1], t - double(i));
+}
+
+// Moreland's cool-warm diverging map and a viridis-like sequential map, a few stops each.
+const Color cool_warm[] = {{59, 76, 192}, {124, 159, 249}, {192, 212, 245}, {242, 240, 238}, {242, 203, 183}, {238, 133, 105}, {180, 4, 38}};
+const Color viridis[] = {{68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
+
+double percentile(std::vector<double> v, double q)
+{
+  if(v.empty()) return 0;
+  const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size() - 1)));
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
+  return v[k];
+}
+
+} // namespace
+
+std::vector<Color> diverging_colors(const std::vector<double>& values, double* range)
+{
+  std::vector<double> magnitude(values.size());
+  std::transform(values.begin(), values.end(), magnitude.begin(), [](double v) { return std::abs(v); });
+  double r = percentile(std::move(magnitude), 0.98);
+  if(!(r > 0)) r = 1;
+  if(range) *range = r;
+  std::vector<Color> out;
+  out.reserve(values.size());
+  for(double v : values) out.push_back(sample(cool_warm, 0.5 + 0.5 * v / r));
+  return out;
+}
+
+std::vector<Color> sequential_colors(const std::vector<double>& values)
+{
+  const double lo = percentile(values, 0.02), hi = percentile(values, 0.98);
+  std::vector<Color> out;
+  out.reserve(values.size());
+  for(double v : values) out.push_back(sample(viridis, hi > lo ? (v - lo) / (hi - lo) : 0.5));
+  return out;
+}
+
+namespace {
+/// Median distance to the nearest other sample, over at most 2,000 evenly strided samples.
+double typical_spacing(const std::vector<Point>& points)
+{
+  using SC = CGAL::Simple_cartesian<double>;
+  using Search = CGAL::Orthogonal_k_neighbor_search<CGAL::Search_traits_3<SC>>;
+  std::vector<SC::Point_3> pts;
+  pts.reserve(points.size());
+  for(const Point& p : points) pts.emplace_back(p.x(), p.y(), p.z());
+  Search::Tree tree(pts.begin(), pts.end());
+  std::vector<double> d;
+  const std::size_t stride = std::max<std::size_t>(1, pts.size() / 2000);
+  for(std::size_t i = 0; i < pts.size(); i += stride) {
+    Search search(tree, pts[i], 2);
+    for(auto it = search.begin(); it != search.end(); ++it)
+      if(it->second > 0) { d.push_back(std::sqrt(it->second)); break; }
+  }
+  return d.empty() ? 0 : percentile(std::move(d), 0.5);
+}
+} // namespace
+
+std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals,
+                       const std::vector<Color>& colors, const Render_settings& settings)
+{
+  if(points.empty()) throw Cli_error("nothing to render: no points");
+  constexpr int ss = 2; // supersampling factor
+  const int W = settings.width * ss, H = settings.height * ss;
+  const double pi = 3.14159265358979323846;
+  const double az = settings.view.azimuth * pi / 180, el = settings.view.elevation * pi / 180;
+  const Eigen::Vector3d to_camera(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+  const Eigen::Vector3d right = Eigen::Vector3d::UnitY().cross(to_camera).normalized();
+  const Eigen::Vector3d up = to_camera.cross(right);
+  const Eigen::Vector3d light = (to_camera + 0.35 * right + 0.45 * up).normalized();
+
+  const std::size_t n = points.size();
+  std::vector<Eigen::Vector3d> view(n); // (u, v, depth towards the camera)
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
+  for(std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(points[i].x(), points[i].y(), points[i].z());
+    view[i] = Eigen::Vector3d(p.dot(right), p.dot(up), p.dot(to_camera));
+    lo = lo.cwiseMin(view[i]);
+    hi = hi.cwiseMax(view[i]);
+  }
+  const double extent_u = std::max(hi.x() - lo.x(), 1e-300), extent_v = std::max(hi.y() - lo.y(), 1e-300);
+  const double scale = 0.9 * std::min(W / extent_u, H / extent_v);
+  const double spacing = typical_spacing(points);
+  const double radius = std::clamp(1.2 * settings.splat_scale * spacing * scale, 1.0 * ss, 20.0 * ss);
+
+  std::vector<float> depth(std::size_t(W) * std::size_t(H), -std::numeric_limits<float>::infinity());
+  std::vector<Color> image(depth.size(), Color{255, 255, 255});
+  const int r = int(std::ceil(radius));
+  for(std::size_t i = 0; i < n; ++i) {
+    const double x = W / 2.0 + (view[i].x() - 0.5 * (lo.x() + hi.x())) * scale;
+    const double y = H / 2.0 - (view[i].y() - 0.5 * (lo.y() + hi.y())) * scale;
+    double shade = 0.85;
+    if(!normals.empty()) {
+      const Eigen::Vector3d nv(normals[i].x(), normals[i].y(), normals[i].z());
+      shade = 0.25 + 0.75 * std::abs(nv.normalized().dot(light)); // two-sided: unoriented normals shade too
+    }
+    const Color base = colors.empty() ? Color{200, 200, 200} : colors[i];
+    Color c;
+    for(int k = 0; k < 3; ++k) c[std::size_t(k)] = (unsigned char)std::lround(std::min(255.0, base[std::size_t(k)] * shade));
+    const float z = float(view[i].z());
+    const int cx = int(std::lround(x)), cy = int(std::lround(y));
+    for(int dy = -r; dy <= r; ++dy)
+      for(int dx = -r; dx <= r; ++dx) {
+        const int px = cx + dx, py = cy + dy;
+        if(px < 0 || py < 0 || px >= W || py >= H || (px - x) * (px - x) + (py - y) * (py - y) > radius * radius) continue;
+        const std::size_t at = std::size_t(py) * std::size_t(W) + std::size_t(px);
+        if(z > depth[at]) { depth[at] = z; image[at] = c; }
+      }
+  }
+  // Outline where depth jumps by more than a few spacings: separates overlapping parts.
+  const float jump = float(4 * std::max(spacing, 1e-12));
+  std::vector<Color> outlined = image;
+  for(int y = 1; y + 1 < H; ++y)
+    for(int x = 1; x + 1 < W; ++x) {
+      const std::size_t at = std::size_t(y) * std::size_t(W) + std::size_t(x);
+      if(!std::isfinite(depth[at])) continue;
+      // A background pixel counts as silhouette only when the background extends beyond it (not a gap).
+      auto background = [&](std::size_t p) {
+        return !std::isfinite(depth[p]) && (p < 2 * std::size_t(W) || p + 2 * std::size_t(W) >= depth.size() ||
+                                            !std::isfinite(depth[p + (p - at)]));
+      };
+      for(std::size_t nb : {at - 1, at + 1, at - std::size_t(W), at + std::size_t(W)})
+        if(background(nb) || depth[nb] - depth[at] > jump) {
+          for(auto& ch : outlined[at]) ch = (unsigned char)(ch * 0.45);
+          break;
+        }
+    }
+  // Box-filter the supersampled image down.
+  std::vector<unsigned char> rgb(std::size_t(settings.width) * std::size_t(settings.height) * 3);
+  for(int y = 0; y < settings.height; ++y)
+    for(int x = 0; x < settings.width; ++x)
+      for(int k = 0; k < 3; ++k) {
+        int sum = 0;
+        for(int sy = 0; sy < ss; ++sy)
+          for(int sx = 0; sx < ss; ++sx)
+            sum += outlined[std::size_t(y * ss + sy) * std::size_t(W) + std::size_t(x * ss + sx)][std::size_t(k)];
+        rgb[(std::size_t(y) * std::size_t(settings.width) + std::size_t(x)) * 3 + std::size_t(k)] = (unsigned char)(sum / (ss * ss));
+      }
+  std::string png;
+  stbi_write_png_to_func([](void* context, void* data, int size) { static_cast<std::string*>(context)->append(static_cast<char*>(data), std::size_t(size)); },
+                         &png, settings.width, settings.height, 3, rgb.data(), settings.width * 3);
+  if(png.empty()) throw Cli_error("PNG encoding failed");
+  return png;
+}
+
+} // namespace point_detail

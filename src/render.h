@@ -1,0 +1,43 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Headless pictures of point sets: splats with a depth buffer and normal shading, written as PNG.
+#ifndef POINT_DETAIL_RENDER_H
+#define POINT_DETAIL_RENDER_H
+
+#include "point_io.h"
+
+#include <string>
+#include <vector>
+
+namespace point_detail {
+
+/// Camera direction: azimuth about the y axis and elevation towards +y, in degrees.
+/// (0, 0) looks at the model from +z with +y up ("front").
+struct View
+{
+  double azimuth = 0, elevation = 0;
+};
+
+/// Parses front|back|left|right|top|bottom|iso or "AZIMUTH,ELEVATION". Throws Cli_error.
+View parse_view(const std::string& text);
+
+struct Render_settings
+{
+  int width = 800, height = 800;
+  View view;
+  double splat_scale = 1.0; ///< scales the splat radius (1.2 median nearest-neighbour spacings)
+};
+
+/// Diverging blue-white-red colours, symmetric about zero, saturating at the 98th percentile of |value|.
+/// `range` receives that saturation value.
+std::vector<Color> diverging_colors(const std::vector<double>& values, double* range = nullptr);
+/// Sequential colours from the 2nd to the 98th percentile.
+std::vector<Color> sequential_colors(const std::vector<double>& values);
+
+/// A PNG picture of the points. `normals` and `colors` may be empty (then: flat shading, grey).
+std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals,
+                       const std::vector<Color>& colors, const Render_settings& settings);
+
+} // namespace point_detail
+
+#endif

@@ -1,0 +1,200 @@
+// The point-detail program, run as a user would: outputs, errors, and files it must not touch.
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/generated_shapes.h>
+
+#include "test_support.h"
+
+#include <CGAL/Point_set_3.h>
+#include <CGAL/Point_set_3/IO.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Program_run
+{
+  int exit_code;
+  std::string output; // stdout and stderr
+};
+
+Program_run run(const std::string& arguments)
+{
+  const std::string command = std::string(POINT_DETAIL_EXE) + " --quiet " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  Program_run r{-1, {}};
+  char buffer[4096];
+  while(std::size_t got = std::fread(buffer, 1, sizeof buffer, pipe)) r.output.append(buffer, got);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class Cli : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    dir = fs::temp_directory_path() / ("point_detail_cli_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+
+  /// A bumpy sphere as an ASCII PLY with normals.
+  std::string write_sphere_ply(const std::string& name, std::size_t n = 3000)
+  {
+    const auto s = CGAL_ext::shapes::bumpy_sphere<Kernel>(n, 1.0, 0.02);
+    std::ofstream out(path(name));
+    out << "ply\nformat ascii 1.0\nelement vertex " << n
+        << "\nproperty double x\nproperty double y\nproperty double z\nproperty double nx\nproperty double ny\nproperty double nz\nend_header\n";
+    out.precision(17);
+    for(std::size_t i = 0; i < n; ++i) out << s.points[i] << " " << s.normals[i] << "\n";
+    return path(name);
+  }
+
+  static std::string contents(const std::string& file)
+  {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+  /// No output or temporary file was left in the directory besides `keep`.
+  void expect_only(std::initializer_list<std::string> keep) const
+  {
+    for(const auto& entry : fs::directory_iterator(dir)) {
+      const std::string name = entry.path().filename().string();
+      EXPECT_NE(std::find(keep.begin(), keep.end(), name), keep.end()) << "unexpected file " << name;
+    }
+  }
+
+  fs::path dir;
+};
+
+} // namespace
+
+TEST_F(Cli, details_writes_every_property_in_input_order_and_matches_the_library)
+{
+  const std::string in = write_sphere_ply("in.ply");
+  const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --order cubic --lambda 0.3 --mu 1.8 -k 12 --png " +
+                    path("out.png") + " --report " + path("report.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  CGAL::Point_set_3<Point> input, output;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), output));
+  ASSERT_EQ(output.size(), input.size());
+  ASSERT_TRUE(output.has_normal_map());
+  auto dx = output.property_map<double>("detail_x").first, dy = output.property_map<double>("detail_y").first,
+       dz = output.property_map<double>("detail_z").first, mag = output.property_map<double>("detail_magnitude").first;
+  ASSERT_TRUE(output.property_map<double>("detail_magnitude").second);
+  ASSERT_TRUE(output.property_map<unsigned char>("red").second);
+
+  std::vector<Vector> details(input.size());
+  std::vector<double> magnitude(input.size());
+  ASSERT_TRUE(CGAL_ext::compute_geometric_details(input, 12, CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.3, 1.8},
+                                                  CGAL::make_property_map(details), CGAL::make_property_map(magnitude),
+                                                  input.parameters()));
+  (void)details;
+  std::size_t i = 0;
+  for(auto it = output.begin(); it != output.end(); ++it, ++i) {
+    ASSERT_EQ(output.point(*it), input.point(*(input.begin() + std::ptrdiff_t(i)))) << "order changed at " << i;
+    EXPECT_DOUBLE_EQ(mag[*it], magnitude[i]);
+    EXPECT_NEAR(std::sqrt(dx[*it] * dx[*it] + dy[*it] * dy[*it] + dz[*it] * dz[*it]), std::abs(magnitude[i]), 1e-12);
+  }
+  EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
+  const auto report = nlohmann::json::parse(contents(path("report.json")));
+  EXPECT_EQ(report["points"], 3000);
+  EXPECT_EQ(report["order"], "cubic");
+  EXPECT_EQ(report["normal_source"], "file");
+  for(const char* stage : {"read", "details", "write", "base_surface", "render"})
+    EXPECT_GE(report["timings_s"][stage].get<double>(), 0.0) << stage;
+  expect_only({"in.ply", "out.ply", "out.png", "report.json"});
+}
+
+TEST_F(Cli, normals_come_from_mesh_faces_or_are_estimated)
+{
+  // A bumpy grid as an OFF mesh with upward faces: its vertex normals are the faces' (about +z).
+  const auto g = CGAL_ext::shapes::bumpy_grid<Kernel>(30, 30, 0.1, 0.01, 1.0);
+  {
+    std::ofstream off(path("grid.off"));
+    off << "OFF\n" << g.points.size() << " " << 2 * 29 * 29 << " 0\n";
+    off.precision(17);
+    for(const Point& p : g.points) off << p << "\n";
+    for(int j = 0; j < 29; ++j)
+      for(int i = 0; i < 29; ++i) {
+        const int a = j * 30 + i;
+        off << "3 " << a << " " << a + 1 << " " << a + 31 << "\n3 " << a << " " << a + 31 << " " << a + 30 << "\n";
+      }
+    std::ofstream xyz(path("grid.xyz"));
+    xyz.precision(17);
+    for(const Point& p : g.points) xyz << p << "\n";
+  }
+  for(const auto& [file, source] : {std::pair{"grid.off", "mesh"}, std::pair{"grid.xyz", "estimated"}}) {
+    const Program_run r = run(std::string("details -i ") + path(file) + " -o " + path("out.ply") + " --report " + path("r.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["normal_source"], source);
+    CGAL::Point_set_3<Point> out;
+    ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), out));
+    ASSERT_TRUE(out.has_normal_map());
+    std::size_t up = 0;
+    for(auto it = out.begin(); it != out.end(); ++it) up += out.normal(*it).z() > 0.9;
+    if(std::string(source) == "mesh") EXPECT_EQ(up, out.size());
+    else EXPECT_TRUE(up == out.size() || up == 0) << up; // one consistent orientation
+  }
+}
+
+TEST_F(Cli, bad_files_and_options_give_one_clear_line_and_no_output)
+{
+  const std::string in = write_sphere_ply("in.ply", 200);
+  const std::string before = contents(in);
+  { std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 10\nproperty double x\nend_header\n1\n2\n"; }
+  { std::ofstream(path("empty.xyz")); }
+  struct Case { std::string args, needle; };
+  const Case cases[] = {
+    {"details -i " + path("missing.ply") + " -o " + path("o.ply"), "no such file"},
+    {"details -i " + path("garbage.ply") + " -o " + path("o.ply"), "garbage.ply"},
+    {"details -i " + path("empty.xyz") + " -o " + path("o.ply"), "no points"},
+    {"details -i " + in + " -o " + in, "is the input file"},
+    {"details -i " + in + " -o " + path("no/such/dir/o.ply"), "does not exist"},
+    {"details -i " + in + " -o " + path("o.ply") + " --lambda 0", "lambda"},
+    {"details -i " + in + " -o " + path("o.ply") + " --order cubic --lambda 0.8 --mu 0.5", "mu"},
+    {"details -i " + in + " -o " + path("o.ply") + " -k 200", "-k 200"},
+    {"details -i " + in + " -o " + path("o.ply") + " --png " + path("o.png") + " --view sideways", "bad view"},
+    {"render -i " + in + " -o " + path("o.png") + " --color-by curvature", "no property 'curvature'"},
+  };
+  for(const Case& c : cases) {
+    const Program_run r = run(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.output.find(c.needle), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_LE(std::count(r.output.begin(), r.output.end(), '\n'), 2) << r.output;
+  }
+  EXPECT_EQ(contents(in), before); // the input is never touched
+  expect_only({"in.ply", "garbage.ply", "empty.xyz"});
+}
+
+TEST_F(Cli, render_and_demo_write_pictures)
+{
+  const std::string in = write_sphere_ply("in.ply", 2000);
+  ASSERT_EQ(run("details -i " + in + " -o " + path("d.ply")).exit_code, 0);
+  for(const char* by : {"", "--color-by detail_magnitude", "--color-by rgb", "--color-by none"}) {
+    const Program_run r = run("render -i " + path("d.ply") + " -o " + path("d.png") + " --view 30,20 --width 200 --height 150 " + by);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(contents(path("d.png")).substr(1, 3), "PNG");
+  }
+  const Program_run demo = run("demo --points 3000 -o " + path("demo"));
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png"})
+    EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
+}
