@@ -94,8 +94,9 @@ std::vector<Color> sequential_colors(const std::vector<double>& values)
 }
 
 namespace {
-/// Median distance to the nearest other sample, over at most 2,000 evenly strided samples.
-double typical_spacing(const std::vector<Point>& points)
+/// Distance of every sample to its 4th nearest other sample: a splat of that radius closes the gaps of
+/// sparse regions without bloating dense ones.
+std::vector<double> local_spacing(const std::vector<Point>& points)
 {
   using SC = CGAL::Simple_cartesian<double>;
   using Search = CGAL::Orthogonal_k_neighbor_search<CGAL::Search_traits_3<SC>>;
@@ -103,14 +104,12 @@ double typical_spacing(const std::vector<Point>& points)
   pts.reserve(points.size());
   for(const Point& p : points) pts.emplace_back(p.x(), p.y(), p.z());
   Search::Tree tree(pts.begin(), pts.end());
-  std::vector<double> d;
-  const std::size_t stride = std::max<std::size_t>(1, pts.size() / 2000);
-  for(std::size_t i = 0; i < pts.size(); i += stride) {
-    Search search(tree, pts[i], 2);
-    for(auto it = search.begin(); it != search.end(); ++it)
-      if(it->second > 0) { d.push_back(std::sqrt(it->second)); break; }
+  std::vector<double> d(pts.size(), 0.0);
+  for(std::size_t i = 0; i < pts.size(); ++i) {
+    Search search(tree, pts[i], unsigned(std::min<std::size_t>(5, pts.size())));
+    for(auto it = search.begin(); it != search.end(); ++it) d[i] = std::sqrt(it->second); // sorted: the last is the farthest
   }
-  return d.empty() ? 0 : percentile(std::move(d), 0.5);
+  return d;
 }
 } // namespace
 
@@ -138,13 +137,14 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
   }
   const double extent_u = std::max(hi.x() - lo.x(), 1e-300), extent_v = std::max(hi.y() - lo.y(), 1e-300);
   const double scale = 0.9 * std::min(W / extent_u, H / extent_v);
-  const double spacing = typical_spacing(points);
-  const double radius = std::clamp(1.2 * settings.splat_scale * spacing * scale, 1.0 * ss, 20.0 * ss);
+  const std::vector<double> spacings = local_spacing(points);
+  const double spacing = percentile(spacings, 0.5);
 
   std::vector<float> depth(std::size_t(W) * std::size_t(H), -std::numeric_limits<float>::infinity());
   std::vector<Color> image(depth.size(), Color{255, 255, 255});
-  const int r = int(std::ceil(radius));
   for(std::size_t i = 0; i < n; ++i) {
+    const double radius = std::clamp(0.75 * settings.splat_scale * spacings[i] * scale, 1.0 * ss, 20.0 * ss);
+    const int r = int(std::ceil(radius));
     const double x = W / 2.0 + (view[i].x() - 0.5 * (lo.x() + hi.x())) * scale;
     const double y = H / 2.0 - (view[i].y() - 0.5 * (lo.y() + hi.y())) * scale;
     double shade = 0.85;

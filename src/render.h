@@ -25,7 +25,7 @@ struct Render_settings
 {
   int width = 800, height = 800;
   View view;
-  double splat_scale = 1.0; ///< scales the splat radius (1.2 median nearest-neighbour spacings)
+  double splat_scale = 1.0; ///< scales the splat radius (0.75 times the distance to the 4th nearest sample)
 };
 
 /// Diverging blue-white-red colours, symmetric about zero, saturating at the 98th percentile of |value|.

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Sets everything up (Debian packages), builds, and runs every test with ctest.
+# Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j"$(nproc)"
+ctest --test-dir "$build" -j"$(nproc)" --output-on-failure
