@@ -194,6 +194,23 @@ TEST(Geometric_details, same_result_through_Point_set_3_pairs_and_sequential_or_
   }
 }
 
+TEST(Geometric_details, Point_set_3_without_normals_gets_estimated_normals_even_through_its_parameters)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.0, 4.0);
+  CGAL::Point_set_3<Point> ps; // no normal property
+  for(const Point& p : s.points) ps.insert(p);
+  auto magnitude = ps.add_property_map<double>("m", 0).first;
+  std::vector<Vector> unused(ps.size());
+  for(int variant = 0; variant < 2; ++variant) {
+    auto detail = ps.add_property_map<Vector>("d", CGAL::NULL_VECTOR).first;
+    if(variant == 0) ASSERT_TRUE(compute_geometric_details(ps, 10, Detail_filter{}, detail, magnitude, ps.parameters()));
+    else ASSERT_TRUE(compute_geometric_details(ps, 10, Detail_filter{}, detail, magnitude));
+    std::size_t outward = 0;
+    for(auto it = ps.begin(); it != ps.end(); ++it) outward += magnitude[*it] > 0;
+    EXPECT_EQ(outward, ps.size()) << "variant " << variant; // estimated normals are oriented outwards
+  }
+}
+
 TEST(Geometric_details, cancelled_run_leaves_the_outputs_untouched)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(150000);

@@ -69,7 +69,7 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   Progress progress(callback);
   Matrix_n3 normals;
   double laplacian_begin = 0;
-  if constexpr(NP_helper::has_normal_map()) {
+  if(has_given_normals<NamedParameters>(points)) {
     normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
   } else {
     progress.stage(0.0, 0.5);
@@ -103,7 +103,8 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   `settings.filter` (Miao et al. 2007, Sect. 3), and its oriented magnitude: `+||delta||` where
   `delta . n >= 0`, `-||delta||` otherwise (positive on bumps that stand out along the normal).
 
-  Normals come from `normal_map` when given; otherwise they are estimated on an internal copy with
+  Normals come from `normal_map` when given (for a `CGAL::Point_set_3`, from its normal property when it has
+  one, so `point_set.parameters()` works with and without normals); otherwise they are estimated on an internal copy with
   `CGAL::jet_estimate_normals` (18 neighbours) and oriented with `CGAL::mst_orient_normals`. Only the
   oriented magnitude uses them.
 

@@ -6,6 +6,8 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/parallel.h>
 
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/Point_set_3.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Spatial_sort_traits_adapter_3.h>
 #include <CGAL/hilbert_sort.h>
@@ -19,6 +21,7 @@
 #include <numeric>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace CGAL_ext {
@@ -112,6 +115,31 @@ Matrix_n3 gather_normals(const PointRange& points, NormalMap normal_map,
   for(std::size_t s = 0; s < cloud.size(); ++s)
     sorted.row(Eigen::Index(s)) = in_order.row(cloud.input_index[s]);
   return sorted;
+}
+
+template <typename Range>
+struct Point_set_3_range : std::false_type {};
+template <typename P, typename V>
+struct Point_set_3_range<CGAL::Point_set_3<P, V>> : std::true_type
+{
+  using Own_normal_map = typename CGAL::Point_set_3<P, V>::Vector_map;
+};
+
+/// Whether the caller supplied normals. CGAL 5.5 treats every `Point_set_3` as having a normal map (and its
+/// `parameters()` names one) even when the set has no normal property, so for such a range it is decided at
+/// run time: its own normal map counts only if the property exists.
+template <typename NamedParameters, typename PointRange>
+bool has_given_normals(const PointRange& points)
+{
+  using Named = typename CGAL::internal_np::Get_param<typename NamedParameters::base, CGAL::internal_np::normal_t>::type;
+  constexpr bool named = !std::is_same<Named, CGAL::internal_np::Param_not_found>::value;
+  if constexpr(Point_set_3_range<PointRange>::value) {
+    if constexpr(named && !std::is_same<Named, typename Point_set_3_range<PointRange>::Own_normal_map>::value)
+      return true;
+    return points.has_normal_map();
+  } else {
+    return named;
+  }
 }
 
 /// Axis-aligned bounding-box diagonal of the rows of `m`.

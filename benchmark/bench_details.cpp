@@ -1,0 +1,192 @@
+// Benchmark of the details pipeline (issue: package foundation): kNN graph, symmetrisation, Laplacian assembly,
+// detail filters of the three orders, and the whole compute_geometric_details call (normals given), on CGAL's
+// scans and on a 1M-point sampling of the armadillo surface, sequentially and with the machine's threads.
+// Usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]
+// Writes DIR/details_results.csv and DIR/details_results.md (medians, min-max, peak memory).
+#include "point_io.h"
+
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_point_set_laplacian.h>
+
+#include <CGAL/IO/polygon_soup_io.h>
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <random>
+#include <sstream>
+#include <sys/resource.h>
+#include <sys/utsname.h>
+
+namespace fs = std::filesystem;
+using namespace point_detail;
+namespace ci = CGAL_ext::internal;
+
+namespace {
+
+struct Stats { double median, min, max; };
+
+Stats measure(int reps, const std::function<void()>& body)
+{
+  std::vector<double> t;
+  for(int r = 0; r < reps; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    body();
+    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::sort(t.begin(), t.end());
+  return {t[t.size() / 2], t.front(), t.back()};
+}
+
+double peak_rss_mib()
+{
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+/// `n` points sampled uniformly on the surface of a triangle mesh, with the normals of their faces.
+Point_cloud sample_mesh(const fs::path& off, std::size_t n)
+{
+  std::vector<Point> v;
+  std::vector<std::vector<std::size_t>> faces;
+  if(!CGAL::IO::read_polygon_soup(off.string(), v, faces)) throw std::runtime_error("cannot read " + off.string());
+  std::vector<double> cumulative;
+  double total = 0;
+  for(const auto& f : faces) {
+    total += std::sqrt(CGAL::squared_area(v[f[0]], v[f[1]], v[f[2]]));
+    cumulative.push_back(total);
+  }
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> u01(0, 1);
+  Point_cloud cloud;
+  for(std::size_t i = 0; i < n; ++i) {
+    const std::size_t f = std::size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u01(rng) * total) - cumulative.begin());
+    const auto& face = faces[std::min(f, faces.size() - 1)];
+    double a = u01(rng), b = u01(rng);
+    if(a + b > 1) { a = 1 - a; b = 1 - b; }
+    const Point &p = v[face[0]], &q = v[face[1]], &r = v[face[2]];
+    cloud.points.push_back(p + a * (q - p) + b * (r - p));
+    Vector normal = CGAL::cross_product(q - p, r - p);
+    cloud.normals.push_back(normal / std::sqrt(normal.squared_length()));
+  }
+  return cloud;
+}
+
+struct Row
+{
+  std::string model, stage, mode;
+  std::size_t points;
+  int threads;
+  Stats time;
+  double peak_mib;
+};
+
+template <typename Tag>
+void bench_model(const std::string& name, const Point_cloud& cloud, int reps, int threads, std::vector<Row>& rows)
+{
+  const char* mode = std::is_same<Tag, CGAL::Sequential_tag>::value ? "sequential" : "parallel";
+  const unsigned k = CGAL_ext::default_laplacian_neighbors;
+  const std::size_t n = cloud.points.size();
+  auto add = [&](const std::string& stage, Stats s) {
+    rows.push_back({name, stage, mode, n, threads, s, peak_rss_mib()});
+    std::printf("%-18s %-9s %-10s %8zu pts  %8.4f s (min %.4f, max %.4f)  peak %.0f MiB\n", name.c_str(), stage.c_str(), mode,
+                n, s.median, s.min, s.max, rows.back().peak_mib);
+  };
+  ci::Spatial_point_cloud sc;
+  add("sort", measure(reps, [&] { sc = ci::make_spatial_point_cloud<Tag>(cloud.points, CGAL::Identity_property_map<const Point>(), "bench"); }));
+  ci::Progress progress;
+  ci::Neighbor_graph directed, graph;
+  add("knn", measure(reps, [&] { directed = ci::k_nearest_neighbor_graph<Tag>(sc.positions, k, progress); }));
+  add("symmetrise", measure(reps, [&] { graph = ci::symmetrize<Tag>(directed); }));
+  ci::Sparse_row_matrix K;
+  add("laplacian", measure(reps, [&] { K = ci::laplacian_matrix<Tag>(sc.positions, graph, {}); }));
+  for(auto order : {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric, CGAL_ext::Detail_order::cubic}) {
+    ci::Matrix_n3 d;
+    add(std::string("filter_") + CGAL_ext::Detail_filter::order_name(order),
+        measure(reps, [&] { d = ci::apply_detail_filter<Tag>(K, CGAL_ext::Detail_filter{order, 0.8, 1.6}, sc.positions); }));
+  }
+  std::vector<Vector> details(n);
+  std::vector<double> magnitude(n);
+  std::vector<std::size_t> idx(n);
+  std::iota(idx.begin(), idx.end(), std::size_t(0));
+  add("pipeline", measure(reps, [&] {
+        CGAL_ext::compute_geometric_details<Tag>(idx, k, CGAL_ext::Detail_filter{}, CGAL::make_property_map(details),
+                                                 CGAL::make_property_map(magnitude),
+                                                 CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+                                                   .normal_map(CGAL::make_property_map(cloud.normals)));
+      }));
+}
+
+std::string machine_facts(int threads)
+{
+  std::ostringstream os;
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line, model = "unknown";
+  while(std::getline(cpu, line))
+    if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
+  os << "- CPU: " << model << "; threads used in parallel runs: " << threads << "\n"
+     << "- compiler: GCC " << __VERSION__ << ", -O3 -DNDEBUG (Release)\n"
+     << "- CGAL " << CGAL_VERSION_STR << ", Eigen " << EIGEN_WORLD_VERSION << "." << EIGEN_MAJOR_VERSION << "." << EIGEN_MINOR_VERSION
+     << ", oneTBB " << TBB_VERSION_MAJOR << "." << TBB_VERSION_MINOR << "\n"
+     << "- k = 10 (symmetrised), uniform weights, lambda 0.8, mu 1.6; pipeline = compute_geometric_details with normals given\n";
+  return os.str();
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  bool quick = false;
+  fs::path data = "data", out = "benchmark";
+  int reps = 5;
+  for(int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if(a == "--quick") quick = true;
+    else if(a == "--data" && i + 1 < argc) data = argv[++i];
+    else if(a == "--out" && i + 1 < argc) out = argv[++i];
+    else if(a == "--reps" && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
+    else { std::fprintf(stderr, "usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]\n"); return 2; }
+  }
+  if(quick) reps = 1;
+  const int threads = tbb::info::default_concurrency();
+  std::vector<Row> rows;
+  std::vector<std::pair<std::string, Point_cloud>> models;
+  for(const char* m : {"armadillo", "bunny00", "refined_elephant"}) {
+    const fs::path file = data / "meshes" / (std::string(m) + ".off");
+    if(!fs::exists(file)) { std::fprintf(stderr, "skipping %s (run scripts/fetch_data.sh)\n", file.string().c_str()); continue; }
+    models.emplace_back(m, read_point_cloud(file));
+    if(quick) break;
+  }
+  if(fs::exists(data / "meshes/armadillo.off"))
+    models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000));
+  for(const auto& [name, cloud] : models) {
+    bench_model<CGAL::Sequential_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, 1, rows);
+    bench_model<CGAL::Parallel_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, threads, rows);
+  }
+  fs::create_directories(out);
+  std::ofstream csv(out / "details_results.csv");
+  csv << "model,points,stage,mode,threads,median_s,min_s,max_s,peak_rss_mib\n";
+  for(const Row& r : rows)
+    csv << r.model << "," << r.points << "," << r.stage << "," << r.mode << "," << r.threads << "," << r.time.median << ","
+        << r.time.min << "," << r.time.max << "," << r.peak_mib << "\n";
+  std::ofstream md(out / "details_results.md");
+  md << "# Details pipeline benchmark\n\n" << machine_facts(threads) << "- repetitions: " << reps
+     << " (3 at 1M points); peak memory is the process's peak RSS when the stage finished\n\n"
+     << "| model | points | stage | mode | median s | min-max s | peak MiB |\n|---|---:|---|---|---:|---|---:|\n";
+  char buf[256];
+  for(const Row& r : rows) {
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %s (%d) | %.4f | %.4f-%.4f | %.0f |\n", r.model.c_str(), r.points,
+                  r.stage.c_str(), r.mode.c_str(), r.threads, r.time.median, r.time.min, r.time.max, r.peak_mib);
+    md << buf;
+  }
+  std::printf("wrote %s and %s\n", (out / "details_results.md").string().c_str(), (out / "details_results.csv").string().c_str());
+  return 0;
+}
