@@ -167,6 +167,10 @@ int main(int argc, char** argv)
   }
   if(fs::exists(data / "meshes/armadillo.off"))
     models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000));
+  if(models.empty()) {
+    std::fprintf(stderr, "bench_details: no model found under %s/meshes (run scripts/fetch_data.sh)\n", data.string().c_str());
+    return 1;
+  }
   for(const auto& [name, cloud] : models) {
     bench_model<CGAL::Sequential_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, 1, rows);
     bench_model<CGAL::Parallel_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, threads, rows);
