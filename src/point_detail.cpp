@@ -188,15 +188,19 @@ struct Details_command
 
 struct Render_command
 {
-  std::string input, output, color_by, view = "front";
+  std::string input, output, color_by, report, view = "front";
   Render_settings render;
 
   void run(const Common_options&)
   {
     Output_files outputs({input});
     const fs::path png_tmp = outputs.add(output);
+    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
     render.view = parse_view(view);
-    const Point_cloud cloud = read_point_cloud(input);
+    Report rep("render");
+    rep.data()["input"] = input;
+    const Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    rep.data()["points"] = cloud.points.size();
     std::vector<Color> colors;
     std::string by = color_by;
     if(by.empty()) by = !cloud.colors.empty() ? "rgb" : cloud.scalar("detail_magnitude") ? "detail_magnitude" : "none";
@@ -213,14 +217,16 @@ struct Render_command
       const auto [lo, hi] = std::minmax_element(values->begin(), values->end());
       colors = (*lo < 0 && *hi > 0) ? diverging_colors(*values) : sequential_colors(*values);
     }
-    write_file(png_tmp, render_png(cloud.points, cloud.normals, colors, render));
+    rep.data()["color_by"] = by;
+    write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, colors, render); }));
+    if(!report.empty()) write_file(report_tmp, rep.dump());
     outputs.commit();
   }
 };
 
 struct Demo_command
 {
-  std::string directory = "point-detail-demo";
+  std::string directory = "point-detail-demo", report;
   std::size_t points = 40000;
 
   void run(const Common_options& common)
@@ -230,6 +236,8 @@ struct Demo_command
     if(!fs::is_directory(directory)) throw Cli_error("cannot create directory " + directory);
     const fs::path dir(directory);
     Output_files outputs({});
+    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    nlohmann::json runs = nlohmann::json::array();
     Progress_printer progress(common.quiet);
     Render_settings render;
     render.view = parse_view("iso");
@@ -253,7 +261,9 @@ struct Demo_command
       write_file(outputs.add(dir / (stem + ".png")), render_on_base_surface(cloud, options.k, render, rep));
       std::printf("demo: %-7s details (lambda %.1f, mu %.1f, k %u) in %.3f s -> %s.ply, %s.png\n", order, options.lambda,
                   options.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
+      runs.push_back(rep.data());
     }
+    if(!report.empty()) write_file(report_tmp, nlohmann::json{{"command", "demo"}, {"runs", runs}}.dump(2) + "\n");
     outputs.commit();
     std::printf("demo: wrote %s/{tentacle,details_linear,details_quadric,details_cubic}.{ply,png}\n", directory.c_str());
   }
@@ -283,11 +293,13 @@ int main(int argc, char** argv)
   render_app->add_option("-i,--input", render.input, "input points")->required();
   render_app->add_option("-o,--output", render.output, "output PNG")->required();
   render_app->add_option("--color-by", render.color_by, "rgb, none or a scalar property (default: rgb, else detail_magnitude)");
+  render_app->add_option("--report", render.report, "write stage timings and counts as JSON");
   add_render_options(*render_app, render.render, render.view);
 
   Demo_command demo;
   CLI::App* demo_app = app.add_subcommand("demo", "colour maps of the three detail orders on a generated tentacle");
   demo_app->add_option("-o,--output", demo.directory, "output directory (created)")->capture_default_str();
+  demo_app->add_option("--report", demo.report, "write stage timings and counts as JSON");
   demo_app->add_option("--points", demo.points, "number of samples")->check(CLI::Range(1000, 5000000))->capture_default_str();
 
   CLI11_PARSE(app, argc, argv);

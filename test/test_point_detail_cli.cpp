@@ -193,8 +193,11 @@ TEST_F(Cli, render_and_demo_write_pictures)
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(contents(path("d.png")).substr(1, 3), "PNG");
   }
-  const Program_run demo = run("demo --points 3000 -o " + path("demo"));
+  ASSERT_EQ(run("render -i " + path("d.ply") + " -o " + path("d.png") + " --report " + path("r.json")).exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["points"], 2000);
+  const Program_run demo = run("demo --points 3000 -o " + path("demo") + " --report " + path("demo.json"));
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_EQ(nlohmann::json::parse(contents(path("demo.json")))["runs"].size(), 3u);
   for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png"})
     EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
 }
