@@ -142,13 +142,6 @@ bool has_given_normals(const PointRange& points)
   }
 }
 
-/// Axis-aligned bounding-box diagonal of the rows of `m`.
-inline double bounding_box_diagonal(const Matrix_n3& m)
-{
-  if(m.rows() == 0) return 0;
-  return (m.colwise().maxCoeff() - m.colwise().minCoeff()).norm();
-}
-
 } // namespace internal
 } // namespace CGAL_ext
 
