@@ -200,7 +200,6 @@ TEST(Geometric_details, Point_set_3_without_normals_gets_estimated_normals_even_
   CGAL::Point_set_3<Point> ps; // no normal property
   for(const Point& p : s.points) ps.insert(p);
   auto magnitude = ps.add_property_map<double>("m", 0).first;
-  std::vector<Vector> unused(ps.size());
   for(int variant = 0; variant < 2; ++variant) {
     auto detail = ps.add_property_map<Vector>("d", CGAL::NULL_VECTOR).first;
     if(variant == 0) ASSERT_TRUE(compute_geometric_details(ps, 10, Detail_filter{}, detail, magnitude, ps.parameters()));

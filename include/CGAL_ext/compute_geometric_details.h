@@ -81,8 +81,7 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   if(!geometric_details<ConcurrencyTag>(cloud, k, settings, progress, details)) return false;
 
   // Results exist only now: the caller's maps are untouched by a cancelled run.
-  std::vector<int> spatial_of(cloud.size());
-  for(std::size_t s = 0; s < cloud.size(); ++s) spatial_of[std::size_t(cloud.input_index[s])] = int(s);
+  const std::vector<int> spatial_of = cloud.spatial_index();
   std::size_t i = 0;
   for(const auto& item : points) {
     const Eigen::RowVector3d d = details.row(spatial_of[i]);

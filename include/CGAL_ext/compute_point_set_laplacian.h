@@ -38,11 +38,11 @@ bool build_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Lapl
 }
 
 /// `P K P^T`: the matrix of the cloud's order re-indexed to the caller's order, rows sorted.
-inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const std::vector<int>& input_index)
+inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const Spatial_point_cloud& cloud)
 {
+  const std::vector<int>& input_index = cloud.input_index;
   const std::size_t n = input_index.size();
-  std::vector<int> spatial_of(n);
-  for(std::size_t s = 0; s < n; ++s) spatial_of[std::size_t(input_index[s])] = int(s);
+  const std::vector<int> spatial_of = cloud.spatial_index();
   Sparse_row_matrix P(K.rows(), K.cols());
   P.resizeNonZeros(K.nonZeros());
   int* outer = P.outerIndexPtr();
@@ -108,7 +108,7 @@ bool compute_point_set_laplacian(const PointRange& points, unsigned int k, const
   internal::Progress progress(callback);
   internal::Sparse_row_matrix K;
   if(!internal::build_laplacian<ConcurrencyTag>(cloud, k, weights, progress, K)) return false;
-  laplacian = internal::to_input_order(K, cloud.input_index);
+  laplacian = internal::to_input_order(K, cloud);
   return true;
 }
 

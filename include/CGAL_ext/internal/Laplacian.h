@@ -46,17 +46,18 @@ Sparse_row_matrix laplacian_matrix(const Matrix_n3& positions, const Neighbor_gr
       for(int m = 0; m < d; ++m) { col[slot(m)] = nb[m]; val[slot(m)] = -1.0 / d; }
       return;
     }
+    // The row's value slots hold the distances first, then the weights.
     double mean = 0;
-    for(int m = 0; m < d; ++m) mean += (positions.row(nb[m]) - positions.row(Eigen::Index(i))).norm();
+    for(int m = 0; m < d; ++m) {
+      col[slot(m)] = nb[m];
+      mean += val[slot(m)] = (positions.row(nb[m]) - positions.row(Eigen::Index(i))).norm();
+    }
     mean /= d;
     const double floor = mean * 1e-6;
     double sum = 0;
     for(int m = 0; m < d; ++m) {
-      const double dist = (positions.row(nb[m]) - positions.row(Eigen::Index(i))).norm();
-      const double w = mean > 0 ? std::pow(std::max(dist, floor), weights.distance_power) : 1.0;
-      col[slot(m)] = nb[m];
-      val[slot(m)] = w;
-      sum += w;
+      val[slot(m)] = mean > 0 ? std::pow(std::max(val[slot(m)], floor), weights.distance_power) : 1.0;
+      sum += val[slot(m)];
     }
     for(int m = 0; m < d; ++m) val[slot(m)] = -val[slot(m)] / sum;
   });

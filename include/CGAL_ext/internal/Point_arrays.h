@@ -40,6 +40,14 @@ struct Spatial_point_cloud
   std::vector<int> input_index;
 
   std::size_t size() const { return input_index.size(); }
+
+  /// The inverse permutation: the row of the caller's i-th point.
+  std::vector<int> spatial_index() const
+  {
+    std::vector<int> row_of(size());
+    for(std::size_t s = 0; s < size(); ++s) row_of[std::size_t(input_index[s])] = int(s);
+    return row_of;
+  }
 };
 
 inline std::string describe_point(std::size_t i, double x, double y, double z)
