@@ -8,3 +8,21 @@ if(NOT TARGET CGAL::TBB_support)
   # Sequential fallback: CGAL_ext still works, Parallel_if_available_tag means sequential.
   add_library(CGAL::TBB_support INTERFACE IMPORTED)
 endif()
+
+# CHOLMOD (SuiteSparse) for the supernodal Cholesky of the least-squares solves; optional: without it the
+# solves use Eigen's SimplicialLDLT. Debian's SuiteSparse 5 ships no CMake package, so look for the files.
+option(CGAL_EXT_USE_CHOLMOD "Use SuiteSparse CHOLMOD for sparse Cholesky factorisations when found" ON)
+if(CGAL_EXT_USE_CHOLMOD AND NOT TARGET SuiteSparse::CHOLMOD)
+  find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+  find_library(CHOLMOD_LIBRARY cholmod)
+  if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY)
+    add_library(SuiteSparse::CHOLMOD INTERFACE IMPORTED)
+    set_target_properties(SuiteSparse::CHOLMOD PROPERTIES
+      INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}"
+      INTERFACE_LINK_LIBRARIES "${CHOLMOD_LIBRARY}"
+      INTERFACE_COMPILE_DEFINITIONS CGAL_EXT_USE_CHOLMOD)
+  endif()
+endif()
+if(NOT TARGET SuiteSparse::CHOLMOD)
+  add_library(SuiteSparse::CHOLMOD INTERFACE IMPORTED) # empty: Eigen's own Cholesky is used
+endif()

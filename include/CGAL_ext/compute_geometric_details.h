@@ -68,14 +68,10 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
 
   Progress progress(callback);
   Matrix_n3 normals;
-  double laplacian_begin = 0;
-  if(has_given_normals<NamedParameters>(points)) {
-    normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
-  } else {
-    progress.stage(0.0, 0.5);
-    laplacian_begin = 0.5;
-    if(!estimate_oriented_normals<ConcurrencyTag>(cloud, default_normal_neighbors, progress, normals)) return false;
-  }
+  const double laplacian_begin = has_given_normals<NamedParameters>(points) ? 0.0 : 0.5;
+  progress.stage(0.0, laplacian_begin);
+  if(!given_or_estimated_normals<ConcurrencyTag>(points, np, cloud, default_normal_neighbors, progress, normals, who))
+    return false;
   progress.stage(laplacian_begin, 1.0);
   Matrix_n3 details;
   if(!geometric_details<ConcurrencyTag>(cloud, k, settings, progress, details)) return false;

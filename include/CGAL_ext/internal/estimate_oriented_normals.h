@@ -7,11 +7,13 @@
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Simple_cartesian.h>
+#include <CGAL/boost/graph/named_params_helper.h>
 #include <CGAL/jet_estimate_normals.h>
 #include <CGAL/mst_orient_normals.h>
 #include <CGAL/property_map.h>
 
 #include <algorithm>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -52,6 +54,22 @@ bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k,
     normals.row(std::get<2>(item)) = len > 0 ? Eigen::RowVector3d(nv / len) : Eigen::RowVector3d(0, 0, 1);
   }
   return progress.report(1.0);
+}
+
+/// The caller's normals when `np` (or a `Point_set_3` range) has them, otherwise estimated with
+/// `neighbors` neighbours. Rows follow the cloud's order. Returns false when cancelled.
+template <typename ConcurrencyTag, typename PointRange, typename NamedParameters>
+bool given_or_estimated_normals(const PointRange& points, const NamedParameters& np, const Spatial_point_cloud& cloud,
+                                unsigned int neighbors, Progress& progress, Matrix_n3& normals, const char* who)
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  if(has_given_normals<NamedParameters>(points)) {
+    normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
+    return progress.report(1.0);
+  }
+  if(cloud.size() < 3)
+    throw Invalid_input(std::string(who) + ": estimating normals needs at least 3 points; pass a normal_map");
+  return estimate_oriented_normals<ConcurrencyTag>(cloud, neighbors, progress, normals);
 }
 
 } // namespace internal

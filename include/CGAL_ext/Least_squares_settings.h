@@ -1,0 +1,71 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_LEAST_SQUARES_SETTINGS_H
+#define CGAL_EXT_LEAST_SQUARES_SETTINGS_H
+
+#include <CGAL_ext/exceptions.h>
+
+#include <cmath>
+#include <cstddef>
+#include <string>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  How the detail least-squares problems (scaling, enhancement, editing) are solved.
+*/
+enum class Linear_solver
+{
+  /// Sparse Cholesky of the normal equations, factored once: CHOLMOD's supernodal `LL^T` when the package
+  /// was configured with SuiteSparse, Eigen's `SimplicialLDLT` otherwise (and as the fallback when `LL^T`
+  /// meets a pivot that rounding made non-positive). Iterative refinement against the exact residual.
+  cholesky,
+  /// Jacobi-preconditioned conjugate gradients on the normal equations (the paper's method), matrix-free:
+  /// the normal matrix is never formed, which saves its assembly and memory on very large regions.
+  conjugate_gradient
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of the least-squares solve `min alpha ||f(K) u - r||^2 + sum_anchors ||u_a - t_a||^2`.
+*/
+struct Least_squares_settings
+{
+  Linear_solver solver = Linear_solver::cholesky;
+  double detail_weight = 1.0;   ///< alpha, the weight of the detail equations (anchors weigh 1), > 0
+  double tolerance = 1e-10;     ///< conjugate gradients stop at this relative residual of the normal equations
+  int max_iterations = 100000;  ///< conjugate-gradient iteration cap (an unconverged solve is an error)
+
+  void validate() const
+  {
+    if(!(std::isfinite(detail_weight) && detail_weight > 0))
+      throw Invalid_input("least squares: detail_weight (alpha) must be a finite number > 0");
+    if(!(std::isfinite(tolerance) && tolerance > 0 && tolerance < 1))
+      throw Invalid_input("least squares: tolerance must be in (0, 1)");
+    if(max_iterations < 1)
+      throw Invalid_input("least squares: max_iterations must be at least 1");
+  }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  What a least-squares solve cost and how well it converged (for reports and benchmarks).
+*/
+struct Least_squares_statistics
+{
+  std::size_t unknowns = 0;          ///< points of the region of interest
+  std::size_t anchors = 0;           ///< soft position constraints
+  std::size_t operator_nonzeros = 0; ///< non-zeros of the ROI rows of `f(K)`
+  std::size_t normal_nonzeros = 0;   ///< non-zeros of the normal matrix (both triangles; 0 for conjugate gradients)
+  double assembly_seconds = 0;       ///< building `f(K)` rows and, for Cholesky, the normal matrix
+  double factor_seconds = 0;
+  double solve_seconds = 0;          ///< last solve, refinement included
+  int iterations = 0;                ///< conjugate-gradient iterations, or refinement steps after the Cholesky solve
+  double relative_residual = 0;      ///< `||b - N u|| / ||b||` of the normal equations after the last solve
+  std::string method;                ///< the factorisation or iteration actually used
+};
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_LEAST_SQUARES_SETTINGS_H

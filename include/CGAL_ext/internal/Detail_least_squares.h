@@ -1,0 +1,360 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_DETAIL_LEAST_SQUARES_H
+#define CGAL_EXT_INTERNAL_DETAIL_LEAST_SQUARES_H
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/Sparse_products.h>
+#include <CGAL_ext/internal/nested_dissection.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <Eigen/SparseCholesky>
+#ifdef CGAL_EXT_USE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// The rows of `f(K)` of the points `roi` (indices into K, increasing) restricted to the columns of those
+/// points, renumbered 0..|roi|-1. The other columns multiply points that stay fixed; with displacements as
+/// unknowns they contribute nothing. Built by Horner's scheme, `f(K) = K^(d-1) (c_low I + c_high K)`, as a
+/// product of restricted sparse factors: K's powers are never formed for the whole cloud.
+template <typename ConcurrencyTag>
+Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_filter& filter,
+                                       const std::vector<int>& roi)
+{
+  const Detail_filter::Coefficients c = filter.coefficients();
+  const int degree = filter.degree();
+  // f(K) = K^(degree - 1) (low I + high K) for the three orders (the cubic has no linear term).
+  const double low = degree == 1 ? 0.0 : degree == 2 ? c.c1 : c.c2;
+  const double high = degree == 1 ? c.c1 : degree == 2 ? c.c2 : c.c3;
+
+  std::vector<int> local_of(std::size_t(K.cols()), -1);
+  for(std::size_t r = 0; r < roi.size(); ++r) local_of[std::size_t(roi[r])] = int(r);
+
+  // Rows roi of (low I + high K); its columns are renumbered now when it is the last factor.
+  const bool last = degree == 1;
+  Sparse_row_matrix B(Eigen::Index(roi.size()), last ? Eigen::Index(roi.size()) : K.cols());
+  std::vector<int> counts(roi.size() + 1, 0);
+  for(std::size_t r = 0; r < roi.size(); ++r) {
+    int count = 0;
+    for(int e = K.outerIndexPtr()[roi[r]]; e < K.outerIndexPtr()[roi[r] + 1]; ++e)
+      count += !last || local_of[std::size_t(K.innerIndexPtr()[e])] >= 0;
+    counts[r + 1] = counts[r] + count;
+  }
+  B.resizeNonZeros(counts.back());
+  std::copy(counts.begin(), counts.end(), B.outerIndexPtr());
+  for_range<ConcurrencyTag>(0, roi.size(), [&](std::size_t r) {
+    int out = counts[r];
+    for(int e = K.outerIndexPtr()[roi[r]]; e < K.outerIndexPtr()[roi[r] + 1]; ++e) {
+      const int j = K.innerIndexPtr()[e];
+      const int column = last ? local_of[std::size_t(j)] : j;
+      if(column < 0) continue;
+      B.innerIndexPtr()[out] = column;
+      B.valuePtr()[out++] = high * K.valuePtr()[e] + (j == roi[r] ? low : 0.0);
+    }
+  });
+  for(int power = 1; power < degree; ++power) {
+    const bool final_factor = power == degree - 1;
+    B = final_factor ? sparse_product<ConcurrencyTag>(B, K, local_of, Eigen::Index(roi.size()))
+                     : sparse_product<ConcurrencyTag>(B, K);
+  }
+  return B;
+}
+
+/*
+  The least-squares core of detail scaling, enhancement and editing:
+
+      min_u  alpha ||A u - r||^2 + sum_a ||u_a - t_a||^2
+
+  for the displacements u (|R| x 3) of the points of a region R, where A holds the ROI rows of f(K) on the ROI
+  columns, r the wanted change of the details and t_a the wanted displacements of the anchors. The normal
+  equations N u = b, N = alpha A^T A + S^T S, are factored once (`factor`) and solved for any number of
+  right-hand sides (`solve`), x, y and z together. Solving for displacements makes "nothing changes" exact:
+  r = 0 and t = 0 give u = 0 bit for bit, whatever the conditioning.
+
+  Cholesky: N is assembled as its upper triangle by a parallel sparse product, scaled symmetrically to a unit
+  diagonal (Jacobi equilibration, which narrows the spread between anchor and detail rows), factored with
+  CHOLMOD's supernodal LL^T when available or Eigen's SimplicialLDLT, and each solve is followed by iterative
+  refinement against the residual computed from A itself (not from the rounded N).
+  Conjugate gradients: matrix-free products with A and A^T, Jacobi preconditioner, three columns in lockstep.
+*/
+class Detail_least_squares
+{
+  using Column_matrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+  using Fallback_factor = Eigen::SimplicialLDLT<Column_matrix, Eigen::Lower, Eigen::NaturalOrdering<int>>;
+#ifdef CGAL_EXT_USE_CHOLMOD
+  using Main_factor = Eigen::CholmodSupernodalLLT<Column_matrix, Eigen::Lower>;
+#endif
+
+public:
+  Detail_least_squares() = default;
+  Detail_least_squares(const Detail_least_squares&) = delete;
+  Detail_least_squares& operator=(const Detail_least_squares&) = delete;
+
+  /// Sets up the system for the operator rows `A` (square, |R| x |R|), the anchors (local indices,
+  /// increasing) and the positions of the region's points (they give the elimination order).
+  /// Throws `Numerical_failure` when the normal matrix cannot be factored.
+  template <typename ConcurrencyTag>
+  void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
+              const Least_squares_settings& settings)
+  {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    m_settings = settings;
+    m_A = std::move(A);
+    m_At = m_A.transpose();
+    m_anchors = std::move(anchors);
+    m_statistics = Least_squares_statistics();
+    m_statistics.unknowns = std::size_t(m_A.rows());
+    m_statistics.anchors = m_anchors.size();
+    m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
+    m_main.reset();
+    m_fallback.reset();
+
+    const double alpha = settings.detail_weight;
+    const std::size_t n = std::size_t(m_A.rows());
+    if(settings.solver == Linear_solver::conjugate_gradient) {
+      // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
+      m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));
+      for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
+        m_diagonal(m_A.innerIndexPtr()[e]) += alpha * m_A.valuePtr()[e] * m_A.valuePtr()[e];
+      for(int a : m_anchors) m_diagonal(a) += 1.0;
+      m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
+      m_statistics.assembly_seconds = seconds_since(start);
+      return;
+    }
+
+    // Upper triangle of A^T A, row-major: read as column-major it is the lower triangle the factorisations want.
+    Sparse_row_matrix upper = sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
+    upper *= alpha;
+    double* diagonal_value = upper.valuePtr();
+    m_scale.resize(Eigen::Index(n));
+    std::vector<char> is_anchor(n, 0), lacks_diagonal(n, 0);
+    for(int a : m_anchors) is_anchor[std::size_t(a)] = 1;
+    bool any_lacking = false;
+    for(std::size_t j = 0; j < n; ++j) {
+      // A row's first stored entry is its diagonal (the product keeps the columns >= row), present wherever
+      // A has a non-zero column.
+      const int first = upper.outerIndexPtr()[j];
+      if(first < upper.outerIndexPtr()[j + 1] && upper.innerIndexPtr()[first] == int(j))
+        diagonal_value[first] += is_anchor[j] ? 1.0 : 0.0;
+      else if(is_anchor[j])
+        lacks_diagonal[j] = any_lacking = true;
+      else
+        throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+                                " of the region appears in no equation; the normal matrix is singular");
+    }
+    if(any_lacking) upper = with_unit_diagonals(upper, lacks_diagonal);
+    for(std::size_t j = 0; j < n; ++j) m_scale(Eigen::Index(j)) = 1.0 / std::sqrt(upper.valuePtr()[upper.outerIndexPtr()[j]]);
+    for(std::size_t j = 0; j < n; ++j)
+      for(int e = upper.outerIndexPtr()[j]; e < upper.outerIndexPtr()[j + 1]; ++e)
+        upper.valuePtr()[e] *= m_scale(Eigen::Index(j)) * m_scale(upper.innerIndexPtr()[e]);
+    m_statistics.normal_nonzeros = 2 * std::size_t(upper.nonZeros()) - n;
+    m_statistics.assembly_seconds = seconds_since(start);
+
+    const auto factor_start = Clock::now();
+    // Factor P N P^T in the geometric nested-dissection order, which the factorisations keep as given.
+    const std::vector<int> order = geometric_nested_dissection(upper, positions);
+    m_new_of.indices().resize(Eigen::Index(n));
+    for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
+    m_normal.resize(Eigen::Index(n), Eigen::Index(n));
+    m_normal.template selfadjointView<Eigen::Lower>() =
+      Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
+                                      upper.innerIndexPtr(), upper.valuePtr())
+        .template selfadjointView<Eigen::Lower>()
+        .twistedBy(m_new_of);
+    upper = Sparse_row_matrix();
+#ifdef CGAL_EXT_USE_CHOLMOD
+    m_main = std::make_unique<Main_factor>();
+    cholmod_common& common = m_main->cholmod();
+    common.print = 0; // a rounding-negative pivot is handled below, not printed
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_NATURAL;
+    m_main->compute(m_normal);
+    if(m_main->info() == Eigen::Success)
+      m_statistics.method = "CHOLMOD supernodal LL^T";
+    else
+      m_main.reset();
+#endif
+    if(!m_main) {
+      m_fallback = std::make_unique<Fallback_factor>(m_normal);
+      if(m_fallback->info() != Eigen::Success)
+        throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
+                                "some part of the region is not pinned by anchors or fixed points)");
+      m_statistics.method = "Eigen SimplicialLDLT";
+#ifdef CGAL_EXT_USE_CHOLMOD
+      m_statistics.method += " (CHOLMOD LL^T met a non-positive pivot)";
+#endif
+    }
+    m_statistics.method += ", geometric nested dissection";
+    m_statistics.factor_seconds = seconds_since(factor_start);
+  }
+
+  /// Displacements of the region's points for the wanted detail change `detail_change` (|R| x 3) and anchor
+  /// displacements `anchor_displacement` (one row per anchor, in the order given to `factor`).
+  template <typename ConcurrencyTag>
+  Matrix_n3 solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const Matrix_n3 b = right_hand_side<ConcurrencyTag>(detail_change, anchor_displacement);
+    const double b_norm = b.norm();
+    Matrix_n3 u = Matrix_n3::Zero(b.rows(), 3);
+    m_statistics.iterations = 0;
+    m_statistics.relative_residual = 0;
+    if(b_norm > 0) {
+      if(m_settings.solver == Linear_solver::conjugate_gradient)
+        conjugate_gradients<ConcurrencyTag>(b, b_norm, u);
+      else
+        refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
+    }
+    if(!u.allFinite())
+      throw Numerical_failure("detail least squares: the solve produced non-finite values");
+    m_statistics.solve_seconds = seconds_since(start);
+    return u;
+  }
+
+  const Least_squares_statistics& statistics() const { return m_statistics; }
+  const Sparse_row_matrix& operator_rows() const { return m_A; }
+
+private:
+  static double seconds_since(std::chrono::steady_clock::time_point t)
+  {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  }
+
+  /// Adds a diagonal 1 where `where` says (anchors whose column of A is empty: a polynomial with a zero there).
+  static Sparse_row_matrix with_unit_diagonals(const Sparse_row_matrix& upper, const std::vector<char>& where)
+  {
+    Sparse_row_matrix D(upper.rows(), upper.cols());
+    D.reserve(Eigen::VectorXi::Ones(upper.rows()));
+    for(Eigen::Index j = 0; j < upper.rows(); ++j)
+      if(where[std::size_t(j)]) D.insert(j, j) = 1.0;
+    D.makeCompressed();
+    Sparse_row_matrix sum = upper + D;
+    sum.makeCompressed();
+    return sum;
+  }
+
+  /// `N X = alpha A^T A X + S^T S X`.
+  template <typename ConcurrencyTag>
+  Matrix_n3 apply_normal(const Matrix_n3& X) const
+  {
+    Matrix_n3 AX, N_X;
+    multiply<ConcurrencyTag>(m_A, X, AX);
+    multiply<ConcurrencyTag>(m_At, AX, N_X);
+    N_X *= m_settings.detail_weight;
+    for(int a : m_anchors) N_X.row(a) += X.row(a);
+    return N_X;
+  }
+
+  template <typename ConcurrencyTag>
+  Matrix_n3 right_hand_side(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement) const
+  {
+    if(detail_change.rows() != m_A.rows() || anchor_displacement.rows() != Eigen::Index(m_anchors.size()))
+      throw Invalid_input("detail least squares: right-hand side sizes do not match the factored system");
+    Matrix_n3 b;
+    multiply<ConcurrencyTag>(m_At, detail_change, b);
+    b *= m_settings.detail_weight;
+    for(std::size_t i = 0; i < m_anchors.size(); ++i) b.row(m_anchors[i]) += anchor_displacement.row(Eigen::Index(i));
+    return b;
+  }
+
+  Matrix_n3 factor_solve(const Matrix_n3& b) const
+  {
+    const Eigen::MatrixXd scaled = m_new_of * (m_scale.asDiagonal() * b);
+    Eigen::MatrixXd x;
+#ifdef CGAL_EXT_USE_CHOLMOD
+    if(m_main) x = m_main->solve(scaled);
+#endif
+    if(m_fallback) x = m_fallback->solve(scaled);
+    return m_scale.asDiagonal() * (m_new_of.transpose() * x);
+  }
+
+  template <typename ConcurrencyTag>
+  void refined_cholesky_solve(const Matrix_n3& b, double b_norm, Matrix_n3& u)
+  {
+    u = factor_solve(b);
+    double previous = b_norm;
+    for(int step = 0;; ++step) {
+      const Matrix_n3 residual = b - apply_normal<ConcurrencyTag>(u);
+      const double norm = residual.norm();
+      m_statistics.relative_residual = norm / b_norm;
+      m_statistics.iterations = step;
+      // Stop at rounding level, or when a step no longer halves the residual (refinement has stalled).
+      if(!(norm > 1e-14 * b_norm) || !(norm < 0.5 * previous) || step == 5) break;
+      previous = norm;
+      u += factor_solve(residual);
+    }
+  }
+
+  template <typename ConcurrencyTag>
+  void conjugate_gradients(const Matrix_n3& b, double b_norm, Matrix_n3& u)
+  {
+    const Eigen::ArrayXd inverse_diagonal = m_diagonal.array().inverse();
+    Matrix_n3 r = b, z = (r.array().colwise() * inverse_diagonal).matrix(), p = z;
+    Eigen::RowVector3d rz = (r.array() * z.array()).colwise().sum();
+    const Eigen::RowVector3d b_column = b.colwise().norm();
+    const double tolerance = m_settings.tolerance;
+    int iteration = 0;
+    auto converged = [&] {
+      const Eigen::RowVector3d r_column = r.colwise().norm();
+      for(int c = 0; c < 3; ++c)
+        if(r_column(c) > tolerance * b_column(c)) return false;
+      return true;
+    };
+    while(!converged()) {
+      if(iteration == m_settings.max_iterations)
+        throw Numerical_failure("detail least squares: conjugate gradients did not reach the tolerance in " +
+                                std::to_string(iteration) + " iterations; raise max_iterations or use Cholesky");
+      const Matrix_n3 q = apply_normal<ConcurrencyTag>(p);
+      const Eigen::RowVector3d pq = (p.array() * q.array()).colwise().sum();
+      for(int c = 0; c < 3; ++c) {
+        if(!(pq(c) > 0)) continue; // this column has converged exactly
+        const double step = rz(c) / pq(c);
+        u.col(c) += step * p.col(c);
+        r.col(c) -= step * q.col(c);
+      }
+      z = (r.array().colwise() * inverse_diagonal).matrix();
+      const Eigen::RowVector3d rz_next = (r.array() * z.array()).colwise().sum();
+      for(int c = 0; c < 3; ++c) {
+        const double beta = rz(c) > 0 ? rz_next(c) / rz(c) : 0.0;
+        p.col(c) = z.col(c) + beta * p.col(c);
+      }
+      rz = rz_next;
+      ++iteration;
+    }
+    m_statistics.iterations = iteration;
+    m_statistics.relative_residual = (b - apply_normal<ConcurrencyTag>(u)).norm() / b_norm;
+  }
+
+  Least_squares_settings m_settings;
+  Sparse_row_matrix m_A, m_At;
+  std::vector<int> m_anchors;
+  Column_matrix m_normal;          // scaled, permuted lower triangle; the factorisations keep pointers into it
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> m_new_of; // elimination order
+  Eigen::VectorXd m_scale;         // Jacobi equilibration of the Cholesky path
+  Eigen::VectorXd m_diagonal;      // diagonal of N for the conjugate-gradient preconditioner
+#ifdef CGAL_EXT_USE_CHOLMOD
+  std::unique_ptr<Main_factor> m_main;
+#else
+  std::unique_ptr<int> m_main;     // never set without CHOLMOD
+#endif
+  std::unique_ptr<Fallback_factor> m_fallback;
+  Least_squares_statistics m_statistics;
+};
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_DETAIL_LEAST_SQUARES_H

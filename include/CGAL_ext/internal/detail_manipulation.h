@@ -1,0 +1,182 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_DETAIL_MANIPULATION_H
+#define CGAL_EXT_INTERNAL_DETAIL_MANIPULATION_H
+
+// What detail scaling and enhancement share: the region of interest and its anchors in the cloud's order,
+// the check that something pins every part of the region, and the solve for the region's displacements.
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Detail_least_squares.h>
+#include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// Rows of the cloud for the caller's point indices, increasing and without repeats.
+template <typename IndexRange>
+std::vector<int> rows_of_indices(const IndexRange& indices, const std::vector<int>& row_of, const char* who,
+                                 const char* what)
+{
+  std::vector<int> rows;
+  for(const auto& index : indices) {
+    const long long i = static_cast<long long>(index);
+    if(i < 0 || i >= static_cast<long long>(row_of.size()))
+      throw Invalid_input(std::string(who) + ": " + what + " index " + std::to_string(i) + " is not a point index (" +
+                          std::to_string(row_of.size()) + " points)");
+    rows.push_back(row_of[std::size_t(i)]);
+  }
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  return rows;
+}
+
+/// The anchors' positions in `roi` (local indices); throws if one is not in the region.
+inline std::vector<int> local_anchor_indices(const std::vector<int>& roi, const std::vector<int>& anchor_rows,
+                                             const std::vector<int>& input_index, const char* who)
+{
+  std::vector<int> local;
+  local.reserve(anchor_rows.size());
+  for(int row : anchor_rows) {
+    const auto it = std::lower_bound(roi.begin(), roi.end(), row);
+    if(it == roi.end() || *it != row)
+      throw Invalid_input(std::string(who) + ": anchor point #" + std::to_string(input_index[std::size_t(row)]) +
+                          " is not in the region of interest; anchors constrain points of the region");
+    local.push_back(int(it - roi.begin()));
+  }
+  return local;
+}
+
+/// The region's points that have a neighbour outside it (the default anchors of a partial region).
+inline std::vector<int> region_border(const Sparse_row_matrix& K, const std::vector<int>& roi, const std::vector<char>& in_roi)
+{
+  std::vector<int> local;
+  for(std::size_t r = 0; r < roi.size(); ++r)
+    for(int e = K.outerIndexPtr()[roi[r]]; e < K.outerIndexPtr()[roi[r] + 1]; ++e)
+      if(!in_roi[std::size_t(K.innerIndexPtr()[e])]) { local.push_back(int(r)); break; }
+  return local;
+}
+
+/// A spatially uniform subset of about `fraction` of the region (grid simplification: in every occupied cube
+/// of a grid, the point closest to the cube's centre). The cube's side follows from the mean neighbour distance.
+inline std::vector<int> uniform_subset(const Sparse_row_matrix& K, const Matrix_n3& positions, const std::vector<int>& roi,
+                                       double fraction)
+{
+  double sum = 0;
+  std::size_t count = 0;
+  for(int i : roi)
+    for(int e = K.outerIndexPtr()[i]; e < K.outerIndexPtr()[i + 1]; ++e)
+      if(K.innerIndexPtr()[e] != i) { sum += (positions.row(K.innerIndexPtr()[e]) - positions.row(i)).norm(); ++count; }
+  // A sample of spacing s has a mean k-neighbour distance of about 1.4 s; one point per cell of side
+  // s / sqrt(fraction) keeps the wanted fraction of a surface.
+  const double side = count == 0 || sum == 0 ? 1.0 : (sum / double(count)) / 1.4 / std::sqrt(fraction);
+  std::map<std::tuple<long long, long long, long long>, std::pair<double, int>> best; // cell -> (distance, local)
+  for(std::size_t r = 0; r < roi.size(); ++r) {
+    const Eigen::RowVector3d p = positions.row(roi[r]) / side;
+    const std::tuple<long long, long long, long long> cell((long long)std::floor(p(0)), (long long)std::floor(p(1)),
+                                                           (long long)std::floor(p(2)));
+    const Eigen::RowVector3d centre(std::get<0>(cell) + 0.5, std::get<1>(cell) + 0.5, std::get<2>(cell) + 0.5);
+    const double d = (p - centre).squaredNorm();
+    auto [it, inserted] = best.emplace(cell, std::make_pair(d, int(r)));
+    if(!inserted && d < it->second.first) it->second = {d, int(r)};
+  }
+  std::vector<int> local;
+  for(const auto& entry : best) local.push_back(entry.second.second);
+  std::sort(local.begin(), local.end());
+  return local;
+}
+
+/// Throws unless every connected part of the region (in the neighbour graph) holds an anchor or touches a
+/// point outside the region: otherwise that part could translate freely and the system is singular.
+inline void check_pinned(const Sparse_row_matrix& K, const std::vector<int>& roi, const std::vector<char>& in_roi,
+                         const std::vector<int>& anchors_local, const std::vector<int>& input_index, const char* who)
+{
+  std::vector<int> local_of(std::size_t(K.rows()), -1);
+  for(std::size_t r = 0; r < roi.size(); ++r) local_of[std::size_t(roi[r])] = int(r);
+  std::vector<char> pinned(roi.size(), 0), seen(roi.size(), 0);
+  for(int a : anchors_local) pinned[std::size_t(a)] = 1;
+  std::vector<int> part, stack;
+  for(std::size_t start = 0; start < roi.size(); ++start) {
+    if(seen[start]) continue;
+    part.clear();
+    bool is_pinned = false;
+    stack.push_back(int(start));
+    seen[start] = 1;
+    while(!stack.empty()) {
+      const int r = stack.back();
+      stack.pop_back();
+      part.push_back(r);
+      is_pinned = is_pinned || pinned[std::size_t(r)];
+      for(int e = K.outerIndexPtr()[roi[std::size_t(r)]]; e < K.outerIndexPtr()[roi[std::size_t(r)] + 1]; ++e) {
+        const int j = K.innerIndexPtr()[e];
+        if(!in_roi[std::size_t(j)]) { is_pinned = true; continue; }
+        const int l = local_of[std::size_t(j)];
+        if(!seen[std::size_t(l)]) { seen[std::size_t(l)] = 1; stack.push_back(l); }
+      }
+    }
+    if(!is_pinned)
+      throw Invalid_input(std::string(who) + ": a part of the region of interest with " + std::to_string(part.size()) +
+                          " points (point #" + std::to_string(input_index[std::size_t(roi[std::size_t(part.front())])]) +
+                          " among them) has no anchor and no neighbour outside the region, so nothing pins it and "
+                          "the least-squares system is singular; give anchors in that part or shrink the region");
+  }
+}
+
+/// The region's displacements for the detail change `detail_change` (rows of the whole cloud; only the
+/// region's are read) and the anchors' displacements.
+template <typename ConcurrencyTag>
+Matrix_n3 solve_region_displacements(const Sparse_row_matrix& K, const Matrix_n3& positions, const Detail_filter& filter,
+                                     const std::vector<int>& roi, const std::vector<int>& anchors_local,
+                                     const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                                     const Least_squares_settings& settings, Least_squares_statistics& statistics)
+{
+  const auto start = std::chrono::steady_clock::now();
+  Sparse_row_matrix A = detail_operator_rows<ConcurrencyTag>(K, filter, roi);
+  const double operator_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Matrix_n3 region_positions(Eigen::Index(roi.size()), 3), region_change(Eigen::Index(roi.size()), 3);
+  for(std::size_t r = 0; r < roi.size(); ++r) {
+    region_positions.row(Eigen::Index(r)) = positions.row(roi[r]);
+    region_change.row(Eigen::Index(r)) = detail_change.row(roi[r]);
+  }
+  Detail_least_squares system;
+  system.factor<ConcurrencyTag>(std::move(A), anchors_local, region_positions, settings);
+  Matrix_n3 u = system.solve<ConcurrencyTag>(region_change, anchor_displacement);
+  statistics = system.statistics();
+  statistics.assembly_seconds += operator_seconds;
+  return u;
+}
+
+/// Writes `positions + displacement` of the region's rows through the point map, in the caller's order.
+template <typename PointRange, typename PointMap>
+void write_region(PointRange& points, PointMap point_map, const Spatial_point_cloud& cloud, const std::vector<int>& roi,
+                  const Matrix_n3& displacement)
+{
+  using Point = typename boost::property_traits<PointMap>::value_type;
+  std::vector<int> local_of_input(cloud.size(), -1);
+  for(std::size_t r = 0; r < roi.size(); ++r) local_of_input[std::size_t(cloud.input_index[std::size_t(roi[r])])] = int(r);
+  std::size_t i = 0;
+  for(auto& item : points) {
+    const int r = local_of_input[i++];
+    if(r < 0) continue;
+    const Eigen::RowVector3d x = cloud.positions.row(roi[std::size_t(r)]) + displacement.row(r);
+    put(point_map, item, Point(x(0), x(1), x(2)));
+  }
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_DETAIL_MANIPULATION_H

@@ -1,0 +1,271 @@
+#include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/scale_geometric_details.h>
+
+#include "test_support.h"
+
+#include <CGAL/Point_set_3.h>
+#include <CGAL/property_map.h>
+
+#include <gtest/gtest.h>
+
+#include <boost/property_map/property_map.hpp>
+
+#include <cmath>
+#include <map>
+#include <limits>
+
+using namespace CGAL_ext;
+
+namespace {
+const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
+constexpr double pi = 3.14159265358979323846;
+
+/// A 48 x 48 grid of unit spacing, slightly jittered (a perfect lattice makes nearest neighbours tie), with
+/// bumps of amplitude `amplitude` and wavelength 8: `z = a b(x, y)`, `b = sin(2 pi x / 8) sin(2 pi y / 8)`.
+struct Bumpy_patch
+{
+  std::vector<Point> points;
+  std::vector<double> bump; // b(x, y) of each point
+  double amplitude = 0.25;
+
+  Bumpy_patch()
+  {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+    for(int j = 0; j < 48; ++j)
+      for(int i = 0; i < 48; ++i) {
+        const double x = i - 23.5 + jitter(rng), y = j - 23.5 + jitter(rng);
+        const double b = std::sin(2 * pi * x / 8) * std::sin(2 * pi * y / 8);
+        points.emplace_back(x, y, amplitude * b);
+        bump.push_back(b);
+      }
+  }
+  /// The region: everything but a border band 6 spacings wide, which stays fixed.
+  std::vector<std::size_t> interior() const
+  {
+    std::vector<std::size_t> roi;
+    for(std::size_t i = 0; i < points.size(); ++i)
+      if(std::abs(points[i].x()) < 18 && std::abs(points[i].y()) < 18) roi.push_back(i);
+    return roi;
+  }
+  /// Over the centre (away from the region's border, where the fixed band's own bumps still show): the
+  /// least-squares amplitude of the bump pattern in `z`, and the largest |z|.
+  std::pair<double, double> centre_amplitude_and_height(const std::vector<Point>& pts) const
+  {
+    double zb = 0, bb = 0, height = 0;
+    for(std::size_t i = 0; i < pts.size(); ++i)
+      if(std::abs(pts[i].x()) < 10 && std::abs(pts[i].y()) < 10) {
+        zb += pts[i].z() * bump[i];
+        bb += bump[i] * bump[i];
+        height = std::max(height, std::abs(pts[i].z()));
+      }
+    return {zb / bb, height};
+  }
+};
+
+std::vector<std::size_t> cap_of_sphere(const std::vector<Point>& points, double min_z)
+{
+  std::vector<std::size_t> roi;
+  for(std::size_t i = 0; i < points.size(); ++i)
+    if(points[i].z() > min_z) roi.push_back(i);
+  return roi;
+}
+
+double max_distance(const std::vector<Point>& a, const std::vector<Point>& b)
+{
+  double d = 0;
+  for(std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::sqrt(CGAL::squared_distance(a[i], b[i])));
+  return d;
+}
+
+Detail_scaling_settings settings_for(Detail_order order, Linear_solver solver = Linear_solver::cholesky)
+{
+  Detail_scaling_settings s(Detail_filter{order, 0.8, 1.6});
+  s.least_squares.solver = solver;
+  return s;
+}
+} // namespace
+
+TEST(ScaleGeometricDetails, ScaleOneReturnsTheInputAndTheOutsideNeverMoves)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02, 4.0);
+  const auto roi = cap_of_sphere(sphere.points, 0.3);
+  for(Detail_order order : all_orders) {
+    for(double s : {1.0, 2.5}) {
+      std::vector<Point> points = sphere.points;
+      const auto result = scale_geometric_details(points, 10, roi, s, settings_for(order));
+      ASSERT_TRUE(result);
+      EXPECT_EQ(result.region_size, roi.size());
+      EXPECT_TRUE(result.default_anchors);
+      EXPECT_GT(result.anchor_count, 0u);
+      for(std::size_t i = 0; i < points.size(); ++i) {
+        if(sphere.points[i].z() <= 0.3) ASSERT_EQ(points[i], sphere.points[i]) << "outside point " << i;
+      }
+      const double moved = max_distance(points, sphere.points);
+      if(s == 1.0) {
+        EXPECT_LT(moved, 1e-9 * 2) << Detail_filter::order_name(order); // the diagonal is about 2
+      } else {
+        EXPECT_GT(moved, 1e-3) << Detail_filter::order_name(order);
+      }
+    }
+  }
+}
+
+TEST(ScaleGeometricDetails, ResultIsAffineInTheScaleFactor)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02, 4.0);
+  const auto roi = cap_of_sphere(sphere.points, 0.2);
+  for(Detail_order order : all_orders) {
+    std::vector<Point> x0 = sphere.points, x2 = sphere.points, x05 = sphere.points;
+    scale_geometric_details(x0, 10, roi, 0.0, settings_for(order));
+    scale_geometric_details(x2, 10, roi, 2.0, settings_for(order));
+    scale_geometric_details(x05, 10, roi, 0.5, settings_for(order));
+    double worst = 0;
+    for(std::size_t i = 0; i < x0.size(); ++i)
+      for(double s : {2.0, 0.5}) {
+        const Point& xs = s == 2.0 ? x2[i] : x05[i];
+        const Point expected = x0[i] + s * (sphere.points[i] - x0[i]);
+        worst = std::max(worst, std::sqrt(CGAL::squared_distance(xs, expected)));
+      }
+    EXPECT_LT(worst, 1e-9) << Detail_filter::order_name(order);
+  }
+}
+
+TEST(ScaleGeometricDetails, FlatPatchBumpsScaleByTheFactor)
+{
+  const Bumpy_patch patch;
+  const auto roi = patch.interior();
+  const double a0 = patch.centre_amplitude_and_height(patch.points).first;
+  ASSERT_NEAR(a0, patch.amplitude, 1e-12);
+  for(Detail_order order : all_orders) {
+    for(double s : {0.5, 2.0}) {
+      std::vector<Point> points = patch.points;
+      ASSERT_TRUE(scale_geometric_details(points, 10, roi, s, settings_for(order)));
+      const double a = patch.centre_amplitude_and_height(points).first;
+      EXPECT_NEAR(a / a0, s, 0.05 * s) << Detail_filter::order_name(order) << " s = " << s;
+    }
+    // s = 0 removes the bumps: less than 10 % of their energy (amplitude squared) is left.
+    std::vector<Point> flat = patch.points;
+    scale_geometric_details(flat, 10, roi, 0.0, settings_for(order));
+    const auto [a, height] = patch.centre_amplitude_and_height(flat);
+    EXPECT_LT(a * a, 0.1 * a0 * a0) << Detail_filter::order_name(order);
+    // What is left is smooth, and small except for the cubic order with soft border anchors (documented
+    // with Detail_scaling_settings::anchor_region_border); held by its surroundings alone it stays low.
+    Detail_scaling_settings unanchored = settings_for(order);
+    unanchored.anchor_region_border = false;
+    std::vector<Point> held = patch.points;
+    scale_geometric_details(held, 10, roi, 0.0, unanchored);
+    const double held_height = patch.centre_amplitude_and_height(held).second;
+    EXPECT_LT(held_height, 0.35 * a0) << Detail_filter::order_name(order);
+    if(order != Detail_order::cubic) {
+      EXPECT_LT(height, 0.1 * a0) << Detail_filter::order_name(order);
+    } else {
+      EXPECT_GT(height, 2 * held_height); // the measured bulge: if this fails, update the documentation
+    }
+  }
+}
+
+TEST(ScaleGeometricDetails, CholeskyAndConjugateGradientsAgree)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(4000, 1.0, 0.02, 4.0);
+  const auto roi = cap_of_sphere(sphere.points, 0.4);
+  for(Detail_order order : {Detail_order::linear, Detail_order::quadric}) {
+    std::vector<Point> direct = sphere.points, iterative = sphere.points;
+    const auto d = scale_geometric_details(direct, 10, roi, 2.0, settings_for(order));
+    const auto it = scale_geometric_details(iterative, 10, roi, 2.0, settings_for(order, Linear_solver::conjugate_gradient));
+    EXPECT_LT(d.least_squares.relative_residual, 1e-10);
+    EXPECT_LT(it.least_squares.relative_residual, 1e-9);
+    EXPECT_GT(it.least_squares.iterations, 0);
+    double displacement = 0;
+    for(std::size_t i = 0; i < direct.size(); ++i)
+      displacement = std::max(displacement, std::sqrt(CGAL::squared_distance(direct[i], sphere.points[i])));
+    EXPECT_LT(max_distance(direct, iterative), 1e-6 * displacement) << Detail_filter::order_name(order);
+  }
+}
+
+TEST(ScaleGeometricDetails, SequentialAndParallelAgree)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(5000, 1.0, 0.02, 4.0);
+  const auto roi = cap_of_sphere(sphere.points, 0.0);
+  std::vector<Point> sequential = sphere.points, parallel = sphere.points;
+  scale_geometric_details<CGAL::Sequential_tag>(sequential, 10, roi, 1.7, settings_for(Detail_order::cubic));
+  scale_geometric_details<CGAL::Parallel_if_available_tag>(parallel, 10, roi, 1.7, settings_for(Detail_order::cubic));
+  EXPECT_LT(max_distance(sequential, parallel), 1e-14);
+}
+
+TEST(ScaleGeometricDetails, AnchorsFromARangeOrAConstraintMapPinTheirPoints)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(4000, 1.0, 0.02, 4.0);
+  // The whole model, anchored on a ring around the equator: legal, and the anchors barely move.
+  std::vector<std::size_t> all(sphere.points.size()), ring;
+  std::map<Point, bool> constrained; // keyed like the range's elements (identity point map)
+  for(std::size_t i = 0; i < all.size(); ++i) {
+    all[i] = i;
+    const bool on_ring = std::abs(sphere.points[i].z()) < 0.05;
+    constrained[sphere.points[i]] = on_ring;
+    if(on_ring) ring.push_back(i);
+  }
+  std::vector<Point> by_range = sphere.points, by_map = sphere.points;
+  const auto r = scale_geometric_details(by_range, 10, all, ring, 0.5, settings_for(Detail_order::quadric));
+  EXPECT_FALSE(r.default_anchors);
+  EXPECT_EQ(r.anchor_count, ring.size());
+  scale_geometric_details(by_map, 10, all, 0.5, settings_for(Detail_order::quadric),
+                          CGAL::parameters::point_is_constrained_map(boost::make_assoc_property_map(constrained)));
+  EXPECT_LT(max_distance(by_range, by_map), 1e-14);
+  double anchor_motion = 0;
+  for(std::size_t a : ring) anchor_motion = std::max(anchor_motion, std::sqrt(CGAL::squared_distance(by_range[a], sphere.points[a])));
+  EXPECT_LT(anchor_motion, 0.5 * max_distance(by_range, sphere.points));
+
+  // A Point_set_3 with a region given as a property.
+  CGAL::Point_set_3<Point> set;
+  for(const Point& p : sphere.points) set.insert(p);
+  auto selected = set.add_property_map<bool>("roi", false).first;
+  for(auto it = set.begin(); it != set.end(); ++it) selected[*it] = set.point(*it).z() > 0.2;
+  const auto roi = selected_indices(set, selected);
+  std::vector<Point> plain = sphere.points;
+  scale_geometric_details(set, 10, roi, 1.8, settings_for(Detail_order::quadric), set.parameters());
+  scale_geometric_details(plain, 10, roi, 1.8, settings_for(Detail_order::quadric));
+  double diff = 0;
+  std::size_t i = 0;
+  for(auto it = set.begin(); it != set.end(); ++it, ++i) diff = std::max(diff, std::sqrt(CGAL::squared_distance(set.point(*it), plain[i])));
+  EXPECT_LT(diff, 1e-14);
+}
+
+TEST(ScaleGeometricDetails, CancelledRunLeavesThePointsUntouched)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(3000);
+  std::vector<Point> points = sphere.points;
+  const auto result = scale_geometric_details(points, 10, cap_of_sphere(points, 0.0), 2.0, Detail_filter{},
+                                              CGAL::parameters::callback([](double f) { return f < 0.5; }));
+  EXPECT_FALSE(result);
+  EXPECT_EQ(points, sphere.points);
+}
+
+TEST(ScaleGeometricDetails, BadInputIsAClearError)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(2000);
+  std::vector<Point> points = sphere.points;
+  const auto cap = cap_of_sphere(points, 0.5);
+  std::vector<std::size_t> all(points.size());
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  auto message = [&](auto&& call) {
+    try { call(); } catch(const Invalid_input& e) { return std::string(e.what()); }
+    return std::string("no exception");
+  };
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, std::vector<std::size_t>{}, 2.0, Detail_filter{}); }).find("empty"), std::string::npos);
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, cap, std::numeric_limits<double>::quiet_NaN(), Detail_filter{}); }).find("finite"), std::string::npos);
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, cap, std::numeric_limits<double>::infinity(), Detail_filter{}); }).find("finite"), std::string::npos);
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, all, 2.0, Detail_filter{}); }).find("no anchors"), std::string::npos);
+  const std::size_t outside = std::size_t(std::find_if(points.begin(), points.end(), [](const Point& p) { return p.z() < 0; }) - points.begin());
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, cap, std::vector<std::size_t>{outside}, 2.0, Detail_filter{}); }).find("not in the region"), std::string::npos);
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, std::vector<std::size_t>{points.size()}, 2.0, Detail_filter{}); }).find("not a point index"), std::string::npos);
+  EXPECT_NE(message([&] { scale_geometric_details(points, 10, cap, 2.0, Detail_filter{Detail_order::quadric, 0.8, 0.5}); }).find("mu"), std::string::npos);
+
+  // Two separate spheres, the whole model as region, anchors on one only: the other is not pinned.
+  std::vector<Point> two = points;
+  for(const Point& p : points) two.push_back(p + Vector(5, 0, 0));
+  std::vector<std::size_t> everything(two.size()), first_anchors = {0, 1, 2};
+  std::iota(everything.begin(), everything.end(), std::size_t(0));
+  EXPECT_NE(message([&] { scale_geometric_details(two, 10, everything, first_anchors, 2.0, Detail_filter{}); }).find("nothing pins it"), std::string::npos);
+  EXPECT_EQ(points, sphere.points); // nothing was written by any failed call
+}
