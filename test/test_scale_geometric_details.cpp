@@ -99,7 +99,9 @@ TEST(ScaleGeometricDetails, ScaleOneReturnsTheInputAndTheOutsideNeverMoves)
       EXPECT_TRUE(result.default_anchors);
       EXPECT_GT(result.anchor_count, 0u);
       for(std::size_t i = 0; i < points.size(); ++i) {
-        if(sphere.points[i].z() <= 0.3) ASSERT_EQ(points[i], sphere.points[i]) << "outside point " << i;
+        if(sphere.points[i].z() <= 0.3) {
+          ASSERT_EQ(points[i], sphere.points[i]) << "outside point " << i;
+        }
       }
       const double moved = max_distance(points, sphere.points);
       if(s == 1.0) {
