@@ -3,16 +3,20 @@
 // point-detail: high-frequency geometric details of point-sampled surfaces from the command line.
 #include "cli_support.h"
 #include "point_io.h"
+#include "region_spec.h"
 #include "render.h"
 
+#include <CGAL_ext/balanced_flow_smooth_point_set.h>
 #include <CGAL_ext/compute_geometric_details.h>
-#include <CGAL_ext/compute_point_set_laplacian.h>
+#include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
-#include <CGAL_ext/internal/taubin_smoothing.h>
+#include <CGAL_ext/scale_geometric_details.h>
 
 #include <CLI/CLI.hpp>
+
+#include <boost/property_map/function_property_map.hpp>
 
 #ifdef CGAL_LINKED_WITH_TBB
 #include <tbb/global_control.h>
@@ -128,19 +132,16 @@ void add_details(Point_cloud& cloud, const Detail_options& options, Progress_pri
   r["color_range"] = range;
 }
 
-/// The detail colours shown on a low-pass base surface (paper Fig. 3).
+/// The detail colours shown on the balanced-flow base surface (paper Fig. 3).
 std::string render_on_base_surface(const Point_cloud& cloud, unsigned int k, const Render_settings& render,
                                    Report& report)
 {
-  const std::vector<Point> base = report.time("base_surface", [&] {
-    Eigen::SparseMatrix<double, Eigen::RowMajor, int> K;
-    CGAL_ext::compute_point_set_laplacian(cloud.points, k, {}, K);
-    CGAL_ext::internal::Matrix_n3 X(Eigen::Index(cloud.points.size()), 3);
-    for(std::size_t i = 0; i < cloud.points.size(); ++i) X.row(Eigen::Index(i)) << cloud.points[i].x(), cloud.points[i].y(), cloud.points[i].z();
-    X = CGAL_ext::internal::taubin_smoothing<CGAL::Parallel_if_available_tag>(K, X);
-    std::vector<Point> out(cloud.points.size());
-    for(std::size_t i = 0; i < out.size(); ++i) out[i] = Point(X(Eigen::Index(i), 0), X(Eigen::Index(i), 1), X(Eigen::Index(i), 2));
-    return out;
+  std::vector<Point> base = cloud.points;
+  std::vector<std::size_t> indices = index_range(base.size());
+  report.time("base_surface", [&] {
+    CGAL_ext::balanced_flow_smooth_point_set(indices, k, CGAL_ext::Balanced_flow_settings(),
+                                             CGAL::parameters::point_map(CGAL::make_property_map(base))
+                                               .normal_map(CGAL::make_property_map(cloud.normals)));
   });
   return report.time("render", [&] { return render_png(base, cloud.normals, cloud.colors, render); });
 }
@@ -181,6 +182,114 @@ struct Details_command
     add_details(cloud, detail, progress, rep);
     rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
     if(!png.empty()) write_file(png_tmp, render_on_base_surface(cloud, detail.k, render, rep));
+    if(!report.empty()) write_file(report_tmp, rep.dump());
+    outputs.commit();
+  }
+};
+
+/// Scales (or enhances) the details of `region` of `cloud` (which has normals) by `factor`; `out` receives the
+/// moved points with the input's normals, their displacement along the normal and the region flag.
+CGAL_ext::Detail_manipulation_result manipulate(bool enhance, const Point_cloud& cloud, const std::vector<std::size_t>& region,
+                                                const std::vector<std::size_t>* anchors, double factor, unsigned int k,
+                                                const CGAL_ext::Detail_enhancement_settings& settings,
+                                                const std::function<bool(double)>& callback, Point_cloud& out)
+{
+  std::vector<Point> moved = cloud.points;
+  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(moved))
+                    .normal_map(CGAL::make_property_map(cloud.normals))
+                    .callback(callback);
+  std::vector<std::size_t> all = index_range(moved.size());
+  CGAL_ext::Detail_manipulation_result result;
+  if(enhance && anchors) {
+    std::vector<char> anchored(moved.size(), 0);
+    for(std::size_t a : *anchors) anchored[a] = 1;
+    const auto is_anchor = boost::make_function_property_map<std::size_t, bool>([&](std::size_t i) { return anchored[i] != 0; });
+    result = CGAL_ext::enhance_geometric_details(all, k, region, factor, settings, np.point_is_constrained_map(is_anchor));
+  } else if(enhance) {
+    result = CGAL_ext::enhance_geometric_details(all, k, region, factor, settings, np);
+  } else if(anchors) {
+    result = CGAL_ext::scale_geometric_details(all, k, region, *anchors, factor, settings, np);
+  } else {
+    result = CGAL_ext::scale_geometric_details(all, k, region, factor, settings, np);
+  }
+  if(!result) return result;
+  std::vector<double> displacement(moved.size()), in_roi(moved.size(), 0.0);
+  for(std::size_t i = 0; i < moved.size(); ++i) displacement[i] = (moved[i] - cloud.points[i]) * cloud.normals[i];
+  for(std::size_t i : region) in_roi[i] = 1.0;
+  out = Point_cloud();
+  out.points = std::move(moved);
+  out.normals = cloud.normals;
+  out.set_scalar("displacement", std::move(displacement));
+  out.set_scalar("in_roi", std::move(in_roi));
+  return result;
+}
+
+/// `scale` and `enhance`: move a region so that its details become s times larger (paper Sect. 4).
+struct Manipulate_command
+{
+  bool enhance = false;
+  std::string input, output, png, report, view = "front", solver = "cholesky";
+  double factor = 1;
+  std::vector<std::string> roi, anchors;
+  bool free_border = false;
+  Detail_options detail;
+  Render_settings render;
+
+  void run(const Common_options& common)
+  {
+    const char* name = enhance ? "enhance" : "scale";
+    Output_files outputs({input});
+    const fs::path ply_tmp = outputs.add(output);
+    const fs::path png_tmp = png.empty() ? fs::path() : outputs.add(png);
+    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    render.view = parse_view(view);
+    std::vector<Region_spec> roi_specs, anchor_specs;
+    for(const std::string& t : roi) roi_specs.push_back(parse_region_spec(t));
+    for(const std::string& t : anchors) anchor_specs.push_back(parse_region_spec(t));
+    CGAL_ext::Detail_enhancement_settings settings(detail.settings());
+    settings.least_squares.solver = solver == "cg" ? CGAL_ext::Linear_solver::conjugate_gradient : CGAL_ext::Linear_solver::cholesky;
+    settings.anchor_region_border = !free_border;
+    settings.validate();
+
+    Progress_printer progress(common.quiet);
+    Report rep(name);
+    rep.data()["input"] = input;
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    if(cloud.points.size() <= detail.k)
+      throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(detail.k) +
+                      " needs more than k points");
+    const std::vector<std::size_t> region = roi_specs.empty() ? index_range(cloud.points.size()) : select_points(cloud.points, roi_specs);
+    if(region.empty()) throw Cli_error("the region of interest (--roi) contains none of the " + std::to_string(cloud.points.size()) + " points");
+    std::vector<std::size_t> anchor_indices;
+    if(!anchor_specs.empty()) {
+      anchor_indices = select_points(cloud.points, anchor_specs);
+      if(anchor_indices.empty()) throw Cli_error("--anchors selects none of the points");
+    }
+    ensure_normals(cloud, progress, rep);
+
+    Point_cloud out;
+    const CGAL_ext::Detail_manipulation_result result = rep.time(name, [&] {
+      return manipulate(enhance, cloud, region, anchor_specs.empty() ? nullptr : &anchor_indices, factor, detail.k,
+                        settings, progress.stage(name), out);
+    });
+    progress.finish();
+    if(!result) throw Cancelled();
+    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
+    if(!png.empty())
+      write_file(png_tmp, rep.time("render", [&] {
+        return render_png(out.points, out.normals, diverging_colors(*out.scalar("displacement")), render);
+      }));
+    auto& r = rep.data();
+    r["points"] = out.points.size();
+    r["factor"] = factor;
+    r["order"] = detail.order;
+    r["roi_points"] = result.region_size;
+    r["anchors"] = result.anchor_count;
+    r["default_anchors"] = result.default_anchors;
+    const CGAL_ext::Least_squares_statistics& ls = result.least_squares;
+    r["solver"] = {{"method", ls.method}, {"operator_nonzeros", ls.operator_nonzeros}, {"normal_nonzeros", ls.normal_nonzeros},
+                   {"assembly_s", ls.assembly_seconds}, {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds},
+                   {"iterations", ls.iterations}, {"relative_residual", ls.relative_residual}};
     if(!report.empty()) write_file(report_tmp, rep.dump());
     outputs.commit();
   }
@@ -263,9 +372,34 @@ struct Demo_command
                   options.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
       runs.push_back(rep.data());
     }
+    // Detail scaling of the tentacle's middle (paper Fig. 4) and enhancement of the whole tentacle (Fig. 5, 6),
+    // quadric order; the pictures are coloured by the displacement along the normal.
+    const std::vector<std::size_t> middle = select_points(input.points, {parse_region_spec("sphere:-0.29,0,0.71,0.3")});
+    const std::vector<std::size_t> whole = index_range(input.points.size());
+    for(const auto& [enhance, factor] : {std::pair{false, 0.6}, std::pair{false, 1.2}, std::pair{true, 2.0}, std::pair{true, 3.0}}) {
+      const std::string what = enhance ? "enhance" : "scale";
+      char stem[64];
+      std::snprintf(stem, sizeof stem, "%s_%.1f", what.c_str(), factor);
+      Report rep("demo " + std::string(stem));
+      Point_cloud out;
+      const auto result = rep.time(what, [&] {
+        return manipulate(enhance, input, enhance ? whole : middle, nullptr, factor, CGAL_ext::default_laplacian_neighbors,
+                          CGAL_ext::Detail_enhancement_settings(), progress.stage(stem), out);
+      });
+      progress.finish();
+      if(!result) throw Cancelled();
+      write_file(outputs.add(dir / (std::string(stem) + ".ply")), ply_bytes(out));
+      write_file(outputs.add(dir / (std::string(stem) + ".png")),
+                 render_png(out.points, out.normals, diverging_colors(*out.scalar("displacement")), render));
+      rep.data()["roi_points"] = result.region_size;
+      rep.data()["anchors"] = result.anchor_count;
+      std::printf("demo: %-7s s = %.1f on %zu points (%zu anchors) in %.3f s -> %s.ply, %s.png\n", what.c_str(), factor,
+                  result.region_size, result.anchor_count, rep.data()["timings_s"][what].get<double>(), stem, stem);
+      runs.push_back(rep.data());
+    }
     if(!report.empty()) write_file(report_tmp, nlohmann::json{{"command", "demo"}, {"runs", runs}}.dump(2) + "\n");
     outputs.commit();
-    std::printf("demo: wrote %s/{tentacle,details_linear,details_quadric,details_cubic}.{ply,png}\n", directory.c_str());
+    std::printf("demo: wrote %s/{tentacle,details_*,scale_*,enhance_*}.{ply,png}\n", directory.c_str());
   }
 };
 
@@ -288,6 +422,29 @@ int main(int argc, char** argv)
   add_detail_options(*details_app, details.detail);
   add_render_options(*details_app, details.render, details.view);
 
+  Manipulate_command scale, enhance;
+  enhance.enhance = true;
+  CLI::App* scale_app = app.add_subcommand("scale", "scale the geometric details of a region by a factor (paper Sect. 4.1)");
+  CLI::App* enhance_app = app.add_subcommand("enhance", "enhance the details against the balanced-flow base surface (paper Sect. 4.2)");
+  for(auto [sub, command] : {std::pair{scale_app, &scale}, std::pair{enhance_app, &enhance}}) {
+    sub->add_option("-i,--input", command->input, "input points (.ply, .off, .xyz, .pwn)")->required();
+    sub->add_option("-o,--output", command->output, "output binary PLY: moved points, normals, displacement, in_roi")->required();
+    sub->add_option("-s,--factor", command->factor, "scale factor s (1: unchanged)")->required();
+    auto* roi_option = sub->add_option("--roi", command->roi,
+      "region of interest, repeatable (union): sphere:x,y,z,r | box:xmin,ymin,zmin,xmax,ymax,zmax | indices:FILE"
+      + std::string(command->enhance ? " (default: the whole model)" : ""));
+    if(!command->enhance) roi_option->required();
+    sub->add_option("--anchors", command->anchors, "anchored points, same syntax (default: the region's border, or for the "
+                                                    "whole model in enhance a uniform 1 % at the exact solution)");
+    sub->add_flag("--free-border", command->free_border, "no default border anchors: the fixed surroundings alone hold a partial region");
+    sub->add_option("--solver", command->solver, "cholesky (factor once) or cg (conjugate gradients, the paper's)")
+      ->check(CLI::IsMember({"cholesky", "cg"}))->capture_default_str();
+    sub->add_option("--png", command->png, "also render the result, coloured by the displacement along the normal");
+    sub->add_option("--report", command->report, "write stage timings, region and solver figures as JSON");
+    add_detail_options(*sub, command->detail);
+    add_render_options(*sub, command->render, command->view);
+  }
+
   Render_command render;
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
   render_app->add_option("-i,--input", render.input, "input points")->required();
@@ -297,7 +454,7 @@ int main(int argc, char** argv)
   add_render_options(*render_app, render.render, render.view);
 
   Demo_command demo;
-  CLI::App* demo_app = app.add_subcommand("demo", "colour maps of the three detail orders on a generated tentacle");
+  CLI::App* demo_app = app.add_subcommand("demo", "detail colour maps, scaling and enhancement on a generated tentacle");
   demo_app->add_option("-o,--output", demo.directory, "output directory (created)")->capture_default_str();
   demo_app->add_option("--report", demo.report, "write stage timings and counts as JSON");
   demo_app->add_option("--points", demo.points, "number of samples")->check(CLI::Range(1000, 5000000))->capture_default_str();
@@ -311,6 +468,8 @@ int main(int argc, char** argv)
 #endif
   try {
     if(*details_app) details.run(common);
+    if(*scale_app) scale.run(common);
+    if(*enhance_app) enhance.run(common);
     if(*render_app) render.run(common);
     if(*demo_app) demo.run(common);
   } catch(const Cancelled&) {

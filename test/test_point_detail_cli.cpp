@@ -1,5 +1,6 @@
 // The point-detail program, run as a user would: outputs, errors, and files it must not touch.
 #include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
 #include "test_support.h"
@@ -197,7 +198,92 @@ TEST_F(Cli, render_and_demo_write_pictures)
   EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["points"], 2000);
   const Program_run demo = run("demo --points 3000 -o " + path("demo") + " --report " + path("demo.json"));
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
-  EXPECT_EQ(nlohmann::json::parse(contents(path("demo.json")))["runs"].size(), 3u);
-  for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png"})
+  EXPECT_EQ(nlohmann::json::parse(contents(path("demo.json")))["runs"].size(), 7u);
+  for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png",
+                       "scale_0.6.png", "scale_1.2.ply", "enhance_2.0.png", "enhance_3.0.ply"})
     EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
+}
+
+TEST_F(Cli, scale_moves_the_region_only_and_matches_the_library)
+{
+  const std::string in = write_sphere_ply("in.ply", 3000);
+  { std::ofstream(path("anchors.txt")) << "# anchors\n0\n\n1 # the first two points\n"; }
+  const Program_run r = run("scale -i " + in + " -o " + path("out.ply") + " --factor 2.5 --roi sphere:0,0,1,0.6 --roi box:-2,-2,0.9,2,2,2 --order linear --png " +
+                            path("out.png") + " --report " + path("report.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> input, output;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), output));
+  ASSERT_EQ(output.size(), input.size());
+  auto in_roi = output.property_map<double>("in_roi");
+  ASSERT_TRUE(in_roi.second);
+  ASSERT_TRUE(output.property_map<double>("displacement").second);
+
+  std::vector<Point> expected;
+  std::vector<std::size_t> roi;
+  for(auto it = input.begin(); it != input.end(); ++it) {
+    const Point& p = input.point(*it);
+    if(CGAL::squared_distance(p, Point(0, 0, 1)) <= 0.36 || p.z() >= 0.9) roi.push_back(expected.size());
+    expected.push_back(p);
+  }
+  CGAL_ext::scale_geometric_details(expected, 10, roi, 2.5, CGAL_ext::Detail_filter{CGAL_ext::Detail_order::linear});
+  std::size_t i = 0, moved = 0;
+  for(auto it = output.begin(); it != output.end(); ++it, ++i) {
+    EXPECT_LT(std::sqrt(CGAL::squared_distance(output.point(*it), expected[i])), 1e-12) << i;
+    EXPECT_EQ(in_roi.first[*it] == 1.0, std::binary_search(roi.begin(), roi.end(), i)) << i;
+    if(in_roi.first[*it] == 0.0) {
+      EXPECT_EQ(output.point(*it), input.point(*(input.begin() + std::ptrdiff_t(i))));
+    }
+    moved += output.point(*it) != input.point(*(input.begin() + std::ptrdiff_t(i)));
+  }
+  EXPECT_GT(moved, roi.size() / 2);
+  const auto report = nlohmann::json::parse(contents(path("report.json")));
+  EXPECT_EQ(report["roi_points"], roi.size());
+  EXPECT_EQ(report["default_anchors"], true);
+  EXPECT_LT(report["solver"]["relative_residual"].get<double>(), 1e-10);
+  EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
+
+  // Given anchors and conjugate gradients; enhancement of the whole model with s = 1 changes nothing.
+  ASSERT_EQ(run("scale -i " + in + " -o " + path("a.ply") + " -s 0.5 --roi sphere:0,0,1,0.6 --anchors indices:" + path("anchors.txt") +
+                " --solver cg --report " + path("a.json")).exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("a.json")))["default_anchors"], false);
+  ASSERT_EQ(run("enhance -i " + in + " -o " + path("e.ply") + " -s 1 --report " + path("e.json")).exit_code, 0);
+  CGAL::Point_set_3<Point> same;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("e.ply"), same));
+  i = 0;
+  for(auto it = same.begin(); it != same.end(); ++it, ++i)
+    EXPECT_LT(std::sqrt(CGAL::squared_distance(same.point(*it), input.point(*(input.begin() + std::ptrdiff_t(i))))), 1e-9);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("e.json")))["roi_points"], 3000);
+}
+
+TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
+{
+  const std::string in = write_sphere_ply("in.ply", 500);
+  { std::ofstream(path("bad_index.txt")) << "3\nseven\n"; }
+  { std::ofstream(path("far_index.txt")) << "3\n500\n"; }
+  struct Case { std::string args, needle; };
+  const std::string scale = "scale -i " + in + " -o " + path("o.ply") + " -s 2 ";
+  const Case cases[] = {
+    {scale + "--roi sphere:0,0,x,1", "'x' is not a finite number"},
+    {scale + "--roi sphere:0,0,1", "sphere takes 4 numbers, got 3"},
+    {scale + "--roi sphere:0,0,1,-1", "radius '-1' must be > 0"},
+    {scale + "--roi cube:0,0,0,1", "unknown kind 'cube'"},
+    {scale + "--roi box:0,0,0,1,1", "box takes 6 numbers, got 5"},
+    {scale + "--roi box:1,0,0,0,1,1", "minimum '1' exceeds the maximum '0'"},
+    {scale + "--roi 0,0,0,1", "expected sphere:"},
+    {scale + "--roi indices:" + path("bad_index.txt"), "bad_index.txt:2: 'seven' is not a point index"},
+    {scale + "--roi indices:" + path("far_index.txt"), "index 500 is out of range"},
+    {scale + "--roi indices:" + path("none.txt"), "cannot read"},
+    {scale + "--roi sphere:9,9,9,0.1", "contains none"},
+    {scale + "--roi sphere:0,0,0,5", "whole model and no anchors"},
+    {scale + "--roi sphere:0,0,1,0.5 --anchors sphere:0,0,-1,0.5", "is not in the region of interest"},
+    {"scale -i " + in + " -o " + path("o.ply") + " -s inf --roi sphere:0,0,1,0.5", "factor"},
+    {"scale -i " + in + " -o " + path("o.ply") + " -s 2", "--roi"},
+  };
+  for(const Case& c : cases) {
+    const Program_run r = run(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.output.find(c.needle), std::string::npos) << c.args << "\n" << r.output;
+  }
+  expect_only({"in.ply", "bad_index.txt", "far_index.txt"});
 }
