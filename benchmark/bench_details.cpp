@@ -3,6 +3,7 @@
 // scans and on a 1M-point sampling of the armadillo surface, sequentially and with the machine's threads.
 // Usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/details_results.csv and DIR/details_results.md (medians, min-max, peak memory).
+#include "cli_support.h"
 #include "point_io.h"
 
 #include <CGAL_ext/compute_geometric_details.h>
@@ -144,6 +145,7 @@ std::string machine_facts(int threads)
 
 int main(int argc, char** argv)
 {
+  use_huge_pages(argv);
   bool quick = false;
   fs::path data = "data", out = "benchmark";
   int reps = 5;

@@ -5,12 +5,27 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <system_error>
 #include <unistd.h>
 
 namespace point_detail {
+
+void use_huge_pages(char** argv)
+{
+  const char* current = std::getenv("GLIBC_TUNABLES");
+  const std::string tunables = current ? current : "";
+  const char* wanted = std::getenv("POINT_DETAIL_HUGE_PAGES");
+  if(tunables.find("glibc.malloc.hugetlb") != std::string::npos || (wanted && std::string(wanted) == "0")) return;
+  const std::string value = (tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1";
+  if(setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  execv("/proc/self/exe", argv);
+  // The exec failed: run as we are, with the environment as it was.
+  if(current) setenv("GLIBC_TUNABLES", current, 1);
+  else unsetenv("GLIBC_TUNABLES");
+}
 namespace fs = std::filesystem;
 
 namespace {

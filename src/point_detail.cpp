@@ -407,6 +407,7 @@ struct Demo_command
 
 int main(int argc, char** argv)
 {
+  use_huge_pages(argv);
   CLI::App app{"point-detail: high-frequency geometric details of point-sampled surfaces (Miao et al. 2007)"};
   app.require_subcommand(1);
   Common_options common;

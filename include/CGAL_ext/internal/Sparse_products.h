@@ -39,26 +39,26 @@ struct Row_accumulator
   }
 };
 
-/// Runs `body(i, accumulator)` for every row i in [0, rows), each thread with its own accumulator.
+/// Runs `body(chunk, accumulator)` for every chunk in [0, chunks), each thread with its own accumulator.
 template <typename ConcurrencyTag, typename Body>
-void for_rows_with_accumulator(std::size_t rows, std::size_t columns, const Body& body)
+void for_chunks_with_accumulator(std::size_t chunks, std::size_t columns, const Body& body)
 {
 #ifdef CGAL_LINKED_WITH_TBB
   if constexpr(is_parallel<ConcurrencyTag>()) {
     tbb::enumerable_thread_specific<Row_accumulator> accumulators([columns] { return Row_accumulator(columns); });
-    for_range<ConcurrencyTag>(0, rows, [&](std::size_t i) { body(i, accumulators.local()); });
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) { body(c, accumulators.local()); });
     return;
   }
 #endif
   Row_accumulator accumulator(columns);
-  for(std::size_t i = 0; i < rows; ++i) body(i, accumulator);
+  for(std::size_t c = 0; c < chunks; ++c) body(c, accumulator);
 }
 
 /// `C = A B` for row-major A and B, with the columns of the result renumbered on the fly: column `c` of
 /// `A B` becomes column `column_map[c]` of C, or is dropped when that is negative (an empty map keeps every
 /// column). With `upper_only`, row i keeps the columns >= i only (the upper triangle of a symmetric product).
-/// Row-parallel, two passes (pattern, then values), each output row sorted; the result does not depend on
-/// the thread count.
+/// Rows are computed in parallel chunks (Gustavson's algorithm, rows sorted) and concatenated; each value is
+/// summed in the order of A's and B's storage, so the result does not depend on the thread count.
 template <typename ConcurrencyTag>
 Sparse_row_matrix sparse_product(const Sparse_row_matrix& A, const Sparse_row_matrix& B,
                                  const std::vector<int>& column_map = {}, Eigen::Index result_columns = -1,
@@ -74,39 +74,42 @@ Sparse_row_matrix sparse_product(const Sparse_row_matrix& A, const Sparse_row_ma
   const double* b_value = B.valuePtr();
   const bool mapped = !column_map.empty();
 
-  // Accumulates row i of the product; the value sum runs in the order of A's and B's storage, so it is the
-  // same whichever thread computes the row.
-  auto accumulate = [&](std::size_t i, Row_accumulator& acc) {
-    for(int ea = a_outer[i]; ea < a_outer[i + 1]; ++ea) {
-      const int j = a_inner[ea];
-      const double aij = a_value[ea];
-      for(int eb = b_outer[j]; eb < b_outer[j + 1]; ++eb) {
-        const int c = mapped ? column_map[std::size_t(b_inner[eb])] : b_inner[eb];
-        if(c < 0 || (upper_only && std::size_t(c) < i)) continue;
-        acc.add(c, aij * b_value[eb]);
-      }
-    }
-  };
-
+  const std::size_t chunk_rows = 64;
+  const std::size_t chunks = (rows + chunk_rows - 1) / chunk_rows;
+  std::vector<std::vector<int>> chunk_columns(chunks);
+  std::vector<std::vector<double>> chunk_values(chunks);
   std::vector<int> counts(rows + 1, 0);
-  for_rows_with_accumulator<ConcurrencyTag>(rows, columns, [&](std::size_t i, Row_accumulator& acc) {
-    accumulate(i, acc);
-    counts[i + 1] = int(acc.touched.size());
-    acc.clear();
+  for_chunks_with_accumulator<ConcurrencyTag>(chunks, columns, [&](std::size_t chunk, Row_accumulator& acc) {
+    std::vector<int>& out_columns = chunk_columns[chunk];
+    std::vector<double>& out_values = chunk_values[chunk];
+    for(std::size_t i = chunk * chunk_rows; i < std::min(rows, (chunk + 1) * chunk_rows); ++i) {
+      for(int ea = a_outer[i]; ea < a_outer[i + 1]; ++ea) {
+        const int j = a_inner[ea];
+        const double aij = a_value[ea];
+        for(int eb = b_outer[j]; eb < b_outer[j + 1]; ++eb) {
+          const int c = mapped ? column_map[std::size_t(b_inner[eb])] : b_inner[eb];
+          if(c < 0 || (upper_only && std::size_t(c) < i)) continue;
+          acc.add(c, aij * b_value[eb]);
+        }
+      }
+      std::sort(acc.touched.begin(), acc.touched.end());
+      for(int c : acc.touched) {
+        out_columns.push_back(c);
+        out_values.push_back(acc.value[std::size_t(c)]);
+      }
+      counts[i + 1] = int(acc.touched.size());
+      acc.clear();
+    }
   });
   std::partial_sum(counts.begin(), counts.end(), counts.begin());
 
   Sparse_row_matrix C{Eigen::Index(rows), Eigen::Index(columns)};
   C.resizeNonZeros(counts.back());
   std::copy(counts.begin(), counts.end(), C.outerIndexPtr());
-  int* c_inner = C.innerIndexPtr();
-  double* c_value = C.valuePtr();
-  for_rows_with_accumulator<ConcurrencyTag>(rows, columns, [&](std::size_t i, Row_accumulator& acc) {
-    accumulate(i, acc);
-    std::sort(acc.touched.begin(), acc.touched.end());
-    int e = counts[i];
-    for(int c : acc.touched) { c_inner[e] = c; c_value[e] = acc.value[std::size_t(c)]; ++e; }
-    acc.clear();
+  for_range<ConcurrencyTag>(0, chunks, [&](std::size_t chunk) {
+    const int begin = counts[chunk * chunk_rows];
+    std::copy(chunk_columns[chunk].begin(), chunk_columns[chunk].end(), C.innerIndexPtr() + begin);
+    std::copy(chunk_values[chunk].begin(), chunk_values[chunk].end(), C.valuePtr() + begin);
   });
   return C;
 }
