@@ -137,6 +137,7 @@ std::string machine_facts(int threads)
      << "- compiler: GCC " << __VERSION__ << ", -O3 -DNDEBUG (Release)\n"
      << "- CGAL " << CGAL_VERSION_STR << ", Eigen " << EIGEN_WORLD_VERSION << "." << EIGEN_MAJOR_VERSION << "." << EIGEN_MINOR_VERSION
      << ", oneTBB " << TBB_VERSION_MAJOR << "." << TBB_VERSION_MINOR << "\n"
+     << "- malloc: " << malloc_pages() << " (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n"
      << "- k = 10 (symmetrised), uniform weights, lambda 0.8, mu 1.6; pipeline = compute_geometric_details with normals given\n";
   return os.str();
 }

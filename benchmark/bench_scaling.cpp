@@ -177,6 +177,7 @@ int main(int argc, char** argv)
     if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
   md << "# Detail scaling and enhancement benchmark\n\n"
      << "- CPU: " << model << "; " << tbb::info::default_concurrency() << " threads; GCC " << __VERSION__ << ", Release\n"
+     << "- malloc: " << malloc_pages() << " (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n"
      << "- k = 10, lambda 0.8, mu 1.6, s = 2, default anchors; medians of " << reps
      << " repetitions for Cholesky (min-max of the total beside), 1 for conjugate gradients\n"
      << "- total = assembly (ROI rows of f(K), normal matrix) + factor + solve (with refinement); call = the whole "

@@ -26,6 +26,13 @@ void use_huge_pages(char** argv)
   if(current) setenv("GLIBC_TUNABLES", current, 1);
   else unsetenv("GLIBC_TUNABLES");
 }
+
+std::string malloc_pages()
+{
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  return tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "transparent huge pages"
+                                                                                                 : "4 KiB pages";
+}
 namespace fs = std::filesystem;
 
 namespace {

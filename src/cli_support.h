@@ -33,6 +33,8 @@ struct Cancelled : std::runtime_error
 /// this halves the time of sparse factorisations and of the kNN pipeline (benchmark/RESULTS). Returns only
 /// when the program runs as it is (already re-executed, disabled, or the exec failed).
 void use_huge_pages(char** argv);
+/// "transparent huge pages" or "4 KiB pages", as the running process's malloc was set up (for reports).
+std::string malloc_pages();
 
 /// Installs the SIGINT handler that turns Ctrl-C into a cancellation at the next progress report.
 void install_interrupt_handler();
