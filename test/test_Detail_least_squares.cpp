@@ -1,0 +1,143 @@
+// The least-squares core of scaling, enhancement and editing, against dense references. Built twice: with the
+// configured Cholesky (CHOLMOD when found) and, with TEST_WITHOUT_CHOLMOD, with Eigen's fallback.
+#include "test_support.h"
+
+#ifdef TEST_WITHOUT_CHOLMOD
+#undef CGAL_EXT_USE_CHOLMOD
+#endif
+
+#include <CGAL_ext/compute_point_set_laplacian.h>
+#include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/internal/Detail_least_squares.h>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <random>
+
+using namespace CGAL_ext;
+using namespace CGAL_ext::internal;
+
+namespace {
+struct Small_problem
+{
+  Spatial_point_cloud cloud;
+  Sparse_row_matrix K;
+  std::vector<int> roi, anchors;
+  Matrix_n3 roi_positions;
+
+  Small_problem()
+  {
+    const auto sphere = shapes::bumpy_sphere<Kernel>(1200, 1.0, 0.02, 4.0);
+    cloud = make_spatial_point_cloud<CGAL::Sequential_tag>(sphere.points, CGAL::Identity_property_map<Point>(), "test");
+    Progress progress;
+    build_laplacian<CGAL::Sequential_tag>(cloud, 10, {}, progress, K);
+    for(int i = 0; i < int(cloud.size()); ++i)
+      if(cloud.positions(i, 2) > 0.1) roi.push_back(i);
+    for(std::size_t r = 0; r < roi.size(); r += 37) anchors.push_back(int(r));
+    roi_positions.resize(Eigen::Index(roi.size()), 3);
+    for(std::size_t r = 0; r < roi.size(); ++r) roi_positions.row(Eigen::Index(r)) = cloud.positions.row(roi[r]);
+  }
+};
+
+const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
+
+Matrix_n3 random_block(Eigen::Index rows, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Matrix_n3 m(rows, 3);
+  for(Eigen::Index i = 0; i < rows; ++i)
+    for(int c = 0; c < 3; ++c) m(i, c) = g(rng);
+  return m;
+}
+} // namespace
+
+TEST(DetailLeastSquares, OperatorRowsAreTheRestrictionOfTheFilterPolynomial)
+{
+  const Small_problem p;
+  const Eigen::MatrixXd K = Eigen::MatrixXd(p.K);
+  for(Detail_order order : all_orders) {
+    const Detail_filter filter{order, 0.8, 1.6};
+    const auto c = filter.coefficients();
+    const Eigen::MatrixXd F = c.c1 * K + c.c2 * K * K + c.c3 * K * K * K;
+    Eigen::MatrixXd expected(p.roi.size(), p.roi.size());
+    for(std::size_t a = 0; a < p.roi.size(); ++a)
+      for(std::size_t b = 0; b < p.roi.size(); ++b) expected(Eigen::Index(a), Eigen::Index(b)) = F(p.roi[a], p.roi[b]);
+    const Eigen::MatrixXd got = Eigen::MatrixXd(detail_operator_rows<CGAL::Parallel_if_available_tag>(p.K, filter, p.roi));
+    EXPECT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-14) << Detail_filter::order_name(order);
+  }
+}
+
+TEST(DetailLeastSquares, SolvesMatchADenseQRReferenceForBothSolvers)
+{
+  const Small_problem p;
+  const double alpha = 0.7;
+  for(Detail_order order : all_orders) {
+    const Sparse_row_matrix A = detail_operator_rows<CGAL::Parallel_if_available_tag>(p.K, Detail_filter{order, 0.8, 1.6}, p.roi);
+    const Matrix_n3 r = random_block(A.rows(), 1), t = random_block(Eigen::Index(p.anchors.size()), 2);
+    // Dense reference: the stacked system [sqrt(alpha) A; S] u = [sqrt(alpha) r; t], by Householder QR.
+    Eigen::MatrixXd stacked = Eigen::MatrixXd::Zero(A.rows() + Eigen::Index(p.anchors.size()), A.cols());
+    Eigen::MatrixXd rhs(stacked.rows(), 3);
+    stacked.topRows(A.rows()) = std::sqrt(alpha) * Eigen::MatrixXd(A);
+    rhs.topRows(A.rows()) = std::sqrt(alpha) * r;
+    for(std::size_t a = 0; a < p.anchors.size(); ++a) {
+      stacked(A.rows() + Eigen::Index(a), p.anchors[a]) = 1.0;
+      rhs.row(A.rows() + Eigen::Index(a)) = t.row(Eigen::Index(a));
+    }
+    const Eigen::MatrixXd reference = stacked.colPivHouseholderQr().solve(rhs);
+    for(Linear_solver solver : {Linear_solver::cholesky, Linear_solver::conjugate_gradient}) {
+      Least_squares_settings settings;
+      settings.solver = solver;
+      settings.detail_weight = alpha;
+      settings.tolerance = 1e-12;
+      Detail_least_squares system;
+      system.factor<CGAL::Parallel_if_available_tag>(A, p.anchors, p.roi_positions, settings);
+      const Matrix_n3 u = system.solve<CGAL::Parallel_if_available_tag>(r, t);
+      EXPECT_LT((u - reference).norm(), 1e-7 * reference.norm())
+        << Detail_filter::order_name(order) << " " << system.statistics().method;
+      EXPECT_LT(system.statistics().relative_residual, 1e-10);
+#if defined(CGAL_EXT_USE_CHOLMOD)
+      const char* expected_method = "CHOLMOD";
+#else
+      const char* expected_method = "Eigen SimplicialLDLT";
+#endif
+      if(solver == Linear_solver::cholesky) {
+        EXPECT_EQ(system.statistics().method.find(expected_method), 0u) << system.statistics().method;
+      }
+      // Factor once, solve many: a second right-hand side, and nothing to change gives exactly nothing.
+      const Matrix_n3 twice = system.solve<CGAL::Parallel_if_available_tag>(Matrix_n3(2 * r), Matrix_n3(2 * t));
+      EXPECT_LT((twice - 2 * u).norm(), 1e-9 * u.norm());
+      const Matrix_n3 zero = system.solve<CGAL::Parallel_if_available_tag>(Matrix_n3::Zero(r.rows(), 3),
+                                                                          Matrix_n3::Zero(t.rows(), 3));
+      EXPECT_EQ(zero.cwiseAbs().maxCoeff(), 0.0);
+    }
+  }
+}
+
+TEST(DetailLeastSquares, SparseProductsDoNotDependOnTheThreadCount)
+{
+  const Small_problem p;
+  const Sparse_row_matrix A = detail_operator_rows<CGAL::Sequential_tag>(p.K, Detail_filter{Detail_order::cubic, 0.8, 1.6}, p.roi);
+  const Sparse_row_matrix At = A.transpose();
+  const Sparse_row_matrix sequential = sparse_product<CGAL::Sequential_tag>(At, A, {}, -1, true);
+  const Sparse_row_matrix parallel = sparse_product<CGAL::Parallel_if_available_tag>(At, A, {}, -1, true);
+  ASSERT_EQ(sequential.nonZeros(), parallel.nonZeros());
+  EXPECT_TRUE(std::equal(sequential.valuePtr(), sequential.valuePtr() + sequential.nonZeros(), parallel.valuePtr()));
+  EXPECT_TRUE(std::equal(sequential.innerIndexPtr(), sequential.innerIndexPtr() + sequential.nonZeros(), parallel.innerIndexPtr()));
+  // The upper triangle of A^T A, against Eigen's own product.
+  const Eigen::MatrixXd full = Eigen::MatrixXd(At) * Eigen::MatrixXd(A);
+  EXPECT_LT((Eigen::MatrixXd(sequential) - Eigen::MatrixXd(full.triangularView<Eigen::Upper>())).cwiseAbs().maxCoeff(), 1e-13);
+}
+
+TEST(DetailLeastSquares, NestedDissectionIsAPermutation)
+{
+  const Small_problem p;
+  const Sparse_row_matrix A = detail_operator_rows<CGAL::Sequential_tag>(p.K, Detail_filter{}, p.roi);
+  const Sparse_row_matrix At = A.transpose();
+  const std::vector<int> order = geometric_nested_dissection(sparse_product<CGAL::Sequential_tag>(At, A, {}, -1, true), p.roi_positions);
+  std::vector<int> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  ASSERT_EQ(sorted.size(), p.roi.size());
+  for(std::size_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], int(i));
+}
