@@ -1,6 +1,8 @@
-// Computes details on a generated sphere through the installed headers; exits non-zero if they look wrong.
+// Computes details and scales them on a generated sphere through the installed headers (and the installed
+// package's Cholesky, CHOLMOD when it was found); exits non-zero if the results look wrong.
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/scale_geometric_details.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
@@ -19,6 +21,15 @@ int main()
   // On a sphere every detail points outwards.
   for(std::size_t i = 0; i < indices.size(); ++i)
     if(details[i] * (sphere.points[i] - CGAL::ORIGIN) <= 0) { std::cerr << "inward detail at " << i << "\n"; return 1; }
-  std::cout << "consumer: details of " << indices.size() << " points OK\n";
+  // Scaling the details of a cap by 1 leaves every point where it is.
+  std::vector<Kernel::Point_3> points = sphere.points;
+  std::vector<std::size_t> cap;
+  for(std::size_t i = 0; i < points.size(); ++i)
+    if(points[i].z() > 0.5) cap.push_back(i);
+  const auto result = CGAL_ext::scale_geometric_details(points, 10, cap, 1.0, CGAL_ext::Detail_filter{});
+  for(std::size_t i = 0; i < points.size(); ++i)
+    if(CGAL::squared_distance(points[i], sphere.points[i]) > 1e-18) { std::cerr << "scaling by 1 moved point " << i << "\n"; return 1; }
+  std::cout << "consumer: details of " << indices.size() << " points OK; identity scaling OK ("
+            << result.least_squares.method << ")\n";
   return 0;
 }
