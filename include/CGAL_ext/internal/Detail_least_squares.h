@@ -109,6 +109,8 @@ public:
   void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
               const Least_squares_settings& settings)
   {
+    if(A.rows() != A.cols() || positions.rows() != A.rows())
+      throw Invalid_input("detail least squares: the operator must be square with one position per unknown");
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     m_settings = settings;
@@ -130,6 +132,10 @@ public:
       for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
         m_diagonal(m_A.innerIndexPtr()[e]) += alpha * m_A.valuePtr()[e] * m_A.valuePtr()[e];
       for(int a : m_anchors) m_diagonal(a) += 1.0;
+      for(Eigen::Index j = 0; j < m_diagonal.size(); ++j)
+        if(!(m_diagonal(j) > 0))
+          throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+                                  " of the region appears in no equation; the normal matrix is singular");
       m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
       m_statistics.assembly_seconds = seconds_since(start);
       return;
@@ -168,8 +174,8 @@ public:
     const std::vector<int> order = geometric_nested_dissection(upper, positions);
     m_new_of.indices().resize(Eigen::Index(n));
     for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
-    m_normal.resize(Eigen::Index(n), Eigen::Index(n));
-    m_normal.template selfadjointView<Eigen::Lower>() =
+    Column_matrix normal{Eigen::Index(n), Eigen::Index(n)};
+    normal.template selfadjointView<Eigen::Lower>() =
       Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
                                       upper.innerIndexPtr(), upper.valuePtr())
         .template selfadjointView<Eigen::Lower>()
@@ -181,14 +187,14 @@ public:
     common.print = 0; // a rounding-negative pivot is handled below, not printed
     common.nmethods = 1;
     common.method[0].ordering = CHOLMOD_NATURAL;
-    m_main->compute(m_normal);
+    m_main->compute(normal);
     if(m_main->info() == Eigen::Success)
       m_statistics.method = "CHOLMOD supernodal LL^T";
     else
       m_main.reset();
 #endif
     if(!m_main) {
-      m_fallback = std::make_unique<Fallback_factor>(m_normal);
+      m_fallback = std::make_unique<Fallback_factor>(normal);
       if(m_fallback->info() != Eigen::Success)
         throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
                                 "some part of the region is not pinned by anchors or fixed points)");
@@ -341,7 +347,6 @@ private:
   Least_squares_settings m_settings;
   Sparse_row_matrix m_A, m_At;
   std::vector<int> m_anchors;
-  Column_matrix m_normal;          // scaled, permuted lower triangle; the factorisations keep pointers into it
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> m_new_of; // elimination order
   Eigen::VectorXd m_scale;         // Jacobi equilibration of the Cholesky path
   Eigen::VectorXd m_diagonal;      // diagonal of N for the conjugate-gradient preconditioner
