@@ -2,7 +2,7 @@
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
-#include "test_support.h"
+#include "bumpy_sphere_fixture.h"
 
 #include <CGAL/property_map.h>
 
@@ -15,93 +15,6 @@
 #include <numeric>
 
 using namespace CGAL_ext;
-
-namespace {
-struct Radial_statistics
-{
-  double mean_radius = 0, bump_rms = 0, centroid_offset = 0;
-};
-
-/// Mean distance from the origin, RMS of its deviation (the bumps), and the centroid's distance from the origin.
-Radial_statistics radial(const std::vector<Point>& points)
-{
-  Radial_statistics s;
-  double cx = 0, cy = 0, cz = 0;
-  for(const Point& p : points) {
-    s.mean_radius += std::sqrt((p - CGAL::ORIGIN).squared_length());
-    cx += p.x(); cy += p.y(); cz += p.z();
-  }
-  const double n = double(points.size());
-  s.mean_radius /= n;
-  for(const Point& p : points) {
-    const double d = std::sqrt((p - CGAL::ORIGIN).squared_length()) - s.mean_radius;
-    s.bump_rms += d * d;
-  }
-  s.bump_rms = std::sqrt(s.bump_rms / n);
-  s.centroid_offset = std::sqrt(cx * cx + cy * cy + cz * cz) / n;
-  return s;
-}
-
-double max_distance(const std::vector<Point>& a, const std::vector<Point>& b)
-{
-  double d = 0;
-  for(std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::sqrt(CGAL::squared_distance(a[i], b[i])));
-  return d;
-}
-
-const auto sphere = shapes::bumpy_sphere<Kernel>(20000, 1.0, 0.02, 4.0);
-const std::vector<std::size_t> indices = [] {
-  std::vector<std::size_t> v(sphere.points.size());
-  std::iota(v.begin(), v.end(), std::size_t(0));
-  return v;
-}();
-
-/// Named parameters for an index range over `points` with the sphere's exact normals.
-auto on(std::vector<Point>& points)
-{
-  return CGAL::parameters::point_map(CGAL::make_property_map(points)).normal_map(CGAL::make_property_map(sphere.normals));
-}
-} // namespace
-
-TEST(BalancedFlow, BumpySphereLosesItsBumpsButNotItsSizeOrPlace)
-{
-  std::vector<Point> base = sphere.points;
-  ASSERT_TRUE(balanced_flow_smooth_point_set(indices, 10, Balanced_flow_settings(), on(base)));
-  const Radial_statistics before = radial(sphere.points), after = radial(base);
-  EXPECT_LT(after.bump_rms, 0.1 * before.bump_rms);
-  EXPECT_LT(std::abs(after.mean_radius - before.mean_radius), 0.01);
-  EXPECT_LT(after.centroid_offset, 0.01);
-  // Normals estimated instead of given: the same properties.
-  std::vector<Point> estimated = sphere.points;
-  ASSERT_TRUE(balanced_flow_smooth_point_set(estimated, 10));
-  EXPECT_LT(radial(estimated).bump_rms, 0.1 * before.bump_rms);
-  EXPECT_LT(std::abs(radial(estimated).mean_radius - before.mean_radius), 0.01);
-}
-
-TEST(BalancedFlow, ThinTubeKeepsItsThickness)
-{
-  // The tentacle tapers from radius 0.25 to 0.083: a plain curvature flow would thin its tip first.
-  const auto tube = shapes::bumpy_tube<Kernel>(30000);
-  std::vector<Point> base = tube.points;
-  std::vector<std::size_t> tube_indices(base.size());
-  std::iota(tube_indices.begin(), tube_indices.end(), std::size_t(0));
-  balanced_flow_smooth_point_set(tube_indices, 10, Balanced_flow_settings(),
-                                 CGAL::parameters::point_map(CGAL::make_property_map(base))
-                                   .normal_map(CGAL::make_property_map(tube.normals)));
-  // Signed change along the normal, averaged: the base neither shrinks nor swells by more than 2 % of the
-  // tip radius, while the bumps (height along the normal) lose most of their energy.
-  double mean_offset = 0, bump_energy = 0, left_energy = 0;
-  for(std::size_t i = 0; i < base.size(); ++i) {
-    const double offset = (base[i] - tube.points[i]) * tube.normals[i];
-    mean_offset += offset;
-    bump_energy += tube.bump_height[i] * tube.bump_height[i];
-    const double left = tube.bump_height[i] + offset;
-    left_energy += left * left;
-  }
-  mean_offset /= double(base.size());
-  EXPECT_LT(std::abs(mean_offset), 0.02 * 0.083);
-  EXPECT_LT(left_energy, 0.2 * bump_energy);
-}
 
 TEST(EnhanceGeometricDetails, WholeModelEnhancementIsTheExactSolutionAndDoublesTheBumps)
 {

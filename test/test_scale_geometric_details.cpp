@@ -71,12 +71,6 @@ std::vector<std::size_t> cap_of_sphere(const std::vector<Point>& points, double 
   return roi;
 }
 
-double max_distance(const std::vector<Point>& a, const std::vector<Point>& b)
-{
-  double d = 0;
-  for(std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::sqrt(CGAL::squared_distance(a[i], b[i])));
-  return d;
-}
 
 Detail_scaling_settings settings_for(Detail_order order, Linear_solver solver = Linear_solver::cholesky)
 {

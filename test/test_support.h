@@ -4,6 +4,7 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <vector>
@@ -23,6 +24,14 @@ inline double pearson(const std::vector<double>& a, const std::vector<double>& b
     sbb += (b[i] - mb) * (b[i] - mb);
   }
   return sab / std::sqrt(saa * sbb);
+}
+
+/// The largest distance between corresponding points of two equally long ranges.
+inline double max_distance(const std::vector<Point>& a, const std::vector<Point>& b)
+{
+  double d = 0;
+  for(std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::sqrt(CGAL::squared_distance(a[i], b[i])));
+  return d;
 }
 
 #endif
