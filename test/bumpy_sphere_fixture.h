@@ -38,7 +38,6 @@ Radial_statistics radial(const std::vector<Point>& points)
   return s;
 }
 
-
 const auto sphere = CGAL_ext::shapes::bumpy_sphere<Kernel>(20000, 1.0, 0.02, 4.0);
 const std::vector<std::size_t> indices = [] {
   std::vector<std::size_t> v(sphere.points.size());
