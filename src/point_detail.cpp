@@ -231,7 +231,7 @@ struct Manipulate_command
   std::string input, output, png, report, view = "front", solver = "cholesky";
   double factor = 1;
   std::vector<std::string> roi, anchors;
-  bool free_border = false;
+  std::string border = "auto";
   Detail_options detail;
   Render_settings render;
 
@@ -248,7 +248,9 @@ struct Manipulate_command
     for(const std::string& t : anchors) anchor_specs.push_back(parse_region_spec(t));
     CGAL_ext::Detail_enhancement_settings settings(detail.settings());
     settings.least_squares.solver = solver == "cg" ? CGAL_ext::Linear_solver::conjugate_gradient : CGAL_ext::Linear_solver::cholesky;
-    settings.anchor_region_border = !free_border;
+    settings.border_anchoring = border == "anchored" ? CGAL_ext::Border_anchoring::anchored
+                                : border == "free"   ? CGAL_ext::Border_anchoring::free
+                                                     : CGAL_ext::Border_anchoring::automatic;
     settings.validate();
 
     Progress_printer progress(common.quiet);
@@ -437,7 +439,9 @@ int main(int argc, char** argv)
     if(!command->enhance) roi_option->required();
     sub->add_option("--anchors", command->anchors, "anchored points, same syntax (default: the region's border, or for the "
                                                     "whole model in enhance a uniform 1 % at the exact solution)");
-    sub->add_flag("--free-border", command->free_border, "no default border anchors: the fixed surroundings alone hold a partial region");
+    sub->add_option("--border", command->border, "default anchors of a partial region: its border (anchored), none (free: the "
+                                                  "surroundings hold it), or auto (anchored except for the cubic order)")
+      ->check(CLI::IsMember({"auto", "anchored", "free"}))->capture_default_str();
     sub->add_option("--solver", command->solver, "cholesky (factor once) or cg (conjugate gradients, the paper's)")
       ->check(CLI::IsMember({"cholesky", "cg"}))->capture_default_str();
     sub->add_option("--png", command->png, "also render the result, coloured by the displacement along the normal");

@@ -93,7 +93,7 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
       for(std::size_t a = 0; a < anchors_local.size(); ++a)
         anchor_displacement.row(Eigen::Index(a)) = (s - 1.0) * detail_offset.row(roi[std::size_t(anchors_local[a])]);
     } else {
-      if(settings.anchor_region_border) anchors_local = region_border(K, roi, in_roi);
+      if(settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
       anchor_displacement.setZero(Eigen::Index(anchors_local.size()), 3);
     }
   }
@@ -124,8 +124,8 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   With the whole model as region (the overload without `roi`), nothing outside holds the shape, so a
   spatially uniform subset of about `default_anchor_fraction` of the points is anchored at the exact
   solution's value there, `p~ + s (p - p~)`; the result is then that exact solution, to solver precision.
-  With a partial region, its border is anchored where it is, unless `point_is_constrained_map` names the
-  anchors (kept where they are).
+  With a partial region, its border is anchored where it is as `settings.border_anchoring` says, unless
+  `point_is_constrained_map` names the anchors (kept where they are).
 
   Normals (for the flow) come from `normal_map` or are estimated (`CGAL::jet_estimate_normals` and
   `CGAL::mst_orient_normals`, 18 neighbours). The parameters are those of `scale_geometric_details`, plus

@@ -21,6 +21,24 @@ namespace CGAL_ext {
 
 /*!
   \ingroup PkgCGALExtRef
+  The default anchors of a partial region of interest. Soft border anchors conflict with the border's own
+  detail equations (which ask those points to move); how that conflict resolves depends on the order.
+  Measured (doc/detail_scaling.md): on a bumpy patch scaled to s = 0, the largest height left in the centre
+  is 0.08 / 0.06 / 1.3 bump amplitudes for the linear / quadric / cubic order with border anchors and
+  0.05 / 0.04 / 0.28 without; on a quarter of a unit sphere scaled by s = 2, the largest displacement is
+  0.11 / 0.11 / 2.9 with border anchors and 0.52 / 0.52 / 0.11 without. The cubic order responds so weakly to
+  smooth shapes (`f(k) ~ 2.7 k^2`) that anchoring turns the conflict into a bulge; the linear and quadric
+  orders need the anchors to keep a curved region's own curvature from being scaled as a whole.
+*/
+enum class Border_anchoring
+{
+  automatic, ///< border anchors for the linear and quadric orders, none for the cubic order (the default)
+  anchored,  ///< border anchors for every order (the paper's soft constraints)
+  free       ///< no border anchors: the surroundings alone hold the region
+};
+
+/*!
+  \ingroup PkgCGALExtRef
   Settings of detail scaling: what the details are (transfer function, Laplacian weights) and how the
   least-squares problem is solved. Implicitly constructible from a `Detail_filter`.
 */
@@ -28,13 +46,17 @@ struct Detail_scaling_settings
 {
   Detail_settings details;
   Least_squares_settings least_squares;
-  /// Without caller anchors, a partial region anchors its border (its points with a neighbour outside), as
-  /// the paper's soft constraints do. With `false` it is held by its fixed surroundings alone: the detail
-  /// equations are then square and consistent. Measured on a bumpy patch scaled to s = 0 (the largest height
-  /// left in its centre, in bump amplitudes): border anchors 0.08 / 0.06 / 1.3 for the linear / quadric /
-  /// cubic order, surroundings alone 0.05 / 0.04 / 0.28. The cubic order's weak response to smooth shapes
-  /// turns the conflict between soft anchors and the border's detail equations into a smooth bulge.
-  bool anchor_region_border = true;
+  /// Without caller anchors, whether a partial region anchors its border (its points with a neighbour
+  /// outside; the paper's soft constraints) or is held by its fixed surroundings alone (the detail equations
+  /// are then square and consistent). See `Border_anchoring`.
+  Border_anchoring border_anchoring = Border_anchoring::automatic;
+
+  /// Whether the default anchors of a partial region are its border, for the filter of these settings.
+  bool anchors_border() const
+  {
+    return border_anchoring == Border_anchoring::anchored ||
+           (border_anchoring == Border_anchoring::automatic && details.filter.order != Detail_order::cubic);
+  }
 
   Detail_scaling_settings(const Detail_filter& filter = {}) : details(filter) {}
   Detail_scaling_settings(const Detail_settings& d, const Least_squares_settings& ls = {}) : details(d), least_squares(ls) {}
@@ -131,7 +153,7 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
     if(roi.size() == cloud.size())
       throw Invalid_input(std::string(who) + ": the region of interest is the whole model and no anchors were given; "
                           "its scaled shape is then not pinned anywhere: give anchors (a range or point_is_constrained_map)");
-    if(settings.anchor_region_border) anchors_local = region_border(K, roi, in_roi);
+    if(settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
   }
   check_pinned(K, roi, in_roi, anchors_local, cloud.input_index, who);
   progress.stage(0.3, 1.0);
@@ -175,7 +197,8 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
   \param roi indices of the region's points; repeats are ignored
   \param anchors indices of anchored points, all in the region. The overload without this argument takes
          them from `point_is_constrained_map`, or, without that either, anchors the region's border (its
-         points with a neighbour outside it). Scaling the whole model needs anchors.
+         points with a neighbour outside it) as `settings.border_anchoring` says. Scaling the whole model
+         needs anchors.
   \param s the scale factor (finite; 0 removes the details, 1 changes nothing, > 1 exaggerates them)
   \param settings transfer function, Laplacian weights and solver (a `Detail_filter` converts implicitly)
   \param np an optional sequence of named parameters among the ones listed below
