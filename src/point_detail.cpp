@@ -9,6 +9,7 @@
 #include <CGAL_ext/balanced_flow_smooth_point_set.h>
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/enhance_geometric_details.h>
+#include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
@@ -297,6 +298,57 @@ struct Manipulate_command
   }
 };
 
+/// `curvature`: signed mean curvature per point (positive where the surface bends away from its normal).
+struct Curvature_command
+{
+  std::string input, output, png, report, view = "front", fitting = "monge";
+  unsigned int k = CGAL_ext::default_curvature_neighbors;
+  Render_settings render;
+
+  void run(const Common_options& common)
+  {
+    Output_files outputs({input});
+    const fs::path ply_tmp = outputs.add(output);
+    const fs::path png_tmp = png.empty() ? fs::path() : outputs.add(png);
+    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    render.view = parse_view(view);
+    Progress_printer progress(common.quiet);
+    Report rep("curvature");
+    rep.data()["input"] = input;
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    if(cloud.points.size() <= k)
+      throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(k) +
+                      " needs more than k points");
+    ensure_normals(cloud, progress, rep);
+    const std::size_t n = cloud.points.size();
+    std::vector<double> H(n);
+    const bool done = rep.time("curvature", [&] {
+      return CGAL_ext::estimate_mean_curvature(
+        index_range(n), k, fitting == "closed-form" ? CGAL_ext::Curvature_fitting::closed_form : CGAL_ext::Curvature_fitting::monge_jet_fitting,
+        CGAL::make_property_map(H),
+        CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+          .normal_map(CGAL::make_property_map(cloud.normals))
+          .callback(progress.stage("curvature")));
+    });
+    progress.finish();
+    if(!done) throw Cancelled();
+    std::vector<double> sorted = H;
+    std::sort(sorted.begin(), sorted.end());
+    auto& r = rep.data();
+    r["points"] = n;
+    r["k"] = k;
+    r["fitting"] = fitting;
+    r["curvature_percentiles"] = {{"p02", sorted[n / 50]}, {"p50", sorted[n / 2]}, {"p98", sorted[n - 1 - n / 50]}};
+    cloud.colors = diverging_colors(H);
+    cloud.set_scalar("mean_curvature", std::move(H));
+    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
+    if(!png.empty())
+      write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+    if(!report.empty()) write_file(report_tmp, rep.dump());
+    outputs.commit();
+  }
+};
+
 struct Render_command
 {
   std::string input, output, color_by, report, view = "front";
@@ -450,6 +502,17 @@ int main(int argc, char** argv)
     add_render_options(*sub, command->render, command->view);
   }
 
+  Curvature_command curvature;
+  CLI::App* curvature_app = app.add_subcommand("curvature", "signed mean curvature of every point (jet fitting), as a PLY property and a colour map");
+  curvature_app->add_option("-i,--input", curvature.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  curvature_app->add_option("-o,--output", curvature.output, "output binary PLY with mean_curvature and colours")->required();
+  curvature_app->add_option("-k,--neighbors", curvature.k, "neighbours of the degree-2 fit (>= 5)")->capture_default_str();
+  curvature_app->add_option("--fitting", curvature.fitting, "monge (CGAL::Monge_via_jet_fitting) or closed-form (faster)")
+    ->check(CLI::IsMember({"monge", "closed-form"}))->capture_default_str();
+  curvature_app->add_option("--png", curvature.png, "also render the curvature colour map (red: bends away from the normal)");
+  curvature_app->add_option("--report", curvature.report, "write stage timings and curvature percentiles as JSON");
+  add_render_options(*curvature_app, curvature.render, curvature.view);
+
   Render_command render;
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
   render_app->add_option("-i,--input", render.input, "input points")->required();
@@ -474,6 +537,7 @@ int main(int argc, char** argv)
   try {
     if(*details_app) details.run(common);
     if(*scale_app) scale.run(common);
+    if(*curvature_app) curvature.run(common);
     if(*enhance_app) enhance.run(common);
     if(*render_app) render.run(common);
     if(*demo_app) demo.run(common);

@@ -287,3 +287,26 @@ TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
   }
   expect_only({"in.ply", "bad_index.txt", "far_index.txt"});
 }
+
+TEST_F(Cli, curvature_of_a_sphere_is_one_over_its_radius)
+{
+  const std::string in = write_sphere_ply("in.ply", 4000);
+  for(const char* fitting : {"monge", "closed-form"}) {
+    const Program_run r = run("curvature -i " + in + " -o " + path("h.ply") + " --fitting " + fitting + " --png " + path("h.png") +
+                              " --report " + path("h.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    CGAL::Point_set_3<Point> out;
+    ASSERT_TRUE(CGAL::IO::read_point_set(path("h.ply"), out));
+    auto H = out.property_map<double>("mean_curvature");
+    ASSERT_TRUE(H.second);
+    std::vector<double> values(H.first.begin(), H.first.end());
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(values.size() / 2), values.end());
+    // The file's sphere has bumps of 2 % of the radius: the median stays within 5 % of 1.
+    EXPECT_NEAR(values[values.size() / 2], 1.0, 0.05) << fitting;
+    EXPECT_NEAR(nlohmann::json::parse(contents(path("h.json")))["curvature_percentiles"]["p50"].get<double>(), 1.0, 0.05);
+    EXPECT_EQ(contents(path("h.png")).substr(1, 3), "PNG");
+  }
+  const Program_run bad = run("curvature -i " + in + " -o " + path("x.ply") + " -k 3");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("at least 5"), std::string::npos) << bad.output;
+}
