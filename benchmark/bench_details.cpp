@@ -3,6 +3,7 @@
 // scans and on a 1M-point sampling of the armadillo surface, sequentially and with the machine's threads.
 // Usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/details_results.csv and DIR/details_results.md (medians, min-max, peak memory).
+#include "bench_support.h"
 #include "cli_support.h"
 #include "point_io.h"
 
@@ -31,55 +32,6 @@ using namespace point_detail;
 namespace ci = CGAL_ext::internal;
 
 namespace {
-
-struct Stats { double median, min, max; };
-
-Stats measure(int reps, const std::function<void()>& body)
-{
-  std::vector<double> t;
-  for(int r = 0; r < reps; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    body();
-    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(t.begin(), t.end());
-  return {t[t.size() / 2], t.front(), t.back()};
-}
-
-double peak_rss_mib()
-{
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;
-}
-
-/// `n` points sampled uniformly on the surface of a triangle mesh, with the normals of their faces.
-Point_cloud sample_mesh(const fs::path& off, std::size_t n)
-{
-  std::vector<Point> v;
-  std::vector<std::vector<std::size_t>> faces;
-  if(!CGAL::IO::read_polygon_soup(off.string(), v, faces)) throw std::runtime_error("cannot read " + off.string());
-  std::vector<double> cumulative;
-  double total = 0;
-  for(const auto& f : faces) {
-    total += std::sqrt(CGAL::squared_area(v[f[0]], v[f[1]], v[f[2]]));
-    cumulative.push_back(total);
-  }
-  std::mt19937_64 rng(42);
-  std::uniform_real_distribution<double> u01(0, 1);
-  Point_cloud cloud;
-  for(std::size_t i = 0; i < n; ++i) {
-    const std::size_t f = std::size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u01(rng) * total) - cumulative.begin());
-    const auto& face = faces[std::min(f, faces.size() - 1)];
-    double a = u01(rng), b = u01(rng);
-    if(a + b > 1) { a = 1 - a; b = 1 - b; }
-    const Point &p = v[face[0]], &q = v[face[1]], &r = v[face[2]];
-    cloud.points.push_back(p + a * (q - p) + b * (r - p));
-    Vector normal = CGAL::cross_product(q - p, r - p);
-    cloud.normals.push_back(normal / std::sqrt(normal.squared_length()));
-  }
-  return cloud;
-}
 
 struct Row
 {

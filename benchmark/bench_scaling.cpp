@@ -3,6 +3,7 @@
 // the 10,000-point region of the targets, and whole-model enhancement.
 // Usage: bench_scaling [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/scaling_results.csv and DIR/scaling_results.md (medians and min-max over repetitions).
+#include "bench_support.h"
 #include "cli_support.h"
 #include "point_io.h"
 #include "region_spec.h"
@@ -26,14 +27,6 @@ namespace fs = std::filesystem;
 using namespace point_detail;
 
 namespace {
-
-struct Stats { double median = 0, min = 0, max = 0; };
-
-Stats summarize(std::vector<double> t)
-{
-  std::sort(t.begin(), t.end());
-  return {t[t.size() / 2], t.front(), t.back()};
-}
 
 struct Case
 {
