@@ -22,8 +22,8 @@ void use_huge_pages(char** argv)
   const std::string value = (tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1";
   if(setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);
-  // The exec failed: run as we are, with the environment as it was.
-  if(current) setenv("GLIBC_TUNABLES", current, 1);
+  // The exec failed: run as we are, with the environment as it was (setenv may have reused `current`).
+  if(current) setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
   else unsetenv("GLIBC_TUNABLES");
 }
 
@@ -33,6 +33,7 @@ std::string malloc_pages()
   return tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "transparent huge pages"
                                                                                                  : "4 KiB pages";
 }
+
 namespace fs = std::filesystem;
 
 namespace {
