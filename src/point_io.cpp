@@ -94,10 +94,24 @@ Point_cloud read_point_cloud(const fs::path& path)
 
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
+  std::string header;
+  std::ifstream(path) >> header;
+  // CGAL's point-set reader refuses the OFF variants with colours (COFF, like CGAL's own cactus.off) and says
+  // so on stderr; its polygon-soup reader takes them.
+  const bool colored_off = ext == "off" && header.find("OFF") != std::string::npos && header != "OFF" && header != "NOFF";
   try {
-    ok = CGAL::IO::read_point_set(path.string(), ps);
+    if(!colored_off) ok = CGAL::IO::read_point_set(path.string(), ps);
   } catch(const std::exception& e) {
     throw Cli_error("cannot read " + path.string() + ": malformed " + ext + " file (" + e.what() + ")");
+  }
+  if(!ok && ext == "off") {
+    std::vector<Point> vertices;
+    std::vector<std::vector<std::size_t>> faces;
+    if(CGAL::IO::read_polygon_soup(path.string(), vertices, faces, CGAL::parameters::verbose(false)) && !vertices.empty()) {
+      ps.clear();
+      for(const Point& v : vertices) ps.insert(v);
+      ok = true;
+    }
   }
   if(!ok) throw Cli_error("cannot read " + path.string() + ": malformed or truncated " + ext + " file");
   if(ps.number_of_points() == 0) throw Cli_error(path.string() + " contains no points");

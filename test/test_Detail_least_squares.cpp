@@ -9,6 +9,7 @@
 #include <CGAL_ext/compute_point_set_laplacian.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/Detail_least_squares.h>
+#include <CGAL_ext/internal/detail_manipulation.h>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -140,4 +141,25 @@ TEST(DetailLeastSquares, NestedDissectionIsAPermutation)
   std::sort(sorted.begin(), sorted.end());
   ASSERT_EQ(sorted.size(), p.roi.size());
   for(std::size_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], int(i));
+}
+
+TEST(DetailLeastSquares, UnpinnedPartsAreFoundWithTheirSize)
+{
+  // Two separate sphere samplings; the region is everything, anchored on the first only.
+  const auto a = shapes::bumpy_sphere<Kernel>(400, 1.0, 0.0), b = shapes::bumpy_sphere<Kernel>(150, 0.3, 0.0);
+  std::vector<Point> points = a.points;
+  for(const Point& p : b.points) points.push_back(p + Vector(5, 0, 0));
+  const Spatial_point_cloud cloud = make_spatial_point_cloud<CGAL::Sequential_tag>(points, CGAL::Identity_property_map<Point>(), "test");
+  Progress progress;
+  Sparse_row_matrix K;
+  build_laplacian<CGAL::Sequential_tag>(cloud, 10, {}, progress, K);
+  std::vector<int> roi(cloud.size());
+  std::iota(roi.begin(), roi.end(), 0);
+  const std::vector<char> in_roi(cloud.size(), 1);
+  const int anchor = cloud.spatial_index()[0]; // a point of the first sphere
+  const auto parts = unpinned_parts(K, roi, in_roi, {anchor});
+  ASSERT_EQ(parts.size(), 1u);
+  EXPECT_EQ(parts[0].size, 150u);
+  EXPECT_GE(cloud.input_index[std::size_t(parts[0].first)], 400);
+  EXPECT_TRUE(unpinned_parts(K, roi, in_roi, {anchor, parts[0].first}).empty());
 }

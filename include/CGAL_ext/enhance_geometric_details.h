@@ -87,8 +87,11 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   Matrix_n3 anchor_displacement = Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3);
   if(result.default_anchors) {
     if(roi.size() == cloud.size()) {
-      // No outside to hold the region: anchor a uniform subset at the exact solution p~ + s (p - p~).
+      // No outside to hold the region: anchor a uniform subset at the exact solution p~ + s (p - p~), plus one
+      // point of every separate piece (a scan's stray cluster) that the subset missed.
       anchors_local = uniform_subset(K, cloud.positions, roi, settings.default_anchor_fraction);
+      for(const Unpinned_part& part : unpinned_parts(K, roi, in_roi, anchors_local)) anchors_local.push_back(part.first);
+      std::sort(anchors_local.begin(), anchors_local.end());
       anchor_displacement.resize(Eigen::Index(anchors_local.size()), 3);
       for(std::size_t a = 0; a < anchors_local.size(); ++a)
         anchor_displacement.row(Eigen::Index(a)) = (s - 1.0) * detail_offset.row(roi[std::size_t(anchors_local[a])]);
@@ -122,8 +125,8 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   `scale_geometric_details`.
 
   With the whole model as region (the overload without `roi`), nothing outside holds the shape, so a
-  spatially uniform subset of about `default_anchor_fraction` of the points is anchored at the exact
-  solution's value there, `p~ + s (p - p~)`; the result is then that exact solution, to solver precision.
+  spatially uniform subset of about `default_anchor_fraction` of the points (and one point of every separate
+  piece the subset misses) is anchored at the exact solution's value there, `p~ + s (p - p~)`; the result is then that exact solution, to solver precision.
   With a partial region, its border is anchored where it is as `settings.border_anchoring` says, unless
   `point_is_constrained_map` names the anchors (kept where they are).
 

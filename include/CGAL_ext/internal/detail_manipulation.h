@@ -100,26 +100,33 @@ inline std::vector<int> uniform_subset(const Sparse_row_matrix& K, const Matrix_
   return local;
 }
 
-/// Throws unless every connected part of the region (in the neighbour graph) holds an anchor or touches a
-/// point outside the region: otherwise that part could translate freely and the system is singular.
-inline void check_pinned(const Sparse_row_matrix& K, const std::vector<int>& roi, const std::vector<char>& in_roi,
-                         const std::vector<int>& anchors_local, const std::vector<int>& input_index, const char* who)
+/// A connected part of the region (in the neighbour graph) with no anchor and no neighbour outside the region:
+/// nothing pins it, it could translate freely. `first` is its first point (local index).
+struct Unpinned_part
+{
+  int first;
+  std::size_t size;
+};
+
+inline std::vector<Unpinned_part> unpinned_parts(const Sparse_row_matrix& K, const std::vector<int>& roi,
+                                                 const std::vector<char>& in_roi, const std::vector<int>& anchors_local)
 {
   std::vector<int> local_of(std::size_t(K.rows()), -1);
   for(std::size_t r = 0; r < roi.size(); ++r) local_of[std::size_t(roi[r])] = int(r);
   std::vector<char> pinned(roi.size(), 0), seen(roi.size(), 0);
   for(int a : anchors_local) pinned[std::size_t(a)] = 1;
-  std::vector<int> part, stack;
+  std::vector<Unpinned_part> parts;
+  std::vector<int> stack;
   for(std::size_t start = 0; start < roi.size(); ++start) {
     if(seen[start]) continue;
-    part.clear();
+    std::size_t size = 0;
     bool is_pinned = false;
     stack.push_back(int(start));
     seen[start] = 1;
     while(!stack.empty()) {
       const int r = stack.back();
       stack.pop_back();
-      part.push_back(r);
+      ++size;
       is_pinned = is_pinned || pinned[std::size_t(r)];
       for(int e = K.outerIndexPtr()[roi[std::size_t(r)]]; e < K.outerIndexPtr()[roi[std::size_t(r)] + 1]; ++e) {
         const int j = K.innerIndexPtr()[e];
@@ -128,12 +135,22 @@ inline void check_pinned(const Sparse_row_matrix& K, const std::vector<int>& roi
         if(!seen[std::size_t(l)]) { seen[std::size_t(l)] = 1; stack.push_back(l); }
       }
     }
-    if(!is_pinned)
-      throw Invalid_input(std::string(who) + ": a part of the region of interest with " + std::to_string(part.size()) +
-                          " points (point #" + std::to_string(input_index[std::size_t(roi[std::size_t(part.front())])]) +
-                          " among them) has no anchor and no neighbour outside the region, so nothing pins it and "
-                          "the least-squares system is singular; give anchors in that part or shrink the region");
+    if(!is_pinned) parts.push_back({int(start), size});
   }
+  return parts;
+}
+
+/// Throws unless every connected part of the region holds an anchor or touches a point outside the region:
+/// otherwise that part could translate freely and the system is singular.
+inline void check_pinned(const Sparse_row_matrix& K, const std::vector<int>& roi, const std::vector<char>& in_roi,
+                         const std::vector<int>& anchors_local, const std::vector<int>& input_index, const char* who)
+{
+  const std::vector<Unpinned_part> parts = unpinned_parts(K, roi, in_roi, anchors_local);
+  if(parts.empty()) return;
+  throw Invalid_input(std::string(who) + ": a part of the region of interest with " + std::to_string(parts.front().size) +
+                      " points (point #" + std::to_string(input_index[std::size_t(roi[std::size_t(parts.front().first)])]) +
+                      " among them) has no anchor and no neighbour outside the region, so nothing pins it and "
+                      "the least-squares system is singular; give anchors in that part or shrink the region");
 }
 
 /// The region's displacements for the detail change `detail_change` (rows of the whole cloud; only the
