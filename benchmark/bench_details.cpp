@@ -99,18 +99,11 @@ std::string machine_facts(int threads)
 int main(int argc, char** argv)
 {
   use_huge_pages(argv);
-  bool quick = false;
-  fs::path data = "data", out = "benchmark";
-  int reps = 5;
-  for(int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if(a == "--quick") quick = true;
-    else if(a == "--data" && i + 1 < argc) data = argv[++i];
-    else if(a == "--out" && i + 1 < argc) out = argv[++i];
-    else if(a == "--reps" && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
-    else { std::fprintf(stderr, "usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]\n"); return 2; }
-  }
-  if(quick) reps = 1;
+  const Bench_options options = parse_bench_options(argc, argv, "bench_details", 5);
+  if(!options.valid) return 2;
+  const bool quick = options.quick;
+  const fs::path data = options.data, out = options.out;
+  const int reps = options.reps;
   const int threads = tbb::info::default_concurrency();
   std::vector<Row> rows;
   std::vector<std::pair<std::string, Point_cloud>> models;

@@ -8,10 +8,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <sys/resource.h>
 #include <vector>
 
@@ -71,6 +74,35 @@ inline Point_cloud sample_mesh(const std::filesystem::path& off, std::size_t n)
     cloud.normals.push_back(normal / std::sqrt(normal.squared_length()));
   }
   return cloud;
+}
+
+/// The command line every benchmark program takes: [--quick] [--data DIR] [--out DIR] [--reps N].
+struct Bench_options
+{
+  bool quick = false;
+  std::filesystem::path data = "data", out = "benchmark";
+  int reps = 3;
+  bool valid = true;
+};
+
+/// Parses the options; a quick run has one repetition. Prints the usage and sets `valid` to false on a mistake.
+inline Bench_options parse_bench_options(int argc, char** argv, const char* program, int default_reps)
+{
+  Bench_options o;
+  o.reps = default_reps;
+  for(int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if(a == "--quick") o.quick = true;
+    else if(a == "--data" && i + 1 < argc) o.data = argv[++i];
+    else if(a == "--out" && i + 1 < argc) o.out = argv[++i];
+    else if(a == "--reps" && i + 1 < argc) o.reps = std::max(1, std::atoi(argv[++i]));
+    else {
+      std::fprintf(stderr, "usage: %s [--quick] [--data DIR] [--out DIR] [--reps N]\n", program);
+      o.valid = false;
+    }
+  }
+  if(o.quick) o.reps = 1;
+  return o;
 }
 
 } // namespace point_detail

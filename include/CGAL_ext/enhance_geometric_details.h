@@ -53,17 +53,10 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   if(!std::isfinite(s)) throw Invalid_input(std::string(who) + ": the enhancement factor s must be finite");
   settings.validate();
 
-  const Spatial_point_cloud cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
-  check_neighbor_count(k, cloud.size(), who);
-  const std::vector<int> row_of = cloud.spatial_index();
-  std::vector<int> roi(cloud.size());
-  if(roi_indices)
-    roi = rows_of_indices(*roi_indices, row_of, who, "region-of-interest");
-  else
-    std::iota(roi.begin(), roi.end(), 0);
-  if(roi.empty()) throw Invalid_input(std::string(who) + ": the region of interest is empty");
-  std::vector<char> in_roi(cloud.size(), 0);
-  for(int r : roi) in_roi[std::size_t(r)] = 1;
+  const Region region = make_region<ConcurrencyTag>(points, point_map, k, roi_indices, who);
+  const Spatial_point_cloud& cloud = region.cloud;
+  const std::vector<int>& roi = region.roi;
+  const std::vector<char>& in_roi = region.in_roi;
 
   Progress progress(callback);
   Matrix_n3 normals;
@@ -83,7 +76,7 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
 
   Detail_manipulation_result result;
   std::vector<int> anchors_local =
-    region_anchors(points, static_cast<const std::vector<int>*>(nullptr), np, cloud, row_of, roi, result.default_anchors, who);
+    region_anchors(points, static_cast<const std::vector<int>*>(nullptr), np, region, result.default_anchors, who);
   Matrix_n3 anchor_displacement = Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3);
   if(result.default_anchors) {
     if(roi.size() == cloud.size()) {
@@ -100,18 +93,8 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
       anchor_displacement.setZero(Eigen::Index(anchors_local.size()), 3);
     }
   }
-  check_pinned(K, roi, in_roi, anchors_local, cloud.input_index, who);
-
-  const Matrix_n3 displacement =
-    solve_region_displacements<ConcurrencyTag>(K, cloud.positions, settings.details.filter, roi, anchors_local, change,
-                                               anchor_displacement, settings.least_squares, result.least_squares);
-  if(!progress.report(1.0)) return {};
-
-  write_region(points, point_map, cloud, roi, displacement);
-  result.completed = true;
-  result.region_size = roi.size();
-  result.anchor_count = anchors_local.size();
-  return result;
+  return solve_and_write_region<ConcurrencyTag>(points, point_map, K, region, anchors_local, change, anchor_displacement,
+                                                settings, progress, result, who);
 }
 
 } // namespace internal

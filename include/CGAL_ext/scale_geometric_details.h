@@ -100,22 +100,43 @@ std::vector<std::size_t> selected_indices(const PointRange& points, SelectionMap
 namespace internal {
 
 /// The anchors of a region in local indices: the caller's (a range of indices or `point_is_constrained_map`)
-/// or, without any, the region's border. Sets `defaulted`.
+/// or, without any, none, with `defaulted` set so that the caller picks its default anchors.
 template <typename PointRange, typename AnchorRange, typename NamedParameters>
 std::vector<int> region_anchors(const PointRange& points, const AnchorRange* anchors, const NamedParameters& np,
-                                const Spatial_point_cloud& cloud, const std::vector<int>& row_of,
-                                const std::vector<int>& roi, bool& defaulted, const char* who)
+                                const Region& region, bool& defaulted, const char* who)
 {
   using CGAL::parameters::get_parameter;
   defaulted = false;
   if(anchors)
-    return local_anchor_indices(roi, rows_of_indices(*anchors, row_of, who, "anchor"), cloud.input_index, who);
+    return local_anchor_indices(region.roi, rows_of_indices(*anchors, region.row_of, who, "anchor"), region.cloud.input_index, who);
   if constexpr(!CGAL::parameters::is_default_parameter<NamedParameters, CGAL::internal_np::point_is_constrained_t>::value)
     return local_anchor_indices(
-      roi, rows_of_indices(selected_indices(points, get_parameter(np, CGAL::internal_np::point_is_constrained)), row_of, who, "anchor"),
-      cloud.input_index, who);
+      region.roi,
+      rows_of_indices(selected_indices(points, get_parameter(np, CGAL::internal_np::point_is_constrained)), region.row_of, who, "anchor"),
+      region.cloud.input_index, who);
   defaulted = true;
   return {};
+}
+
+/// The shared last steps of scaling and enhancement: check that the anchors pin the region, solve for its
+/// displacements and write them through the point map. `result` carries the anchor choice in and out.
+template <typename ConcurrencyTag, typename PointRange, typename PointMap>
+Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap point_map, const Sparse_row_matrix& K,
+                                                  const Region& region, const std::vector<int>& anchors_local,
+                                                  const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                                                  const Detail_scaling_settings& settings, Progress& progress,
+                                                  Detail_manipulation_result result, const char* who)
+{
+  check_pinned(K, region.roi, region.in_roi, anchors_local, region.cloud.input_index, who);
+  const Matrix_n3 displacement = solve_region_displacements<ConcurrencyTag>(
+    K, region.cloud.positions, settings.details.filter, region.roi, anchors_local, detail_change, anchor_displacement,
+    settings.least_squares, result.least_squares);
+  if(!progress.report(1.0)) return {};
+  write_region(points, point_map, region.cloud, region.roi, displacement);
+  result.completed = true;
+  result.region_size = region.roi.size();
+  result.anchor_count = anchors_local.size();
+  return result;
 }
 
 template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename AnchorRange, typename NamedParameters>
@@ -134,13 +155,10 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
   if(!std::isfinite(s)) throw Invalid_input(std::string(who) + ": the scale factor s must be finite");
   settings.validate();
 
-  const Spatial_point_cloud cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
-  check_neighbor_count(k, cloud.size(), who);
-  const std::vector<int> row_of = cloud.spatial_index();
-  const std::vector<int> roi = rows_of_indices(roi_indices, row_of, who, "region-of-interest");
-  if(roi.empty()) throw Invalid_input(std::string(who) + ": the region of interest is empty");
-  std::vector<char> in_roi(cloud.size(), 0);
-  for(int r : roi) in_roi[std::size_t(r)] = 1;
+  const Region region = make_region<ConcurrencyTag>(points, point_map, k, &roi_indices, who);
+  const Spatial_point_cloud& cloud = region.cloud;
+  const std::vector<int>& roi = region.roi;
+  const std::vector<char>& in_roi = region.in_roi;
 
   Progress progress(callback);
   progress.stage(0.0, 0.3);
@@ -148,29 +166,21 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
   if(!build_laplacian<ConcurrencyTag>(cloud, k, settings.details.weights, progress, K)) return {};
 
   Detail_manipulation_result result;
-  std::vector<int> anchors_local = region_anchors(points, anchors, np, cloud, row_of, roi, result.default_anchors, who);
+  std::vector<int> anchors_local = region_anchors(points, anchors, np, region, result.default_anchors, who);
   if(result.default_anchors) {
     if(roi.size() == cloud.size())
       throw Invalid_input(std::string(who) + ": the region of interest is the whole model and no anchors were given; "
                           "its scaled shape is then not pinned anywhere: give anchors (a range or point_is_constrained_map)");
     if(settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
   }
-  check_pinned(K, roi, in_roi, anchors_local, cloud.input_index, who);
   progress.stage(0.3, 1.0);
   if(!progress.report(0.0)) return {};
 
   // delta' - delta = (s - 1) delta on the region; the anchors keep their positions.
   const Matrix_n3 change = (s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, cloud.positions);
-  const Matrix_n3 displacement = solve_region_displacements<ConcurrencyTag>(
-    K, cloud.positions, settings.details.filter, roi, anchors_local, change,
-    Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3), settings.least_squares, result.least_squares);
-  if(!progress.report(1.0)) return {};
-
-  write_region(points, point_map, cloud, roi, displacement);
-  result.completed = true;
-  result.region_size = roi.size();
-  result.anchor_count = anchors_local.size();
-  return result;
+  return solve_and_write_region<ConcurrencyTag>(points, point_map, K, region, anchors_local, change,
+                                                Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3), settings,
+                                                progress, result, who);
 }
 
 } // namespace internal

@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -43,6 +44,36 @@ std::vector<int> rows_of_indices(const IndexRange& indices, const std::vector<in
   std::sort(rows.begin(), rows.end());
   rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
   return rows;
+}
+
+/// The caller's points in spatial order, and a region of interest among them.
+struct Region
+{
+  Spatial_point_cloud cloud;
+  std::vector<int> row_of;  ///< cloud row of the caller's i-th point
+  std::vector<int> roi;     ///< cloud rows of the region, increasing
+  std::vector<char> in_roi; ///< per cloud row
+};
+
+/// Copies and checks the points and `k`, and places the region (`roi_indices`, or every point when null).
+template <typename ConcurrencyTag, typename PointRange, typename PointMap, typename IndexRange>
+Region make_region(const PointRange& points, PointMap point_map, unsigned int k, const IndexRange* roi_indices,
+                   const char* who)
+{
+  Region region;
+  region.cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
+  check_neighbor_count(k, region.cloud.size(), who);
+  region.row_of = region.cloud.spatial_index();
+  if(roi_indices) {
+    region.roi = rows_of_indices(*roi_indices, region.row_of, who, "region-of-interest");
+  } else {
+    region.roi.resize(region.cloud.size());
+    std::iota(region.roi.begin(), region.roi.end(), 0);
+  }
+  if(region.roi.empty()) throw Invalid_input(std::string(who) + ": the region of interest is empty");
+  region.in_roi.assign(region.cloud.size(), 0);
+  for(int r : region.roi) region.in_roi[std::size_t(r)] = 1;
+  return region;
 }
 
 /// The anchors' positions in `roi` (local indices); throws if one is not in the region.
