@@ -78,6 +78,22 @@ std::vector<std::size_t> index_range(std::size_t n)
   return idx;
 }
 
+/// The temporary file to write an optional output to, or an empty path when the option was not given.
+fs::path add_if_given(Output_files& outputs, const std::string& destination)
+{
+  return destination.empty() ? fs::path() : outputs.add(destination);
+}
+
+/// Reads `input` (timed in the report) and checks that it has more than `k` points.
+Point_cloud read_for_neighbors(const std::string& input, unsigned int k, Report& rep)
+{
+  Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+  if(cloud.points.size() <= k)
+    throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(k) +
+                    " needs more than k points");
+  return cloud;
+}
+
 /// Gives the cloud normals when it has none: CGAL jet estimation and MST orientation.
 void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& report)
 {
@@ -167,18 +183,15 @@ struct Details_command
   {
     Output_files outputs({input});
     const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = png.empty() ? fs::path() : outputs.add(png);
-    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path report_tmp = add_if_given(outputs, report);
     render.view = parse_view(view);
     detail.settings().validate(); // before the (possibly long) read
 
     Progress_printer progress(common.quiet);
     Report rep("details");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
-    if(cloud.points.size() <= detail.k)
-      throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(detail.k) +
-                      " needs more than k points");
+    Point_cloud cloud = read_for_neighbors(input, detail.k, rep);
     ensure_normals(cloud, progress, rep);
     add_details(cloud, detail, progress, rep);
     rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
@@ -241,8 +254,8 @@ struct Manipulate_command
     const char* name = enhance ? "enhance" : "scale";
     Output_files outputs({input});
     const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = png.empty() ? fs::path() : outputs.add(png);
-    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path report_tmp = add_if_given(outputs, report);
     render.view = parse_view(view);
     std::vector<Region_spec> roi_specs, anchor_specs;
     for(const std::string& t : roi) roi_specs.push_back(parse_region_spec(t));
@@ -257,10 +270,7 @@ struct Manipulate_command
     Progress_printer progress(common.quiet);
     Report rep(name);
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
-    if(cloud.points.size() <= detail.k)
-      throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(detail.k) +
-                      " needs more than k points");
+    Point_cloud cloud = read_for_neighbors(input, detail.k, rep);
     const std::vector<std::size_t> region = roi_specs.empty() ? index_range(cloud.points.size()) : select_points(cloud.points, roi_specs);
     if(region.empty()) throw Cli_error("the region of interest (--roi) contains none of the " + std::to_string(cloud.points.size()) + " points");
     std::vector<std::size_t> anchor_indices;
@@ -309,16 +319,13 @@ struct Curvature_command
   {
     Output_files outputs({input});
     const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = png.empty() ? fs::path() : outputs.add(png);
-    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path report_tmp = add_if_given(outputs, report);
     render.view = parse_view(view);
     Progress_printer progress(common.quiet);
     Report rep("curvature");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
-    if(cloud.points.size() <= k)
-      throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(k) +
-                      " needs more than k points");
+    Point_cloud cloud = read_for_neighbors(input, k, rep);
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
     std::vector<double> H(n);
@@ -358,7 +365,7 @@ struct Render_command
   {
     Output_files outputs({input});
     const fs::path png_tmp = outputs.add(output);
-    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    const fs::path report_tmp = add_if_given(outputs, report);
     render.view = parse_view(view);
     Report rep("render");
     rep.data()["input"] = input;
@@ -399,7 +406,7 @@ struct Demo_command
     if(!fs::is_directory(directory)) throw Cli_error("cannot create directory " + directory);
     const fs::path dir(directory);
     Output_files outputs({});
-    const fs::path report_tmp = report.empty() ? fs::path() : outputs.add(report);
+    const fs::path report_tmp = add_if_given(outputs, report);
     nlohmann::json runs = nlohmann::json::array();
     Progress_printer progress(common.quiet);
     Render_settings render;
