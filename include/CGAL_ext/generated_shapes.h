@@ -152,6 +152,36 @@ Oriented_sample<Kernel> bumpy_tube(std::size_t n, double bend_radius = 1.0, doub
   return out;
 }
 
+/*!
+  The surface of an axis-aligned cube of edge `edge` centred at the origin, each face sampled on a
+  `per_side` x `per_side` grid of cell centres, each sample moved within its face by up to `jitter` spacings
+  (fixed seed), with the exact face normals: sharp edges for feature tests.
+*/
+template <typename Kernel>
+Oriented_sample<Kernel> cube(std::size_t per_side, double edge = 1.0, double jitter = 0.3)
+{
+  std::mt19937 rng(2718);
+  std::uniform_real_distribution<double> uniform(-jitter, jitter);
+  Oriented_sample<Kernel> out;
+  const double h = edge / double(per_side);
+  out.average_spacing = h;
+  for(int axis = 0; axis < 3; ++axis)
+    for(double side : {-1.0, 1.0}) {
+      Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+      normal(axis) = side;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for(std::size_t i = 0; i < per_side; ++i)
+        for(std::size_t j = 0; j < per_side; ++j) {
+          Eigen::Vector3d p;
+          p(axis) = side * edge / 2;
+          p(u) = std::clamp((double(i) + 0.5 + uniform(rng)) * h, 0.0, edge) - edge / 2;
+          p(v) = std::clamp((double(j) + 0.5 + uniform(rng)) * h, 0.0, edge) - edge / 2;
+          out.push_back(p, normal, 0.0);
+        }
+    }
+  return out;
+}
+
 } // namespace shapes
 } // namespace CGAL_ext
 

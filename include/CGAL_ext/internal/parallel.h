@@ -41,6 +41,14 @@ public:
   /// The following reports cover [begin, end] of the whole run.
   void stage(double begin, double end) { m_begin = begin; m_end = end; }
 
+  /// A stage's span; `at(f)` is the overall progress a fraction f into it (to split a stage into steps).
+  struct Range
+  {
+    double begin, end;
+    double at(double f) const { return begin + (end - begin) * f; }
+  };
+  Range range() const { return {m_begin, m_end}; }
+
   /// Reports a fraction of the current stage; returns false once the caller has cancelled.
   bool report(double fraction)
   {

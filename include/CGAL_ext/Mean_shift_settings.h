@@ -1,0 +1,74 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_MEAN_SHIFT_SETTINGS_H
+#define CGAL_EXT_MEAN_SHIFT_SETTINGS_H
+
+#include <CGAL_ext/exceptions.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  Kernel of the mean shift. The mode moves to the mean of the samples weighted by the kernel's shadow
+  profile `g` (Comaniciu and Meer 2002), evaluated on the squared normalised distances `d_s^2`
+  (spatial part) and `d_r^2` (range part).
+*/
+enum class Mean_shift_kernel
+{
+  /// `g = exp(-(d_s^2 + d_r^2) / 2)`: smooth, every candidate counts a little.
+  gaussian,
+  /// The mean shift of the Epanechnikov kernel: `g = 1` where `d_s <= 1` and `d_r <= 1`, else 0, so the mode
+  /// moves to the plain mean of the samples within one bandwidth of it in both parts.
+  epanechnikov
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of the joint spatial-range mean shift (Miao et al. 2007, Sect. 5.1; Comaniciu and Meer 2002)
+  over the 7D features `(x, y, z, n_x, n_y, n_z, c H)` of the points: position, unit normal and mean
+  curvature `H` scaled by `c`. A value of 0 for a bandwidth or for `curvature_scale` selects the automatic
+  rule, so a user need not tune them:
+
+  - `spatial_bandwidth = 0`: the average spacing, the mean distance of a point to its candidate neighbours;
+  - `range_bandwidth` is dimensionless (normals are unit vectors): 0.5 by default, the distance between
+    two unit normals 29 degrees apart;
+  - `curvature_scale = 0`: `c = 0.5 / H90`, `H90` the 90th percentile of `|H|` over the points (at least
+    `0.01 / spatial_bandwidth`, so a flat model does not blow the scaled curvature up): a point of curvature
+    `H90` and a flat one are one default range bandwidth apart, as are normals 29 degrees apart.
+*/
+struct Mean_shift_settings
+{
+  Mean_shift_kernel kernel = Mean_shift_kernel::gaussian;
+  double spatial_bandwidth = 0; ///< `h_s`, in the points' units; 0 = the average spacing
+  double range_bandwidth = 0.5; ///< `h_r`, over the normal and the scaled curvature; > 0
+  double curvature_scale = 0;   ///< `c`, multiplies `H` in the range part; 0 = `0.5 / H90`
+  /// The iteration stops when the mode moves by less than this, in bandwidths (normalised 7D units).
+  double tolerance = 1e-3;
+  unsigned int max_iterations = 30; ///< iteration cap per point, >= 1
+
+  /// Throws `Invalid_input` for negative, zero (the range bandwidth) or non-finite values.
+  void validate() const
+  {
+    auto check = [](const char* name, double value, bool zero_allowed) {
+      if(!(std::isfinite(value) && (value > 0 || (zero_allowed && value == 0)))) {
+        std::ostringstream os;
+        os << "mean shift settings: " << name << " must be finite and " << (zero_allowed ? ">= 0 (0: automatic)" : "> 0")
+           << " (got " << value << ")";
+        throw Invalid_input(os.str());
+      }
+    };
+    check("spatial_bandwidth", spatial_bandwidth, true);
+    check("range_bandwidth", range_bandwidth, false);
+    check("curvature_scale", curvature_scale, true);
+    check("tolerance", tolerance, false);
+    if(max_iterations < 1) throw Invalid_input("mean shift settings: max_iterations must be at least 1");
+  }
+};
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_MEAN_SHIFT_SETTINGS_H

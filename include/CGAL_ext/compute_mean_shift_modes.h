@@ -1,0 +1,168 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_COMPUTE_MEAN_SHIFT_MODES_H
+#define CGAL_EXT_COMPUTE_MEAN_SHIFT_MODES_H
+
+#include <CGAL_ext/Mean_shift_settings.h>
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/mean_shift.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+
+#include <algorithm>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  The mean-shift mode of a point in the joint spatial-range domain, in the points' own units: the position
+  part, the normal part (a kernel-weighted mean of unit normals, so of length at most 1) and the mean
+  curvature part (the scaled curvature divided by the curvature scale again).
+*/
+template <typename Kernel>
+struct Mean_shift_mode
+{
+  typename Kernel::Point_3 position;
+  typename Kernel::Vector_3 normal;
+  typename Kernel::FT mean_curvature{0};
+  unsigned int iterations = 0; ///< mean-shift steps taken
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  What a mean shift did: the scales it used (after the automatic rules of `Mean_shift_settings`) and its
+  iteration counts.
+*/
+struct Mean_shift_result
+{
+  bool completed = false; ///< false when the callback cancelled
+  double spatial_bandwidth = 0;
+  double range_bandwidth = 0;
+  double curvature_scale = 0;
+  double mean_iterations = 0;
+  unsigned int max_iterations = 0;  ///< the most steps any point took
+  std::size_t points_at_cap = 0;    ///< points stopped by the iteration cap rather than the tolerance
+
+  explicit operator bool() const { return completed; }
+};
+
+namespace internal {
+
+inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Mean_shift_settings& settings)
+{
+  Mean_shift_result result;
+  result.completed = true;
+  result.spatial_bandwidth = analysis.scales.spatial_bandwidth;
+  result.range_bandwidth = analysis.scales.range_bandwidth;
+  result.curvature_scale = analysis.scales.curvature_scale;
+  double sum = 0;
+  for(int steps : analysis.iterations) {
+    sum += steps;
+    result.max_iterations = std::max(result.max_iterations, unsigned(steps));
+    if(steps == int(settings.max_iterations)) ++result.points_at_cap;
+  }
+  result.mean_iterations = analysis.iterations.empty() ? 0 : sum / double(analysis.iterations.size());
+  return result;
+}
+
+/// Checks the candidate count of a mean shift (its curvature fit needs at least 5 neighbours).
+inline void check_mean_shift_neighbors(std::size_t k, std::size_t n, const char* who)
+{
+  check_neighbor_count(k, n, who);
+  if(k < 5)
+    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) +
+                        " is too small: the curvature fit of the mean shift needs at least 5 neighbours");
+}
+
+} // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Computes the mean-shift mode of every point (Miao et al. 2007, Sect. 5.1) by the joint spatial-range mean
+  shift of Comaniciu and Meer over the 7D features `(x, y, z, n, c H)`: starting at the point's feature, the
+  mode moves to the mean of the nearby samples weighted by the product kernel
+  `g(||M_s - q_s||^2 / h_s^2) g(||M_r - q_r||^2 / h_r^2)`, until it moves by less than `settings.tolerance`
+  bandwidths or `settings.max_iterations` is reached. The samples near a moving mode are the sample nearest
+  to it and that sample's `k` nearest neighbours, followed along the neighbour graph as the mode moves.
+
+  The mean curvature `H` comes from the closed-form degree-2 fit of `estimate_mean_curvature` on the same
+  `k` neighbours. Points on either side of a sharp edge have normals far apart in the range part, so their
+  modes stay on their own side: that is what the clustering of `compute_simplification_sample_points` uses.
+
+  \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
+          both give the same modes.
+  \tparam PointRange a model of `ConstRange` whose value type is the key type of the property maps.
+  \tparam ModeMap a model of `WritablePropertyMap` with value type `Mean_shift_mode<geom_traits>`.
+
+  \param points the input points; not modified
+  \param k candidate neighbours of the mean shift and its curvature fit, `5 <= k < points.size()`
+           (default in the program: `default_mean_shift_neighbors` = 15)
+  \param settings kernel, bandwidths (0: automatic), curvature scale, tolerance and iteration cap
+  \param mode_map receives the mode of each point
+  \param np `point_map`, `normal_map` (estimated with `CGAL::jet_estimate_normals` and
+         `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched) and
+         `geom_traits`, as in `compute_geometric_details`
+
+  \return the scales and iteration counts; `completed` is false if the callback cancelled.
+  \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range, invalid settings, a zero
+          or non-finite normal, or points that all coincide.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename ModeMap,
+          typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Mean_shift_result compute_mean_shift_modes(const PointRange& points, unsigned int k, const Mean_shift_settings& settings,
+                                           ModeMap mode_map, const NamedParameters& np = CGAL::parameters::default_values())
+{
+  using CGAL::parameters::choose_parameter;
+  using CGAL::parameters::get_parameter;
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  using Kernel = typename NP_helper::Geom_traits;
+  using FT = typename Kernel::FT;
+  constexpr const char* who = "compute_mean_shift_modes";
+
+  const auto point_map = NP_helper::get_const_point_map(points, np);
+  const std::function<bool(double)> callback =
+    choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
+  settings.validate();
+  const internal::Spatial_point_cloud cloud = internal::make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
+  internal::check_mean_shift_neighbors(k, cloud.size(), who);
+
+  internal::Progress progress(callback);
+  internal::Matrix_n3 normals;
+  const double shift_begin = internal::has_given_normals<NamedParameters>(points) ? 0.0 : 0.4;
+  progress.stage(0.0, shift_begin);
+  if(!internal::given_or_estimated_normals<ConcurrencyTag>(points, np, cloud, default_normal_neighbors, progress,
+                                                            normals, who))
+    return {};
+  progress.stage(shift_begin, 1.0);
+  internal::Mean_shift_analysis analysis;
+  if(!internal::analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings, progress, analysis)) return {};
+
+  const internal::Mean_shift_scales& scales = analysis.scales;
+  const std::vector<int> row_of = cloud.spatial_index();
+  std::size_t i = 0;
+  for(const auto& item : points) {
+    const int r = row_of[i++];
+    const auto m = analysis.modes.row(r);
+    Mean_shift_mode<Kernel> mode;
+    mode.position = typename Kernel::Point_3(FT(m(0) * scales.spatial_bandwidth), FT(m(1) * scales.spatial_bandwidth),
+                                             FT(m(2) * scales.spatial_bandwidth));
+    mode.normal = typename Kernel::Vector_3(FT(m(3) * scales.range_bandwidth), FT(m(4) * scales.range_bandwidth),
+                                            FT(m(5) * scales.range_bandwidth));
+    mode.mean_curvature = FT(m(6) * scales.range_bandwidth / scales.curvature_scale);
+    mode.iterations = unsigned(analysis.iterations[std::size_t(r)]);
+    put(mode_map, item, mode);
+  }
+  return internal::summarize(analysis, settings);
+}
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_COMPUTE_MEAN_SHIFT_MODES_H

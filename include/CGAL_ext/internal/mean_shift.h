@@ -1,0 +1,219 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_MEAN_SHIFT_H
+#define CGAL_EXT_INTERNAL_MEAN_SHIFT_H
+
+#include <CGAL_ext/Mean_shift_settings.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/mean_curvature.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace CGAL_ext {
+
+/// Default number of candidate neighbours of the mean shift (and of its curvature fit).
+constexpr unsigned int default_mean_shift_neighbors = default_curvature_neighbors;
+
+namespace internal {
+
+/// n x 7 array: the normalised features `(x / h_s, n / h_r, c H / h_r)`, or modes in the same units.
+using Matrix_n7 = Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor>;
+
+/// The first `k` neighbours of every row of a nearest-first graph with at least `k` per row.
+inline Neighbor_graph nearest_prefix(const Neighbor_graph& graph, std::size_t k)
+{
+  const std::size_t n = graph.size();
+  Neighbor_graph prefix;
+  prefix.offsets.resize(n + 1);
+  prefix.indices.reserve(n * k);
+  prefix.offsets[0] = 0;
+  for(std::size_t i = 0; i < n; ++i) {
+    const int count = std::min(graph.degree(i), int(k));
+    prefix.indices.insert(prefix.indices.end(), graph.begin(i), graph.begin(i) + count);
+    prefix.offsets[i + 1] = int(prefix.indices.size());
+  }
+  return prefix;
+}
+
+/// The bandwidths and curvature scale actually used, after the automatic rules of `Mean_shift_settings`.
+struct Mean_shift_scales
+{
+  double spatial_bandwidth = 0, range_bandwidth = 0, curvature_scale = 0;
+};
+
+/// Applies the automatic rules: the average spacing over `graph`, `c = 0.5 / H90`.
+inline Mean_shift_scales resolve_scales(const Mean_shift_settings& settings, const Matrix_n3& positions,
+                                        const Neighbor_graph& graph, const Eigen::VectorXd& curvature)
+{
+  Mean_shift_scales scales{settings.spatial_bandwidth, settings.range_bandwidth, settings.curvature_scale};
+  if(scales.spatial_bandwidth == 0) {
+    double sum = 0;
+    std::size_t count = 0;
+    for(std::size_t i = 0; i < graph.size(); ++i)
+      for(const int* j = graph.begin(i); j != graph.end(i); ++j, ++count)
+        sum += (positions.row(*j) - positions.row(Eigen::Index(i))).norm();
+    scales.spatial_bandwidth = count > 0 ? sum / double(count) : 0;
+    if(!(scales.spatial_bandwidth > 0))
+      throw Invalid_input("mean shift: all points coincide, so the automatic spatial bandwidth (the average "
+                          "spacing) is zero; remove duplicate points or set spatial_bandwidth");
+  }
+  if(scales.curvature_scale == 0) {
+    std::vector<double> magnitude(std::size_t(curvature.size()));
+    for(std::size_t i = 0; i < magnitude.size(); ++i) magnitude[i] = std::abs(curvature(Eigen::Index(i)));
+    const auto p90 = magnitude.begin() + std::ptrdiff_t(0.9 * double(magnitude.size() - 1));
+    std::nth_element(magnitude.begin(), p90, magnitude.end());
+    scales.curvature_scale = 0.5 / std::max(*p90, 0.01 / scales.spatial_bandwidth);
+  }
+  return scales;
+}
+
+inline Matrix_n7 mean_shift_features(const Matrix_n3& positions, const Matrix_n3& normals,
+                                     const Eigen::VectorXd& curvature, const Mean_shift_scales& scales)
+{
+  Matrix_n7 features(positions.rows(), 7);
+  features.leftCols<3>() = positions / scales.spatial_bandwidth;
+  features.middleCols(3, 3) = normals / scales.range_bandwidth;
+  features.col(6) = curvature * (scales.curvature_scale / scales.range_bandwidth);
+  return features;
+}
+
+/// The joint spatial-range mean shift of every feature row. The candidates of a moving mode are the
+/// sample nearest to it (its anchor, at first the point itself) and the anchor's neighbours in `graph`;
+/// after each step the anchor moves to the candidate nearest to the new mode, a walk on the graph that
+/// follows the mode without querying the tree again. Rows are independent, so any thread count gives the
+/// same modes. Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, const Mean_shift_settings& settings,
+                      Progress& progress, Matrix_n7& modes, std::vector<int>& iterations)
+{
+  using Row7 = Eigen::Matrix<double, 1, 7>;
+  const std::size_t n = std::size_t(features.rows());
+  modes.resize(features.rows(), 7);
+  iterations.assign(n, 0);
+  const bool gaussian = settings.kernel == Mean_shift_kernel::gaussian;
+  const double tolerance2 = settings.tolerance * settings.tolerance;
+  return for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
+    Row7 mode = features.row(Eigen::Index(i));
+    int anchor = int(i);
+    int step = 0;
+    while(step < int(settings.max_iterations)) {
+      ++step;
+      Row7 sum = Row7::Zero();
+      double weight_sum = 0;
+      auto visit = [&](int j) {
+        const auto q = features.row(j);
+        const double ds2 = (mode.head<3>() - q.head<3>()).squaredNorm();
+        const double dr2 = (mode.tail<4>() - q.tail<4>()).squaredNorm();
+        const double w = gaussian ? std::exp(-0.5 * (ds2 + dr2)) : (ds2 <= 1 && dr2 <= 1 ? 1.0 : 0.0);
+        sum.noalias() += w * q;
+        weight_sum += w;
+      };
+      visit(anchor);
+      for(const int* j = graph.begin(std::size_t(anchor)); j != graph.end(std::size_t(anchor)); ++j) visit(*j);
+      if(!(weight_sum > 0)) break; // no sample within the kernel's reach: the mode stays
+      const Row7 next = sum / weight_sum;
+      const double shift2 = (next - mode).squaredNorm();
+      mode = next;
+      int nearest = anchor;
+      double nearest_d2 = (mode.head<3>() - features.row(anchor).head<3>()).squaredNorm();
+      for(const int* j = graph.begin(std::size_t(anchor)); j != graph.end(std::size_t(anchor)); ++j) {
+        const double d2 = (mode.head<3>() - features.row(*j).head<3>()).squaredNorm();
+        if(d2 < nearest_d2) { nearest_d2 = d2; nearest = *j; }
+      }
+      anchor = nearest;
+      if(shift2 < tolerance2) break;
+    }
+    modes.row(Eigen::Index(i)) = mode;
+    iterations[i] = step;
+  });
+}
+
+/// Everything the mean shift computes for a cloud: the nearest-first candidate graph, the curvature, the
+/// scales and the modes (normalised units), all in the cloud's order.
+struct Mean_shift_analysis
+{
+  Neighbor_graph candidates;
+  Eigen::VectorXd curvature;
+  Mean_shift_scales scales;
+  Matrix_n7 modes;
+  std::vector<int> iterations;
+};
+
+/// Candidate graph with `k` neighbours (`5 <= k < n`), closed-form curvature on it, scales, modes.
+/// Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool analyse_mean_shift(const Spatial_point_cloud& cloud, const Matrix_n3& normals, std::size_t k,
+                        const Mean_shift_settings& settings, Progress& progress, Mean_shift_analysis& out)
+{
+  const Progress::Range whole = progress.range();
+  progress.stage(whole.begin, whole.at(0.25));
+  out.candidates = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
+  if(progress.cancelled()) return false;
+  progress.stage(whole.at(0.25), whole.at(0.5));
+  if(!mean_curvatures<ConcurrencyTag>(cloud, normals, out.candidates, Curvature_fitting::closed_form, progress,
+                                      out.curvature))
+    return false;
+  out.scales = resolve_scales(settings, cloud.positions, out.candidates, out.curvature);
+  progress.stage(whole.at(0.5), whole.end);
+  return mean_shift_modes<ConcurrencyTag>(mean_shift_features(cloud.positions, normals, out.curvature, out.scales),
+                                          out.candidates, settings, progress, out.modes, out.iterations);
+}
+
+/// Mean-shift neighbours (DESIGN.md 3.4): the candidates of each row (nearest first) whose modes' range
+/// parts lie within one range bandwidth of the row's mode. Rows that keep fewer than `min_neighbors` are
+/// filled up with the remaining candidates of closest mode (joint distance), so every row stays valid.
+/// Rows keep the candidates' order; symmetrise the result for a Laplacian.
+template <typename ConcurrencyTag>
+Neighbor_graph mean_shift_neighbor_graph(const Neighbor_graph& candidates, const Matrix_n7& modes,
+                                         std::size_t min_neighbors)
+{
+  const std::size_t n = candidates.size();
+  std::vector<int> kept(candidates.indices.size());
+  std::vector<int> count(n);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    const int degree = candidates.degree(i);
+    const int* nb = candidates.begin(i);
+    int* out = kept.data() + candidates.offsets[i];
+    const auto mode = modes.row(Eigen::Index(i));
+    thread_local std::vector<char> take;
+    take.assign(std::size_t(degree), 0);
+    int taken = 0;
+    for(int m = 0; m < degree; ++m)
+      if((mode.tail<4>() - modes.row(nb[m]).tail<4>()).squaredNorm() <= 1) { take[std::size_t(m)] = 1; ++taken; }
+    while(taken < std::min(degree, int(min_neighbors))) {
+      int best = -1;
+      double best_d2 = 0;
+      for(int m = 0; m < degree; ++m) {
+        if(take[std::size_t(m)]) continue;
+        const double d2 = (mode - modes.row(nb[m])).squaredNorm();
+        if(best < 0 || d2 < best_d2) { best = m; best_d2 = d2; }
+      }
+      take[std::size_t(best)] = 1;
+      ++taken;
+    }
+    int c = 0;
+    for(int m = 0; m < degree; ++m)
+      if(take[std::size_t(m)]) out[c++] = nb[m];
+    count[i] = c;
+  });
+  Neighbor_graph graph;
+  graph.offsets.assign(n + 1, 0);
+  for(std::size_t i = 0; i < n; ++i) graph.offsets[i + 1] = graph.offsets[i] + count[i];
+  graph.indices.resize(std::size_t(graph.offsets[n]));
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    std::copy_n(kept.data() + candidates.offsets[i], count[i], graph.indices.data() + graph.offsets[i]);
+  });
+  return graph;
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_MEAN_SHIFT_H

@@ -1,0 +1,189 @@
+#include <CGAL_ext/compute_mean_shift_modes.h>
+#include <CGAL_ext/generated_shapes.h>
+
+#include "test_support.h"
+
+#include <CGAL/Point_set_3.h>
+#include <CGAL/property_map.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+using namespace CGAL_ext;
+
+namespace {
+using Mode = Mean_shift_mode<Kernel>;
+
+struct Outcome
+{
+  std::vector<Mode> modes;
+  Mean_shift_result result;
+};
+
+template <typename Tag = CGAL::Parallel_if_available_tag>
+Outcome modes_of(const shapes::Oriented_sample<Kernel>& s, const Mean_shift_settings& settings = {},
+             unsigned k = default_mean_shift_neighbors)
+{
+  std::vector<std::size_t> idx(s.points.size());
+  std::iota(idx.begin(), idx.end(), std::size_t(0));
+  Outcome run;
+  run.modes.resize(s.points.size());
+  run.result = compute_mean_shift_modes<Tag>(idx, k, settings, CGAL::make_property_map(run.modes),
+                                             CGAL::parameters::point_map(CGAL::make_property_map(s.points))
+                                               .normal_map(CGAL::make_property_map(s.normals)));
+  return run;
+}
+
+/// Index of the cube face (0..5: axis * 2 + positive side) a normal points to.
+int face_of(const Vector& n)
+{
+  int axis = 0;
+  for(int a = 1; a < 3; ++a)
+    if(std::abs(n[a]) > std::abs(n[axis])) axis = a;
+  return 2 * axis + (n[axis] > 0 ? 1 : 0);
+}
+} // namespace
+
+TEST(MeanShift, CubeModesStayOnTheirFace)
+{
+  for(Mean_shift_kernel kernel : {Mean_shift_kernel::gaussian, Mean_shift_kernel::epanechnikov}) {
+    const auto cube = shapes::cube<Kernel>(30);
+    Mean_shift_settings settings;
+    settings.kernel = kernel;
+    const Outcome run = modes_of(cube, settings);
+    ASSERT_TRUE(run.result.completed);
+    std::size_t wrong_face = 0, off_plane = 0;
+    for(std::size_t i = 0; i < cube.points.size(); ++i) {
+      const int face = face_of(cube.normals[i]);
+      if(face_of(run.modes[i].normal) != face) ++wrong_face;
+      // The mode's position stays in its face's plane (within a tenth of the spacing) ...
+      const int axis = face / 2;
+      if(std::abs(std::abs(run.modes[i].position[axis]) - 0.5) > 0.1 * cube.average_spacing) ++off_plane;
+      // ... and its normal part stays close to the face normal: the range kernel keeps other faces out.
+      EXPECT_GT(run.modes[i].normal * cube.normals[i], 0.9) << i;
+    }
+    EXPECT_EQ(wrong_face, 0u);
+    EXPECT_LE(double(off_plane), 0.01 * double(cube.points.size()));
+    EXPECT_GT(run.result.mean_iterations, 1.0);
+    EXPECT_LE(run.result.max_iterations, settings.max_iterations);
+  }
+}
+
+TEST(MeanShift, AutomaticScalesFollowTheSpacingAndCurvature)
+{
+  // A sphere of radius 2 has H = 1/2 everywhere: the curvature scale is 0.5 / H90 = 1, and the spatial
+  // bandwidth is the mean distance to the 15 nearest neighbours, between one and three spacings.
+  const auto sphere = shapes::bumpy_sphere<Kernel>(5000, 2.0, 0.0);
+  const Outcome run = modes_of(sphere);
+  EXPECT_NEAR(run.result.curvature_scale, 1.0, 0.05);
+  EXPECT_GT(run.result.spatial_bandwidth, sphere.average_spacing);
+  EXPECT_LT(run.result.spatial_bandwidth, 3 * sphere.average_spacing);
+  EXPECT_EQ(run.result.range_bandwidth, 0.5);
+  // The modes of a uniform sphere stay near it and keep H = 1/2.
+  for(std::size_t i = 0; i < sphere.points.size(); i += 37) {
+    EXPECT_NEAR(std::sqrt((run.modes[i].position - CGAL::ORIGIN).squared_length()), 2.0, 0.05);
+    EXPECT_NEAR(run.modes[i].mean_curvature, 0.5, 0.03);
+  }
+}
+
+TEST(MeanShift, GivenBandwidthsAreUsedAndAStepCapIsHonoured)
+{
+  const auto grid = shapes::bumpy_grid<Kernel>(40, 40, 1.0, 0.5, 8.0);
+  Mean_shift_settings settings;
+  settings.spatial_bandwidth = 1.7;
+  settings.curvature_scale = 3.0;
+  settings.max_iterations = 1;
+  const Outcome run = modes_of(grid, settings);
+  EXPECT_EQ(run.result.spatial_bandwidth, 1.7);
+  EXPECT_EQ(run.result.curvature_scale, 3.0);
+  EXPECT_EQ(run.result.max_iterations, 1u);
+  for(const Mode& m : run.modes) EXPECT_EQ(m.iterations, 1u);
+}
+
+TEST(MeanShift, SequentialAndParallelGiveTheSameModes)
+{
+  const auto tube = shapes::bumpy_tube<Kernel>(8000);
+  const Outcome seq = modes_of<CGAL::Sequential_tag>(tube);
+  const Outcome par = modes_of<CGAL::Parallel_if_available_tag>(tube);
+  ASSERT_EQ(seq.modes.size(), par.modes.size());
+  for(std::size_t i = 0; i < seq.modes.size(); ++i) {
+    EXPECT_EQ(seq.modes[i].position, par.modes[i].position);
+    EXPECT_EQ(seq.modes[i].normal, par.modes[i].normal);
+    EXPECT_EQ(seq.modes[i].mean_curvature, par.modes[i].mean_curvature);
+  }
+}
+
+TEST(MeanShift, PointSet3WithoutNormalsEstimatesThem)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.0);
+  CGAL::Point_set_3<Point> set;
+  for(const Point& p : sphere.points) set.insert(p);
+  auto [mode_map, created] = set.add_property_map<Mode>("mode", Mode());
+  ASSERT_TRUE(created);
+  ASSERT_TRUE(compute_mean_shift_modes(set, default_mean_shift_neighbors, Mean_shift_settings(), mode_map,
+                                       set.parameters()));
+  // Estimated normals are oriented consistently (all outward or all inward): |H| = 1 either way.
+  for(std::size_t i = 0; i < set.size(); i += 29) EXPECT_NEAR(std::abs(mode_map[i].mean_curvature), 1.0, 0.06);
+}
+
+TEST(MeanShift, CancelledRunLeavesTheMapUntouched)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(2000);
+  std::vector<std::size_t> idx(sphere.points.size());
+  std::iota(idx.begin(), idx.end(), std::size_t(0));
+  Mode marker;
+  marker.iterations = 12345;
+  std::vector<Mode> modes(sphere.points.size(), marker);
+  const Mean_shift_result result = compute_mean_shift_modes(
+    idx, 15, Mean_shift_settings(), CGAL::make_property_map(modes),
+    CGAL::parameters::point_map(CGAL::make_property_map(sphere.points))
+      .normal_map(CGAL::make_property_map(sphere.normals))
+      .callback(std::function<bool(double)>([](double f) { return f < 0.6; })));
+  EXPECT_FALSE(result.completed);
+  for(const Mode& m : modes) EXPECT_EQ(m.iterations, 12345u);
+}
+
+TEST(MeanShift, BadInputIsRefusedWithAClearError)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(500);
+  auto expect_error = [&](const shapes::Oriented_sample<Kernel>& s, const Mean_shift_settings& settings, unsigned k,
+                          const char* needle) {
+    try {
+      modes_of(s, settings, k);
+      ADD_FAILURE() << "no error for " << needle;
+    } catch(const Invalid_input& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  Mean_shift_settings zero_range;
+  zero_range.range_bandwidth = 0;
+  expect_error(sphere, zero_range, 15, "range_bandwidth");
+  Mean_shift_settings negative_spatial;
+  negative_spatial.spatial_bandwidth = -1;
+  expect_error(sphere, negative_spatial, 15, "spatial_bandwidth");
+  Mean_shift_settings nan_scale;
+  nan_scale.curvature_scale = std::numeric_limits<double>::quiet_NaN();
+  expect_error(sphere, nan_scale, 15, "curvature_scale");
+  Mean_shift_settings no_steps;
+  no_steps.max_iterations = 0;
+  expect_error(sphere, no_steps, 15, "max_iterations");
+  expect_error(sphere, {}, 4, "at least 5");
+  expect_error(sphere, {}, 500, "smaller than the number of points");
+
+  auto zero_normal = sphere;
+  zero_normal.normals[7] = Vector(0, 0, 0);
+  expect_error(zero_normal, {}, 15, "normal of point #7");
+  auto nan_normal = sphere;
+  nan_normal.normals[3] = Vector(std::numeric_limits<double>::quiet_NaN(), 0, 1);
+  expect_error(nan_normal, {}, 15, "normal of point #3");
+  auto nan_point = sphere;
+  nan_point.points[11] = Point(0, std::numeric_limits<double>::infinity(), 0);
+  expect_error(nan_point, {}, 15, "point #11");
+
+  shapes::Oriented_sample<Kernel> duplicates;
+  for(int i = 0; i < 20; ++i) duplicates.push_back(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(0, 0, 1), 0);
+  expect_error(duplicates, {}, 15, "coincide");
+}
