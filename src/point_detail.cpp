@@ -8,6 +8,7 @@
 
 #include <CGAL_ext/balanced_flow_smooth_point_set.h>
 #include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/generated_shapes.h>
@@ -24,8 +25,10 @@
 #include <tbb/info.h>
 #endif
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <numeric>
 
@@ -45,7 +48,7 @@ struct Detail_options
   std::string order = "quadric";
   double lambda = CGAL_ext::Detail_filter().lambda, mu = CGAL_ext::Detail_filter().mu;
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
-  std::string weights = "uniform";
+  std::string weights = "uniform", neighbors = "knn";
 
   CGAL_ext::Detail_settings settings() const
   {
@@ -57,6 +60,8 @@ struct Detail_options
     s.filter.mu = mu;
     s.weights.weighting = weights == "distance" ? CGAL_ext::Laplacian_weighting::distance_power
                                                 : CGAL_ext::Laplacian_weighting::uniform;
+    s.neighborhood = neighbors == "mean-shift" ? CGAL_ext::Laplacian_neighborhood::mean_shift
+                                               : CGAL_ext::Laplacian_neighborhood::k_nearest;
     return s;
   }
 };
@@ -66,7 +71,10 @@ void add_detail_options(CLI::App& app, Detail_options& o)
   app.add_option("--order", o.order, "transfer function")->check(CLI::IsMember({"linear", "quadric", "cubic"}))->capture_default_str();
   app.add_option("--lambda", o.lambda, "pass-band frequency (> 0)")->capture_default_str();
   app.add_option("--mu", o.mu, "highest frequency (> lambda; quadric and cubic)")->capture_default_str();
-  app.add_option("-k,--neighbors", o.k, "nearest neighbours of the Laplacian, the point itself not counted")->capture_default_str();
+  app.add_option("-k,--neighbor-count", o.k, "nearest neighbours of the Laplacian, the point itself not counted")->capture_default_str();
+  app.add_option("--neighbors", o.neighbors, "Laplacian neighbourhoods: knn (symmetrised k nearest) or mean-shift (the k "
+                                             "nearest whose mean-shift modes agree, so rows stop at creases)")
+    ->check(CLI::IsMember({"knn", "mean-shift"}))->capture_default_str();
   app.add_option("--weights", o.weights, "Laplacian weights: uniform (1/valence) or distance (|p_i - p_j|^-1)")
     ->check(CLI::IsMember({"uniform", "distance"}))->capture_default_str();
 }
@@ -146,6 +154,7 @@ void add_details(Point_cloud& cloud, const Detail_options& options, Progress_pri
   r["lambda"] = options.lambda;
   if(settings.filter.order != CGAL_ext::Detail_order::linear) r["mu"] = options.mu;
   r["weights"] = options.weights;
+  r["neighbors"] = options.neighbors;
   r["color_range"] = range;
 }
 
@@ -296,6 +305,7 @@ struct Manipulate_command
     r["points"] = out.points.size();
     r["factor"] = factor;
     r["order"] = detail.order;
+    r["neighbors"] = detail.neighbors;
     r["roi_points"] = result.region_size;
     r["anchors"] = result.anchor_count;
     r["default_anchors"] = result.default_anchors;
@@ -353,6 +363,84 @@ struct Curvature_command
       write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
     if(!report.empty()) write_file(report_tmp, rep.dump());
     outputs.commit();
+  }
+};
+
+/// `simplify`: simplification sample points (SSPs) by recursive splits guided by the mean-shift modes (paper Sect. 5).
+struct Simplify_command
+{
+  std::string input, output, png, clusters, report, view = "front";
+  CGAL_ext::Simplification_settings settings;
+  std::size_t max_cluster_size = 0; // taken only when the option was given
+  CLI::Option* max_cluster_size_option = nullptr;
+  Render_settings render;
+
+  void run(const Common_options& common)
+  {
+    Output_files outputs({input});
+    const fs::path ply_tmp = outputs.add(output);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path clusters_tmp = add_if_given(outputs, clusters);
+    const fs::path report_tmp = add_if_given(outputs, report);
+    render.view = parse_view(view);
+    if(max_cluster_size_option->count() > 0) settings.max_cluster_size = max_cluster_size;
+    settings.validate();
+
+    Progress_printer progress(common.quiet);
+    Report rep("simplify");
+    rep.data()["input"] = input;
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    if(cloud.points.empty()) throw Cli_error(input + " has no points");
+    ensure_normals(cloud, progress, rep);
+    const std::size_t n = cloud.points.size();
+    std::vector<std::size_t> sample_of(n);
+    const auto ssps = rep.time("simplify", [&] {
+      return CGAL_ext::compute_simplification_sample_points(
+        index_range(n), settings, CGAL::make_property_map(sample_of),
+        CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+          .normal_map(CGAL::make_property_map(cloud.normals))
+          .callback(progress.stage("simplify")));
+    });
+    progress.finish();
+    if(!ssps) throw Cancelled();
+
+    Point_cloud surfels;
+    std::vector<double> radius, member_count;
+    for(const auto& ssp : ssps.samples) {
+      surfels.points.push_back(ssp.centroid);
+      surfels.normals.push_back(ssp.normal);
+      radius.push_back(ssp.radius);
+      member_count.push_back(double(ssp.member_count));
+    }
+    surfels.set_scalar("radius", std::move(radius));
+    surfels.set_scalar("member_count", std::move(member_count));
+    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(surfels)); });
+    cloud.colors = label_colors(sample_of);
+    if(!clusters.empty()) {
+      std::vector<double> ssp_index(sample_of.begin(), sample_of.end());
+      cloud.set_scalar("ssp_index", std::move(ssp_index));
+      write_file(clusters_tmp, ply_bytes(cloud));
+    }
+    if(!png.empty())
+      write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+
+    auto& r = rep.data();
+    r["points"] = n;
+    r["ssps"] = ssps.size();
+    r["points_per_ssp"] = double(n) / double(ssps.size());
+    r["max_cluster_size"] = ssps.max_cluster_size;
+    r["mode_threshold"] = std::isfinite(settings.mode_spread_threshold) ? nlohmann::json(settings.mode_spread_threshold)
+                                                                        : nlohmann::json("inf");
+    const CGAL_ext::Mean_shift_result& ms = ssps.mean_shift;
+    if(ms.completed)
+      r["mean_shift"] = {{"spatial_bandwidth", ms.spatial_bandwidth}, {"range_bandwidth", ms.range_bandwidth},
+                         {"curvature_scale", ms.curvature_scale}, {"mean_iterations", ms.mean_iterations},
+                         {"max_iterations", ms.max_iterations}, {"points_at_cap", ms.points_at_cap}};
+    if(!report.empty()) write_file(report_tmp, rep.dump());
+    outputs.commit();
+    if(!common.quiet)
+      std::fprintf(stderr, "simplify: %zu points -> %zu SSPs (%.1f points each, at most %zu)\n", n, ssps.size(),
+                   double(n) / double(ssps.size()), ssps.max_cluster_size);
   }
 };
 
@@ -513,12 +601,32 @@ int main(int argc, char** argv)
   CLI::App* curvature_app = app.add_subcommand("curvature", "signed mean curvature of every point (jet fitting), as a PLY property and a colour map");
   curvature_app->add_option("-i,--input", curvature.input, "input points (.ply, .off, .xyz, .pwn)")->required();
   curvature_app->add_option("-o,--output", curvature.output, "output binary PLY with mean_curvature and colours")->required();
-  curvature_app->add_option("-k,--neighbors", curvature.k, "neighbours of the degree-2 fit (>= 5)")->capture_default_str();
+  curvature_app->add_option("-k,--neighbor-count", curvature.k, "neighbours of the degree-2 fit (>= 5)")->capture_default_str();
   curvature_app->add_option("--fitting", curvature.fitting, "monge (CGAL::Monge_via_jet_fitting) or closed-form (faster)")
     ->check(CLI::IsMember({"monge", "closed-form"}))->capture_default_str();
   curvature_app->add_option("--png", curvature.png, "also render the curvature colour map (red: bends away from the normal)");
   curvature_app->add_option("--report", curvature.report, "write stage timings and curvature percentiles as JSON");
   add_render_options(*curvature_app, curvature.render, curvature.view);
+
+  Simplify_command simplify;
+  CLI::App* simplify_app = app.add_subcommand("simplify", "simplification sample points: clusters split until small and of one mean-shift mode (paper Sect. 5)");
+  simplify_app->add_option("-i,--input", simplify.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  simplify_app->add_option("-o,--output", simplify.output, "output binary PLY of the SSP surfels: position, normal, radius, member_count")->required();
+  simplify.max_cluster_size_option = simplify_app->add_option("--max-cluster-size", simplify.max_cluster_size,
+    "largest number of points per SSP (default: ceil(points / target))");
+  simplify_app->add_option("--target", simplify.settings.target_count, "SSP count that sets the default cluster size")->capture_default_str();
+  simplify_app->add_option("--mode-threshold", simplify.settings.mode_spread_threshold,
+    "split while the members' modes spread more than this many range bandwidths (inf: by size only)")->capture_default_str();
+  simplify_app->add_option("-k,--neighbor-count", simplify.settings.mean_shift_neighbors, "neighbours of the mean shift (>= 5)")->capture_default_str();
+  simplify_app->add_option("--kernel", simplify.settings.mean_shift.kernel, "mean-shift kernel")
+    ->transform(CLI::CheckedTransformer(std::map<std::string, CGAL_ext::Mean_shift_kernel>{
+      {"gaussian", CGAL_ext::Mean_shift_kernel::gaussian}, {"epanechnikov", CGAL_ext::Mean_shift_kernel::epanechnikov}}));
+  simplify_app->add_option("--spatial-bandwidth", simplify.settings.mean_shift.spatial_bandwidth, "h_s (0: the average spacing)")->capture_default_str();
+  simplify_app->add_option("--range-bandwidth", simplify.settings.mean_shift.range_bandwidth, "h_r over normal and scaled curvature")->capture_default_str();
+  simplify_app->add_option("--clusters", simplify.clusters, "also write the input with its ssp_index and cluster colours (PLY)");
+  simplify_app->add_option("--png", simplify.png, "also render the input coloured by cluster (paper Fig. 7)");
+  simplify_app->add_option("--report", simplify.report, "write stage timings, SSP counts and mean-shift figures as JSON");
+  add_render_options(*simplify_app, simplify.render, simplify.view);
 
   Render_command render;
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
@@ -546,6 +654,7 @@ int main(int argc, char** argv)
     if(*scale_app) scale.run(common);
     if(*curvature_app) curvature.run(common);
     if(*enhance_app) enhance.run(common);
+    if(*simplify_app) simplify.run(common);
     if(*render_app) render.run(common);
     if(*demo_app) demo.run(common);
   } catch(const Cancelled&) {

@@ -15,6 +15,7 @@
 #include <stb/stb_image_write.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -90,6 +91,26 @@ std::vector<Color> sequential_colors(const std::vector<double>& values)
   std::vector<Color> out;
   out.reserve(values.size());
   for(double v : values) out.push_back(sample(viridis, hi > lo ? (v - lo) / (hi - lo) : 0.5));
+  return out;
+}
+
+std::vector<Color> label_colors(const std::vector<std::size_t>& labels)
+{
+  std::vector<Color> out;
+  out.reserve(labels.size());
+  for(std::size_t label : labels) {
+    // A hash spreads neighbouring labels over the hue circle; saturation and value vary a little too.
+    std::uint64_t h = std::uint64_t(label) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+    const double hue = double(h % 3600) / 600.0, sat = 0.55 + 0.4 * double((h >> 12) % 100) / 100.0,
+                 val = 0.7 + 0.3 * double((h >> 24) % 100) / 100.0;
+    const int sector = int(hue);
+    const double f = hue - sector, p = val * (1 - sat), q = val * (1 - sat * f), t = val * (1 - sat * (1 - f));
+    const double rgb[6][3] = {{val, t, p}, {q, val, p}, {p, val, t}, {p, q, val}, {t, p, val}, {val, p, q}};
+    const double* c = rgb[sector % 6];
+    out.push_back({static_cast<unsigned char>(255 * c[0]), static_cast<unsigned char>(255 * c[1]),
+                   static_cast<unsigned char>(255 * c[2])});
+  }
   return out;
 }
 

@@ -33,6 +33,8 @@ struct Render_settings
 std::vector<Color> diverging_colors(const std::vector<double>& values, double* range = nullptr);
 /// Sequential colours from the 2nd to the 98th percentile.
 std::vector<Color> sequential_colors(const std::vector<double>& values);
+/// Distinct colours per label (clusters), the same colour for the same label.
+std::vector<Color> label_colors(const std::vector<std::size_t>& labels);
 
 /// A PNG picture of the points. `normals` and `colors` may be empty (then: flat shading, grey).
 std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals,

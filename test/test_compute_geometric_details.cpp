@@ -12,6 +12,7 @@
 
 #include <boost/iterator/counting_iterator.hpp>
 
+#include <array>
 #include <cstdio>
 #include <utility>
 
@@ -225,6 +226,43 @@ TEST(Geometric_details, cancelled_run_leaves_the_outputs_untouched)
   for(const Vector& v : out) ASSERT_EQ(v, Vector(7, 7, 7));
 }
 
+TEST(Geometric_details, mean_shift_neighborhoods_keep_a_cube_faces_details_in_its_plane)
+{
+  // With kNN rows, points near an edge average in the next face, so their detail points out of their face;
+  // mean-shift rows keep one face (the modes' normals differ by sqrt 2 > one range bandwidth), and a detail
+  // built from coplanar neighbours lies in the plane: delta . n = 0.
+  const auto cube = shapes::cube<Kernel>(30);
+  Detail_settings knn(Detail_filter{Detail_order::linear, 1.0, 2.0});
+  Detail_settings mean_shift = knn;
+  mean_shift.neighborhood = Laplacian_neighborhood::mean_shift;
+  auto off_plane = [&](const Details& d) {
+    std::size_t count = 0;
+    for(double c : normal_components(d, cube)) count += std::abs(c) > 1e-9;
+    return double(count) / double(cube.points.size());
+  };
+  const Details with_knn = details_of(cube, 10, knn);
+  const Details with_modes = details_of<CGAL::Sequential_tag>(cube, 10, mean_shift);
+  std::printf("points with a detail out of their face: kNN %.1f %%, mean shift %.2f %%\n", 100 * off_plane(with_knn),
+              100 * off_plane(with_modes));
+  EXPECT_GT(off_plane(with_knn), 0.1);
+  EXPECT_LT(off_plane(with_modes), 0.005);
+  const Details parallel = details_of<CGAL::Parallel_if_available_tag>(cube, 10, mean_shift);
+  EXPECT_EQ(parallel.vectors, with_modes.vectors);
+
+  // Interior points keep the same neighbours as with kNN: away from edges the details agree.
+  std::size_t interior = 0, same = 0;
+  for(std::size_t i = 0; i < cube.points.size(); ++i) {
+    // Distance to the nearest edge: 0.5 minus the second largest |coordinate|.
+    std::array<double, 3> c = {std::abs(cube.points[i].x()), std::abs(cube.points[i].y()), std::abs(cube.points[i].z())};
+    std::sort(c.begin(), c.end());
+    if(0.5 - c[1] < 5 * cube.average_spacing) continue;
+    ++interior;
+    same += (with_knn.vectors[i] - with_modes.vectors[i]).squared_length() < 1e-20;
+  }
+  EXPECT_GT(interior, cube.points.size() / 3);
+  EXPECT_GT(double(same), 0.95 * double(interior));
+}
+
 TEST(Geometric_details, bad_input_throws_a_clear_error)
 {
   std::vector<Point> pts = shapes::bumpy_sphere<Kernel>(50).points;
@@ -248,6 +286,13 @@ TEST(Geometric_details, bad_input_throws_a_clear_error)
   std::vector<Vector> normals(pts.size(), Vector(0, 0, 1));
   normals[3] = CGAL::NULL_VECTOR;
   expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{}, CGAL::make_property_map(out), np.normal_map(CGAL::make_property_map(normals))); }, "normal of point #3");
+  Detail_settings mean_shift;
+  mean_shift.neighborhood = Laplacian_neighborhood::mean_shift;
+  mean_shift.mean_shift.range_bandwidth = 0;
+  expect_error([&] { compute_geometric_details(idx, 10, mean_shift, CGAL::make_property_map(out), np); }, "range_bandwidth");
+  mean_shift.mean_shift.range_bandwidth = 0.5;
+  const std::vector<std::size_t> five(idx.begin(), idx.begin() + 5);
+  expect_error([&] { compute_geometric_details(five, 3, mean_shift, CGAL::make_property_map(out), np); }, "at least 5");
   pts[9] = Point(std::numeric_limits<double>::infinity(), 0, 0);
   expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{}, CGAL::make_property_map(out), np); }, "point #9");
 }

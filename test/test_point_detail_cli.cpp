@@ -1,5 +1,6 @@
 // The point-detail program, run as a user would: outputs, errors, and files it must not touch.
 #include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
@@ -309,4 +310,84 @@ TEST_F(Cli, curvature_of_a_sphere_is_one_over_its_radius)
   const Program_run bad = run("curvature -i " + in + " -o " + path("x.ply") + " -k 3");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("at least 5"), std::string::npos) << bad.output;
+}
+
+TEST_F(Cli, simplify_writes_surfels_that_cover_every_point_once_and_match_the_library)
+{
+  const std::string in = write_sphere_ply("in.ply", 3000);
+  const Program_run r = run("simplify -i " + in + " -o " + path("ssp.ply") + " --max-cluster-size 20 --clusters " +
+                            path("clusters.ply") + " --png " + path("ssp.png") + " --report " + path("ssp.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> input, surfels, clusters;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("ssp.ply"), surfels));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("clusters.ply"), clusters));
+  ASSERT_TRUE(surfels.has_normal_map());
+  auto radius = surfels.property_map<double>("radius");
+  auto members = surfels.property_map<double>("member_count");
+  auto ssp_index = clusters.property_map<double>("ssp_index");
+  ASSERT_TRUE(radius.second && members.second && ssp_index.second);
+
+  CGAL_ext::Simplification_settings settings;
+  settings.max_cluster_size = 20;
+  std::vector<std::size_t> sample_of(input.size());
+  const auto library = CGAL_ext::compute_simplification_sample_points(input, settings, CGAL::make_property_map(sample_of),
+                                                                      input.parameters());
+  ASSERT_EQ(surfels.size(), library.size());
+  std::vector<double> counted(surfels.size(), 0.0);
+  std::size_t i = 0;
+  for(auto it = clusters.begin(); it != clusters.end(); ++it, ++i) {
+    ASSERT_EQ(std::size_t(ssp_index.first[*it]), sample_of[i]);
+    counted[sample_of[i]] += 1;
+  }
+  double total = 0;
+  std::size_t s = 0;
+  for(auto it = surfels.begin(); it != surfels.end(); ++it, ++s) {
+    EXPECT_EQ(members.first[*it], counted[s]);
+    EXPECT_LE(members.first[*it], 20.0);
+    EXPECT_GE(radius.first[*it], 0.0);
+    EXPECT_NEAR(CGAL::squared_distance(surfels.point(*it), library.samples[s].centroid), 0.0, 1e-24);
+    total += members.first[*it];
+  }
+  EXPECT_EQ(total, double(input.size()));
+  const auto report = nlohmann::json::parse(contents(path("ssp.json")));
+  EXPECT_EQ(report["ssps"], library.size());
+  EXPECT_EQ(report["max_cluster_size"], 20);
+  EXPECT_GT(report["mean_shift"]["mean_iterations"].get<double>(), 1.0);
+  EXPECT_EQ(contents(path("ssp.png")).substr(1, 3), "PNG");
+
+  for(const auto& [args, needle] : {std::pair<std::string, std::string>{"--max-cluster-size 0", "max_cluster_size"},
+                                    {"--mode-threshold 0", "mode_spread_threshold"},
+                                    {"--target 0", "target_count"},
+                                    {"-k 4", "mean_shift_neighbors"},
+                                    {"--range-bandwidth -1", "range_bandwidth"}}) {
+    const Program_run bad = run("simplify -i " + in + " -o " + path("x.ply") + " " + args);
+    EXPECT_EQ(bad.exit_code, 1) << args;
+    EXPECT_NE(bad.output.find(needle), std::string::npos) << args << "\n" << bad.output;
+  }
+  expect_only({"in.ply", "ssp.ply", "clusters.ply", "ssp.png", "ssp.json"});
+}
+
+TEST_F(Cli, details_on_mean_shift_neighbourhoods_match_the_library)
+{
+  const std::string in = write_sphere_ply("in.ply", 3000);
+  const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --neighbors mean-shift --report " + path("r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> input, output;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), output));
+  CGAL_ext::Detail_settings settings;
+  settings.neighborhood = CGAL_ext::Laplacian_neighborhood::mean_shift;
+  std::vector<Vector> details(input.size());
+  std::vector<double> magnitude(input.size());
+  ASSERT_TRUE(CGAL_ext::compute_geometric_details(input, CGAL_ext::default_laplacian_neighbors, settings,
+                                                  CGAL::make_property_map(details), CGAL::make_property_map(magnitude),
+                                                  input.parameters()));
+  auto mag = output.property_map<double>("detail_magnitude").first;
+  std::size_t i = 0;
+  for(auto it = output.begin(); it != output.end(); ++it, ++i) ASSERT_DOUBLE_EQ(mag[*it], magnitude[i]);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["neighbors"], "mean-shift");
+  const Program_run bad = run("details -i " + in + " -o " + path("x.ply") + " --neighbors delaunay");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("delaunay"), std::string::npos) << bad.output;
 }

@@ -107,6 +107,34 @@ TEST(ScaleGeometricDetails, ScaleOneReturnsTheInputAndTheOutsideNeverMoves)
   }
 }
 
+TEST(ScaleGeometricDetails, MeanShiftNeighbourhoodsScaleTooAndReturnTheInputAtOne)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02, 4.0);
+  const auto roi = cap_of_sphere(sphere.points, 0.3);
+  Detail_scaling_settings settings = settings_for(Detail_order::quadric);
+  settings.details.neighborhood = Laplacian_neighborhood::mean_shift;
+  // Points with normals as pairs, so the normals travel with the points.
+  using Pwn = std::pair<Point, Vector>;
+  auto scaled = [&](double s, const Detail_scaling_settings& with) {
+    std::vector<Pwn> pwn;
+    for(std::size_t i = 0; i < sphere.points.size(); ++i) pwn.emplace_back(sphere.points[i], sphere.normals[i]);
+    EXPECT_TRUE(scale_geometric_details(pwn, 10, roi, s, with,
+                                        CGAL::parameters::point_map(CGAL::First_of_pair_property_map<Pwn>())
+                                          .normal_map(CGAL::Second_of_pair_property_map<Pwn>())));
+    std::vector<Point> out;
+    for(const Pwn& p : pwn) out.push_back(p.first);
+    return out;
+  };
+  EXPECT_LT(max_distance(scaled(1.0, settings), sphere.points), 1e-9 * 2);
+  const std::vector<Point> modes = scaled(2.0, settings), knn = scaled(2.0, settings_for(Detail_order::quadric));
+  // A smooth sphere has one mode family: the neighbourhoods barely change, nor does the result.
+  EXPECT_GT(max_distance(modes, sphere.points), 1e-3);
+  EXPECT_LT(max_distance(modes, knn), 0.2 * max_distance(knn, sphere.points));
+  std::vector<Point> estimated = sphere.points; // without normals they are estimated
+  ASSERT_TRUE(scale_geometric_details(estimated, 10, roi, 2.0, settings));
+  EXPECT_LT(max_distance(estimated, modes), 0.2 * max_distance(knn, sphere.points));
+}
+
 TEST(ScaleGeometricDetails, ResultIsAffineInTheScaleFactor)
 {
   const auto sphere = shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02, 4.0);

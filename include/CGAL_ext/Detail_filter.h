@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_DETAIL_FILTER_H
 #define CGAL_EXT_DETAIL_FILTER_H
 
+#include <CGAL_ext/Mean_shift_settings.h>
 #include <CGAL_ext/exceptions.h>
 
 #include <cmath>
@@ -119,17 +120,39 @@ struct Laplacian_weights
 
 /*!
   \ingroup PkgCGALExtRef
-  Everything that defines the geometric details besides the neighbour count: the transfer function and
-  the Laplacian's weights. Implicitly constructible from a `Detail_filter`.
+  Which neighbours a row of the Laplacian connects.
+*/
+enum class Laplacian_neighborhood
+{
+  k_nearest, ///< the symmetrised k-nearest-neighbour graph
+  mean_shift ///< the k nearest whose mean-shift modes agree (Miao et al. 2007, Sect. 5.1; needs normals)
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Everything that defines the geometric details besides the neighbour count: the transfer function, the
+  Laplacian's weights and its neighbourhoods. Implicitly constructible from a `Detail_filter`.
+
+  With `Laplacian_neighborhood::mean_shift`, the `k` nearest neighbours of a point are candidates and a row keeps
+  those whose mean-shift modes (`mean_shift`, run on max(k, 15) neighbours) lie within one range bandwidth of the
+  point's mode, at least 3 of them (the nearest modes fill up); the graph is then symmetrised. A point's
+  neighbourhood thus stops at creases and curvature changes, so details there are not smeared across them.
 */
 struct Detail_settings
 {
   Detail_filter filter;
   Laplacian_weights weights;
+  Laplacian_neighborhood neighborhood = Laplacian_neighborhood::k_nearest;
+  Mean_shift_settings mean_shift; ///< used by `Laplacian_neighborhood::mean_shift` only
 
   Detail_settings(const Detail_filter& f = {}, const Laplacian_weights& w = {}) : filter(f), weights(w) {}
 
-  void validate() const { filter.validate(); weights.validate(); }
+  void validate() const
+  {
+    filter.validate();
+    weights.validate();
+    if(neighborhood == Laplacian_neighborhood::mean_shift) mean_shift.validate();
+  }
 };
 
 } // namespace CGAL_ext

@@ -73,15 +73,6 @@ inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Me
   return result;
 }
 
-/// Checks the candidate count of a mean shift (its curvature fit needs at least 5 neighbours).
-inline void check_mean_shift_neighbors(std::size_t k, std::size_t n, const char* who)
-{
-  check_neighbor_count(k, n, who);
-  if(k < 5)
-    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) +
-                        " is too small: the curvature fit of the mean shift needs at least 5 neighbours");
-}
-
 } // namespace internal
 
 /*!

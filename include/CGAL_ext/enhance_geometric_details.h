@@ -65,7 +65,7 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
     return {};
   progress.stage(0.3, 0.5);
   Sparse_row_matrix K;
-  if(!build_laplacian<ConcurrencyTag>(cloud, k, settings.details.weights, progress, K)) return {};
+  if(!detail_laplacian<ConcurrencyTag>(cloud, k, settings.details, normals, progress, K, who)) return {};
 
   // sigma = delta - delta~ with delta~ = f(K) p~, so delta' - delta = (s - 1) f(K) (p - p~).
   const Matrix_n3 base = balanced_flow_base_surface<ConcurrencyTag>(K, cloud.positions, normals, settings.flow);

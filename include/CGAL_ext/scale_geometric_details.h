@@ -161,9 +161,15 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
   const std::vector<char>& in_roi = region.in_roi;
 
   Progress progress(callback);
-  progress.stage(0.0, 0.3);
+  Matrix_n3 normals; // only the mean-shift neighbourhoods need them
+  if(settings.details.neighborhood == Laplacian_neighborhood::mean_shift) {
+    progress.stage(0.0, 0.1);
+    if(!given_or_estimated_normals<ConcurrencyTag>(points, np, cloud, default_normal_neighbors, progress, normals, who))
+      return {};
+  }
+  progress.stage(normals.rows() ? 0.1 : 0.0, 0.3);
   Sparse_row_matrix K;
-  if(!build_laplacian<ConcurrencyTag>(cloud, k, settings.details.weights, progress, K)) return {};
+  if(!detail_laplacian<ConcurrencyTag>(cloud, k, settings.details, normals, progress, K, who)) return {};
 
   Detail_manipulation_result result;
   std::vector<int> anchors_local = region_anchors(points, anchors, np, region, result.default_anchors, who);

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace CGAL_ext {
@@ -25,6 +26,15 @@ namespace internal {
 
 /// n x 7 array: the normalised features `(x / h_s, n / h_r, c H / h_r)`, or modes in the same units.
 using Matrix_n7 = Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor>;
+
+/// Checks the candidate count of a mean shift (its curvature fit needs at least 5 neighbours).
+inline void check_mean_shift_neighbors(std::size_t k, std::size_t n, const char* who)
+{
+  check_neighbor_count(k, n, who);
+  if(k < 5)
+    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) +
+                        " is too small: the curvature fit of the mean shift needs at least 5 neighbours");
+}
 
 /// The first `k` neighbours of every row of a nearest-first graph with at least `k` per row.
 inline Neighbor_graph nearest_prefix(const Neighbor_graph& graph, std::size_t k)
