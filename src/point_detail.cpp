@@ -2,10 +2,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // point-detail: high-frequency geometric details of point-sampled surfaces from the command line.
 #include "cli_support.h"
+#include "edit_spec.h"
 #include "point_io.h"
 #include "region_spec.h"
 #include "render.h"
 
+#include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/balanced_flow_smooth_point_set.h>
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/compute_simplification_sample_points.h>
@@ -444,6 +446,139 @@ struct Simplify_command
   }
 };
 
+/// Runs an edit on `cloud` (which has normals): preprocess, deform, diffuse. `out` receives the deformed points
+/// and normals, the distance each point moved, its status (0 fixed, 1 region, 2 handle) and its sample point;
+/// the report gets the paper's Table 1 fields.
+void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_printer& progress, Report& rep, Point_cloud& out)
+{
+  const std::size_t n = cloud.points.size();
+  const std::vector<std::size_t> all = index_range(n);
+  CGAL_ext::Detail_preserving_deformation<> deformation(
+    all, edit.settings,
+    CGAL::parameters::point_map(CGAL::make_property_map(cloud.points)).normal_map(CGAL::make_property_map(cloud.normals))
+      .callback(progress.stage("preprocess")));
+  deformation.insert_roi_points(edit.roi);
+  for(const Handle_edit& handle : edit.handles) {
+    const std::size_t group = deformation.create_handle_group();
+    deformation.insert_handle_points(group, handle.points);
+    deformation.set_handle_transform(group, handle.rotation, handle.translation);
+  }
+  const bool done = rep.time("preprocess", [&] { return deformation.preprocess(); });
+  progress.finish();
+  if(!done) throw Cancelled();
+  rep.time("deform", [&] { deformation.deform(); });
+  out = Point_cloud();
+  out.points.resize(n);
+  out.normals.resize(n);
+  std::vector<std::size_t> indices = all;
+  rep.time("diffuse", [&] {
+    deformation.diffuse(indices, CGAL::parameters::point_map(CGAL::make_property_map(out.points))
+                                   .normal_map(CGAL::make_property_map(out.normals)));
+  });
+  std::vector<double> moved(n), status(n, 0.0), sample(n);
+  for(std::size_t i = 0; i < n; ++i) {
+    moved[i] = std::sqrt(CGAL::squared_distance(out.points[i], cloud.points[i]));
+    sample[i] = double(deformation.sample_point_of(i));
+  }
+  for(std::size_t i : edit.roi) status[i] = 1;
+  for(const Handle_edit& handle : edit.handles)
+    for(std::size_t i : handle.points) status[i] = 2;
+  out.colors = sequential_colors(moved);
+  out.set_scalar("displacement", std::move(moved));
+  out.set_scalar("status", std::move(status));
+  out.set_scalar("ssp_index", std::move(sample));
+
+  // Handle sample points against their targets (soft constraints).
+  double handle_error = 0;
+  for(std::size_t s = 0; s < deformation.number_of_sample_points(); ++s)
+    if(deformation.is_handle_sample_point(s))
+      handle_error = std::max(handle_error, (deformation.deformed_sample_position(s) -
+                                             deformation.handle_target(deformation.handle_group_of(s), deformation.sample_position(s))).norm());
+  const CGAL_ext::Detail_preserving_deformation_statistics& st = deformation.statistics();
+  const CGAL_ext::Least_squares_statistics& ls = st.least_squares;
+  auto& r = rep.data();
+  r["points"] = st.points;
+  r["ssps"] = st.samples;
+  r["roi_ssps"] = st.roi_samples;
+  r["handle_ssps"] = st.handle_samples;
+  r["handle_groups"] = edit.handles.size();
+  r["order"] = CGAL_ext::Detail_filter::order_name(edit.settings.filter.order);
+  r["lambda"] = edit.settings.filter.lambda;
+  if(edit.settings.filter.order != CGAL_ext::Detail_order::linear) r["mu"] = edit.settings.filter.mu;
+  // The paper's Table 1: time for editing the SSPs (operator, normal matrix, factorisation, solve) and for diffusion.
+  r["table1"] = {{"editing_ssps_s", ls.assembly_seconds + ls.factor_seconds + st.deform_seconds},
+                 {"diffusion_s", st.diffuse_seconds}};
+  r["clustering_s"] = st.clustering_seconds;
+  r["solver"] = {{"method", ls.method}, {"normal_nonzeros", ls.normal_nonzeros}, {"assembly_s", ls.assembly_seconds},
+                 {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds}, {"relative_residual", ls.relative_residual}};
+  r["max_handle_ssp_error"] = handle_error;
+}
+
+/// `edit`: detail-preserving editing of a region by handles (paper Sect. 6).
+struct Edit_command
+{
+  std::string input, output, edit, sel, def, png, report, view = "front";
+  std::string order, strength, origin;
+  double lambda = 0, mu = 0, handle_weight = 0;
+  unsigned int k = 0;
+  std::size_t max_cluster_size = 0, target = 0;
+  bool no_propagation = false;
+  std::map<std::string, CLI::Option*> given;
+  Render_settings render;
+
+  bool has(const std::string& name) const { return given.at(name)->count() > 0; }
+
+  void run(const Common_options& common)
+  {
+    std::vector<fs::path> inputs{input};
+    for(const std::string& f : {edit, sel, def})
+      if(!f.empty()) inputs.push_back(f);
+    Output_files outputs(inputs);
+    const fs::path ply_tmp = outputs.add(output);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path report_tmp = add_if_given(outputs, report);
+    render.view = parse_view(view);
+
+    Progress_printer progress(common.quiet);
+    Report rep("edit");
+    rep.data()["input"] = input;
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    if(cloud.points.size() < 2) throw Cli_error(input + " has fewer than 2 points");
+    Edit_description description = edit.empty() ? read_botsch_sorkine(sel, def, cloud.points.size())
+                                                 : read_edit_json(edit, cloud.points);
+    // Options given on the command line override the edit file's settings.
+    auto& s = description.settings;
+    if(has("--order"))
+      s.filter.order = order == "linear" ? CGAL_ext::Detail_order::linear
+                       : order == "cubic" ? CGAL_ext::Detail_order::cubic : CGAL_ext::Detail_order::quadric;
+    if(has("--lambda")) s.filter.lambda = lambda;
+    if(has("--mu")) s.filter.mu = mu;
+    if(has("-k")) s.sample_neighbors = k;
+    if(has("--strength")) s.strength_distance = strength == "geodesic" ? CGAL_ext::Strength_distance::geodesic : CGAL_ext::Strength_distance::euclidean;
+    if(has("--diffusion-origin")) s.diffusion_origin = origin == "nearest" ? CGAL_ext::Diffusion_origin::nearest_sample : CGAL_ext::Diffusion_origin::own_sample;
+    if(has("--handle-weight")) s.handle_weight = handle_weight;
+    if(has("--max-cluster-size")) s.simplification.max_cluster_size = max_cluster_size;
+    if(has("--target")) s.simplification.target_count = target;
+    if(no_propagation) s.propagate_rotations = false;
+    s.validate();
+    ensure_normals(cloud, progress, rep);
+
+    Point_cloud out;
+    run_edit(cloud, description, progress, rep, out);
+    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
+    if(!png.empty())
+      write_file(png_tmp, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
+    if(!report.empty()) write_file(report_tmp, rep.dump());
+    outputs.commit();
+    if(!common.quiet) {
+      const auto& r = rep.data();
+      std::fprintf(stderr, "edit: %zu points, %zu SSPs (%zu in the region): editing the SSPs %.3f s, diffusion %.3f s\n",
+                   r["points"].get<std::size_t>(), r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(),
+                   r["table1"]["editing_ssps_s"].get<double>(), r["table1"]["diffusion_s"].get<double>());
+    }
+  }
+};
+
 struct Render_command
 {
   std::string input, output, color_by, report, view = "front";
@@ -546,9 +681,35 @@ struct Demo_command
                   result.region_size, result.anchor_count, rep.data()["timings_s"][what].get<double>(), stem, stem);
       runs.push_back(rep.data());
     }
+    // Detail-preserving editing (paper Fig. 8): the tip swings by 50 degrees about the base of the region (the
+    // tentacle above z = 0.25; the rest stays). Coloured by the distance each point moved.
+    Edit_description bend;
+    bend.roi = select_points(input.points, {parse_region_spec("box:-2,-1,0.25,1,1,2")});
+    Handle_edit tip;
+    tip.points = select_points(input.points, {parse_region_spec("box:-2,-1,-1,-0.85,1,2")});
+    const Eigen::Vector3d pivot(0, 0, 0.25);
+    tip.rotation = Eigen::AngleAxisd(50 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    tip.translation = pivot - tip.rotation * pivot;
+    bend.handles.push_back(tip);
+    for(const char* order : {"linear", "quadric", "cubic"}) {
+      bend.settings.filter.order = std::string(order) == "linear" ? CGAL_ext::Detail_order::linear
+                                   : std::string(order) == "cubic" ? CGAL_ext::Detail_order::cubic
+                                                                   : CGAL_ext::Detail_order::quadric;
+      Report rep(std::string("demo edit ") + order);
+      Point_cloud out;
+      run_edit(input, bend, progress, rep, out);
+      const std::string stem = std::string("edit_") + order;
+      write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(out));
+      write_file(outputs.add(dir / (stem + ".png")), render_png(out.points, out.normals, out.colors, render));
+      const auto& r = rep.data();
+      std::printf("demo: %-7s edit, tip swung 50 degrees: %zu SSPs (%zu in the region), SSPs %.3f s, diffusion %.3f s -> %s.ply, %s.png\n",
+                  order, r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(), r["table1"]["editing_ssps_s"].get<double>(),
+                  r["table1"]["diffusion_s"].get<double>(), stem.c_str(), stem.c_str());
+      runs.push_back(r);
+    }
     if(!report.empty()) write_file(report_tmp, nlohmann::json{{"command", "demo"}, {"runs", runs}}.dump(2) + "\n");
     outputs.commit();
-    std::printf("demo: wrote %s/{tentacle,details_*,scale_*,enhance_*}.{ply,png}\n", directory.c_str());
+    std::printf("demo: wrote %s/{tentacle,details_*,scale_*,enhance_*,edit_*}.{ply,png}\n", directory.c_str());
   }
 };
 
@@ -628,6 +789,33 @@ int main(int argc, char** argv)
   simplify_app->add_option("--report", simplify.report, "write stage timings, SSP counts and mean-shift figures as JSON");
   add_render_options(*simplify_app, simplify.render, simplify.view);
 
+  Edit_command edit;
+  CLI::App* edit_app = app.add_subcommand("edit", "detail-preserving editing by handles on simplification sample points (paper Sect. 6)");
+  edit_app->add_option("-i,--input", edit.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  edit_app->add_option("-o,--output", edit.output, "output binary PLY: deformed points and normals, displacement, status, ssp_index")->required();
+  auto* edit_json = edit_app->add_option("--edit", edit.edit, "edit description (JSON: roi, handles with transforms, settings; doc/editing.md)");
+  auto* edit_sel = edit_app->add_option("--sel", edit.sel, "Botsch-Sorkine selection: one status per point (0 fixed, 1 deformable, 2 handle)");
+  auto* edit_def = edit_app->add_option("--def", edit.def, "Botsch-Sorkine handle transform: a 4x4 matrix");
+  edit_json->excludes(edit_sel)->excludes(edit_def);
+  edit_sel->needs(edit_def);
+  edit_def->needs(edit_sel);
+  edit_app->add_option("--png", edit.png, "also render the result, coloured by the distance each point moved");
+  edit_app->add_option("--report", edit.report, "write the paper's Table 1 fields, stage timings and solver figures as JSON");
+  edit.given["--order"] = edit_app->add_option("--order", edit.order, "transfer function (overrides the edit file)")
+                            ->check(CLI::IsMember({"linear", "quadric", "cubic"}));
+  edit.given["--lambda"] = edit_app->add_option("--lambda", edit.lambda, "pass-band frequency (> 0)");
+  edit.given["--mu"] = edit_app->add_option("--mu", edit.mu, "highest frequency (> lambda; quadric and cubic)");
+  edit.given["-k"] = edit_app->add_option("-k,--neighbor-count", edit.k, "neighbours of a sample point in their Laplacian (default 10)");
+  edit.given["--strength"] = edit_app->add_option("--strength", edit.strength, "distances of the strength field: euclidean (the paper's) or geodesic")
+                               ->check(CLI::IsMember({"euclidean", "geodesic"}));
+  edit.given["--diffusion-origin"] = edit_app->add_option("--diffusion-origin", edit.origin, "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)")
+                                       ->check(CLI::IsMember({"own", "nearest"}));
+  edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of the handle constraints (default 1)");
+  edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
+  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 4000)");
+  edit_app->add_flag("--no-rotation-propagation", edit.no_propagation, "keep the details' world orientation (plain Laplacian editing)");
+  add_render_options(*edit_app, edit.render, edit.view);
+
   Render_command render;
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
   render_app->add_option("-i,--input", render.input, "input points")->required();
@@ -637,7 +825,7 @@ int main(int argc, char** argv)
   add_render_options(*render_app, render.render, render.view);
 
   Demo_command demo;
-  CLI::App* demo_app = app.add_subcommand("demo", "detail colour maps, scaling and enhancement on a generated tentacle");
+  CLI::App* demo_app = app.add_subcommand("demo", "detail colour maps, scaling, enhancement and editing on a generated tentacle");
   demo_app->add_option("-o,--output", demo.directory, "output directory (created)")->capture_default_str();
   demo_app->add_option("--report", demo.report, "write stage timings and counts as JSON");
   demo_app->add_option("--points", demo.points, "number of samples")->check(CLI::Range(1000, 5000000))->capture_default_str();
@@ -655,6 +843,10 @@ int main(int argc, char** argv)
     if(*curvature_app) curvature.run(common);
     if(*enhance_app) enhance.run(common);
     if(*simplify_app) simplify.run(common);
+    if(*edit_app) {
+      if(edit.edit.empty() && edit.sel.empty()) throw Cli_error("edit needs --edit EDIT.json or --sel S --def D");
+      edit.run(common);
+    }
     if(*render_app) render.run(common);
     if(*demo_app) demo.run(common);
   } catch(const Cancelled&) {

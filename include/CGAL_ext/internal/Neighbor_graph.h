@@ -15,6 +15,7 @@
 #include <boost/iterator/counting_iterator.hpp>
 
 #include <algorithm>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -46,43 +47,88 @@ inline void check_neighbor_count(std::size_t k, std::size_t n, const char* who)
   }
 }
 
+/// CGAL's kd-tree over the rows of a position array: k-nearest queries that report row indices.
+class Position_tree
+{
+  using SC = CGAL::Simple_cartesian<double>;
+  using Point_pmap = CGAL::Pointer_property_map<SC::Point_3>::const_type;
+  using Traits = CGAL::Search_traits_adapter<int, Point_pmap, CGAL::Search_traits_3<SC>>;
+  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
+  using Tree = typename Search::Tree;
+
+public:
+  using Point = SC::Point_3;
+
+  static Point point(const Matrix_n3& positions, Eigen::Index i)
+  {
+    return Point(positions(i, 0), positions(i, 1), positions(i, 2));
+  }
+
+  template <typename ConcurrencyTag>
+  explicit Position_tree(const Matrix_n3& positions, ConcurrencyTag)
+    : m_points(std::size_t(positions.rows())), m_pmap(nullptr)
+  {
+    for(std::size_t i = 0; i < m_points.size(); ++i) m_points[i] = point(positions, Eigen::Index(i));
+    m_pmap = Point_pmap(m_points.data());
+    m_tree = std::make_unique<Tree>(boost::counting_iterator<int>(0), boost::counting_iterator<int>(int(m_points.size())),
+                                    typename Tree::Splitter(), Traits(m_pmap));
+    m_tree->template build<ConcurrencyTag>();
+  }
+
+  std::size_t size() const { return m_points.size(); }
+  const Point& operator[](std::size_t i) const { return m_points[i]; }
+
+  /// Calls `visit(row, squared_distance)` for the `k` rows nearest to `query`, nearest first.
+  template <typename Visit>
+  void nearest(const Point& query, std::size_t k, const Visit& visit) const
+  {
+    Search search(*m_tree, query, unsigned(k), 0, true, typename Search::Distance(m_pmap), true);
+    for(auto it = search.begin(); it != search.end(); ++it) visit(it->first, it->second);
+  }
+
+private:
+  std::vector<Point> m_points;
+  Point_pmap m_pmap;
+  std::unique_ptr<Tree> m_tree;
+};
+
 /// Directed k-nearest-neighbour graph (each row holds exactly k other points, nearest first) with CGAL's
 /// kd-tree, built once and queried in parallel. Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
 {
-  using SC = CGAL::Simple_cartesian<double>;
-  using Point = SC::Point_3;
   const std::size_t n = std::size_t(positions.rows());
-
-  std::vector<Point> points(n);
-  for(std::size_t i = 0; i < n; ++i) points[i] = Point(positions(Eigen::Index(i), 0), positions(Eigen::Index(i), 1), positions(Eigen::Index(i), 2));
-  using Point_pmap = CGAL::Pointer_property_map<Point>::const_type;
-  using Base_traits = CGAL::Search_traits_3<SC>;
-  using Traits = CGAL::Search_traits_adapter<int, Point_pmap, Base_traits>;
-  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
-  using Tree = typename Search::Tree;
-  using Distance = typename Search::Distance;
-
-  const Point_pmap pmap(points.data());
-  Tree tree(boost::counting_iterator<int>(0), boost::counting_iterator<int>(int(n)), typename Tree::Splitter(),
-            Traits(pmap));
-  tree.template build<ConcurrencyTag>();
-  const Distance distance(pmap);
-
+  const Position_tree tree(positions, ConcurrencyTag());
   Neighbor_graph graph;
   graph.offsets.resize(n + 1);
   for(std::size_t i = 0; i <= n; ++i) graph.offsets[i] = int(i * k);
   graph.indices.resize(n * k);
   // Ask for k + 1 to skip the point itself; with exact duplicates the point need not come first.
   const bool completed = for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
-    Search search(tree, points[i], unsigned(k + 1), 0, true, distance, true);
     int* out = graph.indices.data() + i * k;
     std::size_t m = 0;
-    for(auto it = search.begin(); it != search.end() && m < k; ++it)
-      if(std::size_t(it->first) != i) out[m++] = it->first;
+    tree.nearest(tree[i], k + 1, [&](int j, double) {
+      if(std::size_t(j) != i && m < k) out[m++] = j;
+    });
   });
   if(!completed) return {};
+  return graph;
+}
+
+/// For every row of `queries`, its `k` nearest rows of `samples` (`k <= samples.rows()`), nearest first.
+template <typename ConcurrencyTag>
+Neighbor_graph k_nearest_samples(const Matrix_n3& samples, const Matrix_n3& queries, std::size_t k)
+{
+  const std::size_t n = std::size_t(queries.rows());
+  const Position_tree tree(samples, ConcurrencyTag());
+  Neighbor_graph graph;
+  graph.offsets.resize(n + 1);
+  for(std::size_t i = 0; i <= n; ++i) graph.offsets[i] = int(i * k);
+  graph.indices.resize(n * k);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    int* out = graph.indices.data() + i * k;
+    tree.nearest(Position_tree::point(queries, Eigen::Index(i)), k, [&](int j, double) { *out++ = j; });
+  });
   return graph;
 }
 

@@ -1,0 +1,712 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H
+#define CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_simplification_sample_points.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Detail_least_squares.h>
+#include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/detail_manipulation.h>
+#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/mean_shift.h>
+#include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/ssp_diffusion.h>
+#include <CGAL_ext/internal/strength_field.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+#include <CGAL/tags.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  How the strength field measures the distances `d0` (to the fixed part) and `d1` (to a handle).
+*/
+enum class Strength_distance
+{
+  euclidean, ///< straight-line distance between sample points (the paper's)
+  geodesic   ///< shortest path along the sample points' neighbour graph (Dijkstra): does not leak across parts
+             ///< that are close in space but far along the surface, like an arm held near the body
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Where a point's offset is measured from when the deformation is diffused from the sample points to every
+  point (Miao et al. 2007, Sect. 6.2). Both reproduce rigid motions exactly and keep points whose sample
+  points did not move in place; they differ in how they blend bending.
+*/
+enum class Diffusion_origin
+{
+  nearest_sample, ///< the paper's: `p - ssp_0` (the nearest sample point) decoded in every frame from `ssp'_0`
+  own_sample      ///< `p - ssp_i` decoded in frame i from `ssp'_i`: each sample point carries the point rigidly
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of detail-preserving editing (Miao et al. 2007, Sect. 6). Implicitly constructible from a
+  `Detail_filter`.
+*/
+struct Detail_preserving_deformation_settings
+{
+  /// The details preserved on the sample points (their Laplacian is built on the sample points' kNN graph).
+  Detail_filter filter;
+  /// Neighbours of a sample point in the sample points' Laplacian (smaller when there are fewer sample points).
+  unsigned int sample_neighbors = default_laplacian_neighbors;
+  /// How the points are clustered into sample points; every point is its own sample point when the input
+  /// has at most `simplification.target_count` points and no `max_cluster_size` is set.
+  Simplification_settings simplification;
+  /// alpha (`least_squares.detail_weight`) and the solver; handles are soft constraints of weight `handle_weight`.
+  Least_squares_settings least_squares;
+  /// Weight of the handle constraints relative to the detail equations (the paper: 1). Larger values pull
+  /// the handles closer to their targets.
+  double handle_weight = 1.0;
+  /// Distances of the strength field.
+  Strength_distance strength_distance = Strength_distance::euclidean;
+  /// Whether the details turn with the propagated handle rotations (`delta'_i = R(Q_i) delta_i`); without,
+  /// the details keep their world orientation (plain Laplacian editing).
+  bool propagate_rotations = true;
+  /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1.
+  unsigned int diffusion_samples = 4;
+  Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
+
+  Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
+
+  void validate() const
+  {
+    filter.validate();
+    simplification.validate();
+    least_squares.validate();
+    if(sample_neighbors < 1)
+      throw Invalid_input("detail-preserving deformation: sample_neighbors must be at least 1");
+    if(!(std::isfinite(handle_weight) && handle_weight > 0))
+      throw Invalid_input("detail-preserving deformation: handle_weight must be a finite number > 0");
+    if(diffusion_samples < 1)
+      throw Invalid_input("detail-preserving deformation: diffusion_samples must be at least 1");
+  }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Sizes and timings of a `Detail_preserving_deformation` (the fields of the paper's Table 1 and more).
+*/
+struct Detail_preserving_deformation_statistics
+{
+  std::size_t points = 0;      ///< input points
+  std::size_t samples = 0;     ///< simplification sample points
+  std::size_t roi_samples = 0; ///< sample points of the region of interest (the unknowns)
+  std::size_t handle_samples = 0;
+  double clustering_seconds = 0; ///< mean shift and clustering (the mean shift runs once per deformation object)
+  double preprocess_seconds = 0; ///< all of `preprocess()`, clustering and factorisation included
+  Least_squares_statistics least_squares; ///< assembly, factorisation and last solve of the sample points' system
+  double deform_seconds = 0;  ///< last `deform()`: propagated rotations, right-hand side, back-substitution
+  double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
+};
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Detail-preserving editing of a point-sampled surface (Miao et al. 2007, Sect. 6), shaped like
+  `CGAL::Surface_mesh_deformation`: select a region of interest (ROI) and handle groups, `preprocess()`,
+  then move the handles with `set_handle_transform()` and call `deform()` and `diffuse()` as often as wanted.
+
+  - The points are clustered into simplification sample points (SSPs) that never mix fixed, ROI and handle
+    points (`compute_simplification_sample_points`).
+  - The SSPs' geometric details `delta = f(K) s` are kept in the least-squares sense while the handle SSPs
+    are pulled to their targets: `min alpha sum_{i in ROI} ||(f(K) s')_i - R(Q_i) delta_i||^2 +
+    w sum_{h in handles} ||s'_h - (R_g s_h + t_g)||^2`, with SSPs outside the ROI fixed. The unknowns are
+    displacements and the normal matrix is factored once in `preprocess()`; a handle move only changes the
+    right-hand side.
+  - Rotations propagate from the handles by the strength field `f = beta(d0 / (d0 + d1))`, `beta(t) =
+    3t^2 - 2t^3`: `Q_i = nlerp(identity, Q_handle, f)`. Several groups share the pull in proportion to
+    `1 / d1_g` (a handle SSP follows its own group only).
+  - Every point follows its `m` nearest SSPs through their local frames (normal refitted after the edit,
+    first axis toward a fixed reference neighbour), blended by weights that fall off with distance; normals
+    turn with the blended rotation.
+
+  Identities (tested): unmoved handles return every point exactly; with the whole model as ROI, moving every
+  handle group by one rigid motion moves every point and normal rigidly; points whose SSPs are all fixed
+  never move.
+
+  The object copies the points and normals at construction; the caller's range is only written by
+  `diffuse(points, np)`. It is not copyable (it owns its factorisation).
+
+  \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag>
+class Detail_preserving_deformation
+{
+  using Matrix_n3 = internal::Matrix_n3;
+  static constexpr const char* who = "Detail_preserving_deformation";
+  enum : int { fixed_label = 0, roi_label = 1, first_handle_label = 2 };
+
+public:
+  using Settings = Detail_preserving_deformation_settings;
+  using Statistics = Detail_preserving_deformation_statistics;
+
+  /*!
+    Copies the points and their normals.
+
+    \param points the points (any range; its order defines the point indices used below)
+    \param settings details, clustering, solver, strength field and diffusion settings
+    \param np `point_map`, `normal_map` (estimated with `CGAL::jet_estimate_normals` and
+           `CGAL::mst_orient_normals` when absent) and `callback` (progress of `preprocess()`; false cancels it)
+    \throws Invalid_input for an empty range, non-finite coordinates, zero or non-finite normals, fewer than
+            two points, or invalid settings.
+  */
+  template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+  explicit Detail_preserving_deformation(const PointRange& points, const Settings& settings = Settings(),
+                                         const NamedParameters& np = CGAL::parameters::default_values())
+    : m_settings(settings)
+  {
+    using CGAL::parameters::choose_parameter;
+    using CGAL::parameters::get_parameter;
+    using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+    m_settings.validate();
+    m_callback = choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
+    m_cloud = internal::make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
+    if(m_cloud.size() < 2) throw Invalid_input(std::string(who) + ": editing needs at least two points");
+    m_row_of = m_cloud.spatial_index();
+    internal::Progress progress;
+    internal::given_or_estimated_normals<ConcurrencyTag>(points, np, m_cloud, default_normal_neighbors, progress,
+                                                         m_normals, who);
+    m_label.assign(m_cloud.size(), fixed_label);
+    m_deformed_points = m_cloud.positions;
+    m_deformed_normals = m_normals;
+  }
+
+  Detail_preserving_deformation(const Detail_preserving_deformation&) = delete;
+  Detail_preserving_deformation& operator=(const Detail_preserving_deformation&) = delete;
+
+  /// \name Selection
+  /// Point indices are positions in the range given at construction. Changing the selection makes the
+  /// next `deform()` preprocess again.
+  /// @{
+
+  /// Adds a point to the region of interest (the deformable part; every other point stays fixed).
+  void insert_roi_point(std::size_t i) { set_label(i, roi_label, false); }
+
+  template <typename IndexRange>
+  void insert_roi_points(const IndexRange& indices)
+  {
+    for(const auto& i : indices) insert_roi_point(std::size_t(i));
+  }
+
+  /// Adds a handle group, initially with the identity transform, and returns its index.
+  std::size_t create_handle_group()
+  {
+    m_transforms.push_back(Transform());
+    m_preprocessed = false;
+    return m_transforms.size() - 1;
+  }
+
+  /// Makes point `i`, which must be (or later be put) in the region of interest, a handle of `group`.
+  void insert_handle_point(std::size_t group, std::size_t i)
+  {
+    check_group(group);
+    set_label(i, first_handle_label + int(group), true);
+  }
+
+  template <typename IndexRange>
+  void insert_handle_points(std::size_t group, const IndexRange& indices)
+  {
+    for(const auto& i : indices) insert_handle_point(group, std::size_t(i));
+  }
+
+  /// Puts every point back to fixed and removes the handle groups.
+  void clear_selection()
+  {
+    std::fill(m_label.begin(), m_label.end(), fixed_label);
+    std::fill(m_in_roi.begin(), m_in_roi.end(), 0);
+    m_transforms.clear();
+    m_preprocessed = false;
+  }
+
+  std::size_t number_of_handle_groups() const { return m_transforms.size(); }
+  /// @}
+
+  /// \name Editing
+  /// @{
+
+  /*!
+    Clusters the points into sample points, builds their Laplacian and details, the strength field and the
+    diffusion stencils, and factors the normal matrix. Called by `deform()` when the selection changed.
+    \return false if the callback cancelled (the object then stays unpreprocessed).
+    \throws Invalid_input for an empty region of interest, a handle group without points, a handle point
+            outside the region, or a part of the region that neither a handle nor the fixed part pins.
+    \throws Numerical_failure when the factorisation fails.
+  */
+  bool preprocess();
+
+  /// The rigid transform `p -> R p + t` (world frame, the convention of the Botsch-Sorkine `.def` files) of a
+  /// handle group. `R` must be a rotation (orthonormal within 1e-6, determinant +1).
+  void set_handle_transform(std::size_t group, const Eigen::Matrix3d& R, const Eigen::Vector3d& t)
+  {
+    check_group(group);
+    if(!R.allFinite() || !t.allFinite())
+      throw Invalid_input(std::string(who) + ": the transform of handle group " + std::to_string(group) + " is not finite");
+    const double error = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
+    if(!(error < 1e-6) || !(R.determinant() > 0)) {
+      std::ostringstream os;
+      os << who << ": the matrix of handle group " << group << " is not a rotation (|R^T R - I| = " << error
+         << ", det R = " << R.determinant() << "); give a rigid transform without scaling, shear or mirroring";
+      throw Invalid_input(os.str());
+    }
+    m_transforms[group] = Transform{Eigen::Quaterniond(R).normalized(), t};
+  }
+
+  /// As above with the rotation as a unit quaternion (norm within 1e-6 of 1).
+  void set_handle_transform(std::size_t group, const Eigen::Quaterniond& q, const Eigen::Vector3d& t)
+  {
+    check_group(group);
+    if(!q.coeffs().allFinite() || !t.allFinite())
+      throw Invalid_input(std::string(who) + ": the transform of handle group " + std::to_string(group) + " is not finite");
+    if(!(std::abs(q.norm() - 1) < 1e-6)) {
+      std::ostringstream os;
+      os << who << ": the quaternion of handle group " << group << " has norm " << q.norm()
+         << "; a rotation needs a unit quaternion (normalise it)";
+      throw Invalid_input(os.str());
+    }
+    m_transforms[group] = Transform{q.normalized(), t};
+  }
+
+  /*!
+    Solves the sample points' new positions for the current handle transforms (preprocessing first if the
+    selection changed). Only the right-hand side changes between calls: one back-substitution.
+    \return false if a needed preprocessing was cancelled.
+  */
+  bool deform();
+
+  /// Carries the sample points' deformation to every point and normal (internal arrays; read them with
+  /// `deformed_point()` or write them with `diffuse(points, np)`). Parallel and allocation-free.
+  void diffuse();
+
+  /*!
+    `diffuse()`, then writes every point's deformed position through `point_map` and, when given, its
+    normal through `normal_map` (`np`), in the order of `points`, which must have as many elements as the
+    range given at construction.
+  */
+  template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+  void diffuse(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values());
+
+  /// Handle transforms back to the identity and every point back to its input position and normal; the
+  /// preprocessing is kept.
+  void reset()
+  {
+    for(Transform& t : m_transforms) t = Transform();
+    m_deformed_points = m_cloud.positions;
+    m_deformed_normals = m_normals;
+    m_deformed_samples = m_samples;
+    std::fill(m_sample_rotation.begin(), m_sample_rotation.end(), Eigen::Matrix3d::Identity());
+  }
+  /// @}
+
+  /// \name Results and sizes
+  /// @{
+  std::size_t number_of_points() const { return m_cloud.size(); }
+  std::size_t number_of_sample_points() const { return std::size_t(m_samples.rows()); }
+  std::size_t number_of_roi_sample_points() const { return m_roi.size(); }
+  bool is_preprocessed() const { return m_preprocessed; }
+  const Statistics& statistics() const { return m_statistics; }
+
+  Eigen::Vector3d point(std::size_t i) const { return m_cloud.positions.row(m_row_of.at(i)).transpose(); }
+  Eigen::Vector3d normal(std::size_t i) const { return m_normals.row(m_row_of.at(i)).transpose(); }
+  Eigen::Vector3d deformed_point(std::size_t i) const { return m_deformed_points.row(m_row_of.at(i)).transpose(); }
+  Eigen::Vector3d deformed_normal(std::size_t i) const { return m_deformed_normals.row(m_row_of.at(i)).transpose(); }
+
+  /// The sample point of input point `i` (after `preprocess()`).
+  std::size_t sample_point_of(std::size_t i) const { return std::size_t(m_sample_of.at(std::size_t(m_row_of.at(i)))); }
+  Eigen::Vector3d sample_position(std::size_t s) const { return m_samples.row(Eigen::Index(s)).transpose(); }
+  Eigen::Vector3d sample_normal(std::size_t s) const { return m_sample_normals.row(Eigen::Index(s)).transpose(); }
+  Eigen::Vector3d deformed_sample_position(std::size_t s) const { return m_deformed_samples.row(Eigen::Index(s)).transpose(); }
+  /// The detail vector `f(K) s` of sample point `s` (zero outside the region of interest).
+  Eigen::Vector3d sample_detail(std::size_t s) const
+  {
+    const int r = m_roi_local.at(s);
+    return r < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(m_details.row(r).transpose());
+  }
+  /// The rotation propagated to sample point `s` by the last `deform()` (the identity outside the region).
+  Eigen::Matrix3d propagated_rotation(std::size_t s) const { return m_propagated.at(s); }
+  /// The strength `f = beta(d0 / (d0 + d1))` of handle group `g` at sample point `s`.
+  double strength(std::size_t s, std::size_t g) const { return m_strength.at(s * m_transforms.size() + g); }
+  /// The sample points' Laplacian `K` (rows in sample-point order).
+  const internal::Sparse_row_matrix& sample_laplacian() const { return m_K; }
+  /// Whether sample point `s` is in the region of interest / a handle.
+  bool is_roi_sample_point(std::size_t s) const { return m_sample_label.at(s) != fixed_label; }
+  bool is_handle_sample_point(std::size_t s) const { return m_sample_label.at(s) >= first_handle_label; }
+  /// The handle group of sample point `s`; only for handle sample points.
+  std::size_t handle_group_of(std::size_t s) const { return std::size_t(m_sample_label.at(s) - first_handle_label); }
+  /// The target of a handle point under its group's current transform.
+  Eigen::Vector3d handle_target(std::size_t group, const Eigen::Vector3d& p) const
+  {
+    check_group(group);
+    return m_transforms[group].rotation * p + m_transforms[group].translation;
+  }
+  const Settings& settings() const { return m_settings; }
+  /// @}
+
+private:
+  struct Transform
+  {
+    Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  };
+
+  void check_group(std::size_t group) const
+  {
+    if(group >= m_transforms.size())
+      throw Invalid_input(std::string(who) + ": there is no handle group " + std::to_string(group) + " (" +
+                          std::to_string(m_transforms.size()) + " groups; create_handle_group() adds one)");
+  }
+
+  void set_label(std::size_t i, int label, bool handle)
+  {
+    if(i >= m_cloud.size())
+      throw Invalid_input(std::string(who) + ": point index " + std::to_string(i) + " is out of range (" +
+                          std::to_string(m_cloud.size()) + " points)");
+    const std::size_t row = std::size_t(m_row_of[i]);
+    if(handle) {
+      m_label[row] = label;
+    } else {
+      if(m_in_roi.empty()) m_in_roi.assign(m_cloud.size(), 0);
+      m_in_roi[row] = 1;
+      if(m_label[row] == fixed_label) m_label[row] = roi_label;
+    }
+    m_preprocessed = false;
+  }
+
+  bool in_roi(std::size_t row) const { return !m_in_roi.empty() && m_in_roi[row]; }
+
+  void check_selection() const;
+  void cluster(internal::Progress& progress);
+  void build_strength_field();
+
+  Settings m_settings;
+  std::function<bool(double)> m_callback;
+  internal::Spatial_point_cloud m_cloud;
+  std::vector<int> m_row_of;
+  Matrix_n3 m_normals;
+  std::vector<int> m_label;         // per row: fixed, ROI, or handle of group (label - 2)
+  std::vector<char> m_in_roi; // per row: inserted into the ROI
+  std::vector<Transform> m_transforms;
+  bool m_preprocessed = false;
+  internal::Mean_shift_analysis m_mean_shift; // selection-independent: computed once
+  bool m_has_mean_shift = false;
+
+  // Sample points (after preprocess).
+  Matrix_n3 m_samples, m_sample_normals, m_deformed_samples;
+  std::vector<int> m_sample_of;    // per row
+  std::vector<int> m_sample_label; // per sample point
+  std::vector<int> m_sample_first_row; // a member row of each sample point (for messages)
+  internal::Neighbor_graph m_graph; // symmetrised kNN of the sample points
+  internal::Sparse_row_matrix m_K;
+  std::vector<int> m_roi;       // sample points of the region, increasing
+  std::vector<int> m_roi_local; // per sample point: its row in m_roi, or -1
+  std::vector<int> m_anchors;   // local indices of the handle sample points
+  std::vector<int> m_anchor_group;
+  Matrix_n3 m_details;          // f(K) s on the region's rows
+  internal::Detail_least_squares m_system;
+  std::vector<double> m_d1, m_strength; // per sample point and group
+  std::vector<Eigen::Matrix3d> m_propagated, m_sample_rotation, m_frames;
+  internal::Ssp_frames m_frame_builder;
+  internal::Diffusion_stencil m_stencil;
+  Matrix_n3 m_anchor_displacement, m_detail_change; // per-edit buffers
+  Matrix_n3 m_deformed_points, m_deformed_normals;
+  Statistics m_statistics;
+};
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::check_selection() const
+{
+  if(m_in_roi.empty() || std::find(m_in_roi.begin(), m_in_roi.end(), 1) == m_in_roi.end())
+    throw Invalid_input(std::string(who) + ": the region of interest is empty; insert_roi_points() selects the "
+                        "deformable part");
+  if(m_transforms.empty())
+    throw Invalid_input(std::string(who) + ": there is no handle group; create_handle_group() and "
+                        "insert_handle_points() select what the user moves");
+  std::vector<std::size_t> count(m_transforms.size(), 0);
+  for(std::size_t row = 0; row < m_label.size(); ++row) {
+    if(m_label[row] < first_handle_label) continue;
+    ++count[std::size_t(m_label[row] - first_handle_label)];
+    if(!in_roi(row))
+      throw Invalid_input(std::string(who) + ": handle point #" + std::to_string(m_cloud.input_index[row]) +
+                          " is not in the region of interest; handles are deformable points (insert it into the "
+                          "region too)");
+  }
+  for(std::size_t g = 0; g < count.size(); ++g)
+    if(count[g] == 0)
+      throw Invalid_input(std::string(who) + ": handle group " + std::to_string(g) + " has no point");
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::cluster(internal::Progress& progress)
+{
+  using namespace internal;
+  const std::size_t n = m_cloud.size();
+  const Simplification_settings& simplification = m_settings.simplification;
+  Cluster_split_rule rule;
+  rule.max_size = simplification.cluster_size_for(n);
+  rule.labels = &m_label;
+  const std::size_t k = std::min<std::size_t>(simplification.mean_shift_neighbors, n - 1);
+  if(rule.max_size > 1 && std::isfinite(simplification.mode_spread_threshold) && k >= 5) {
+    if(!m_has_mean_shift) {
+      if(!analyse_mean_shift<ConcurrencyTag>(m_cloud, m_normals, k, simplification.mean_shift, progress, m_mean_shift))
+        return;
+      m_has_mean_shift = true;
+    }
+    rule.modes = &m_mean_shift.modes;
+    rule.spread_threshold = simplification.mode_spread_threshold;
+  }
+  std::vector<int> order;
+  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(m_cloud.positions, rule, order);
+  Simplification_sample_points<CGAL::Simple_cartesian<double>> ssps;
+  make_surfels<CGAL::Simple_cartesian<double>, ConcurrencyTag>(m_cloud, m_normals, order, leaves, ssps);
+
+  const std::size_t count = ssps.size();
+  m_samples.resize(Eigen::Index(count), 3);
+  m_sample_normals.resize(Eigen::Index(count), 3);
+  m_sample_label.resize(count);
+  m_sample_first_row.resize(count);
+  m_sample_of.assign(n, -1);
+  for(std::size_t s = 0; s < count; ++s) {
+    const auto& ssp = ssps.samples[s];
+    m_samples.row(Eigen::Index(s)) << ssp.centroid.x(), ssp.centroid.y(), ssp.centroid.z();
+    m_sample_normals.row(Eigen::Index(s)) << ssp.normal.x(), ssp.normal.y(), ssp.normal.z();
+    const int first = order[ssp.first_member];
+    m_sample_first_row[s] = first;
+    m_sample_label[s] = m_label[std::size_t(first)];
+    for(std::size_t m = 0; m < ssp.member_count; ++m) m_sample_of[std::size_t(order[ssp.first_member + m])] = int(s);
+  }
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::build_strength_field()
+{
+  using namespace internal;
+  const std::size_t count = std::size_t(m_samples.rows()), groups = m_transforms.size();
+  std::vector<int> fixed;
+  std::vector<std::vector<int>> handles(groups);
+  for(std::size_t s = 0; s < count; ++s) {
+    if(m_sample_label[s] == fixed_label) fixed.push_back(int(s));
+    else if(m_sample_label[s] >= first_handle_label) handles[std::size_t(m_sample_label[s] - first_handle_label)].push_back(int(s));
+  }
+  auto distance_to = [&](const std::vector<int>& sources) {
+    return m_settings.strength_distance == Strength_distance::geodesic
+             ? graph_distance_to(m_samples, m_graph, sources)
+             : euclidean_distance_to<ConcurrencyTag>(m_samples, sources);
+  };
+  const Eigen::VectorXd d0 = distance_to(fixed);
+  m_d1.assign(count * groups, 0.0);
+  m_strength.assign(count * groups, 0.0);
+  for(std::size_t g = 0; g < groups; ++g) {
+    const Eigen::VectorXd d1 = distance_to(handles[g]);
+    for(std::size_t s = 0; s < count; ++s) {
+      m_d1[s * groups + g] = d1(Eigen::Index(s));
+      // Only the region's sample points turn; the fixed part has strength 0 by definition (d0 = 0).
+      m_strength[s * groups + g] = m_sample_label[s] == fixed_label ? 0.0 : internal::strength(d0(Eigen::Index(s)), d1(Eigen::Index(s)));
+    }
+  }
+}
+
+template <typename ConcurrencyTag>
+bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
+{
+  using namespace internal;
+  const auto start = std::chrono::steady_clock::now();
+  auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  m_preprocessed = false;
+  check_selection();
+  Progress progress(m_callback);
+  progress.stage(0.0, m_has_mean_shift ? 0.0 : 0.6);
+  cluster(progress);
+  if(progress.cancelled()) return false;
+  m_statistics = Statistics();
+  m_statistics.clustering_seconds = seconds_since(start);
+  progress.stage(0.6, 1.0);
+  if(!progress.report(0.0)) return false;
+
+  const std::size_t count = std::size_t(m_samples.rows());
+  if(count < 2)
+    throw Invalid_input(std::string(who) + ": the points form a single sample point; lower the cluster size");
+  // The sample points' Laplacian on their symmetrised kNN graph.
+  const std::size_t k = std::min<std::size_t>(m_settings.sample_neighbors, count - 1);
+  Progress silent;
+  m_graph = symmetrize<ConcurrencyTag>(k_nearest_neighbor_graph<ConcurrencyTag>(m_samples, k, silent));
+  m_K = laplacian_matrix<ConcurrencyTag>(m_samples, m_graph, Laplacian_weights());
+
+  m_roi.clear();
+  m_roi_local.assign(count, -1);
+  std::vector<char> in_region(count, 0);
+  m_anchors.clear();
+  m_anchor_group.clear();
+  for(std::size_t s = 0; s < count; ++s) {
+    if(m_sample_label[s] == fixed_label) continue;
+    m_roi_local[s] = int(m_roi.size());
+    in_region[s] = 1;
+    if(m_sample_label[s] >= first_handle_label) {
+      m_anchors.push_back(int(m_roi.size()));
+      m_anchor_group.push_back(m_sample_label[s] - first_handle_label);
+    }
+    m_roi.push_back(int(s));
+  }
+  std::vector<int> point_of_sample(count);
+  for(std::size_t s = 0; s < count; ++s) point_of_sample[s] = m_cloud.input_index[std::size_t(m_sample_first_row[s])];
+  check_pinned(m_K, m_roi, in_region, m_anchors, point_of_sample, who);
+
+  // Details of the region's sample points and the factored normal equations. Handles weigh w against alpha:
+  // the minimiser of alpha ||A u - r||^2 + w ||S u - t||^2 is that of (alpha / w) ||A u - r||^2 + ||S u - t||^2.
+  const Matrix_n3 all_details = apply_detail_filter<ConcurrencyTag>(m_K, m_settings.filter, m_samples);
+  m_details.resize(Eigen::Index(m_roi.size()), 3);
+  Matrix_n3 region_positions(Eigen::Index(m_roi.size()), 3);
+  for(std::size_t r = 0; r < m_roi.size(); ++r) {
+    m_details.row(Eigen::Index(r)) = all_details.row(m_roi[r]);
+    region_positions.row(Eigen::Index(r)) = m_samples.row(m_roi[r]);
+  }
+  Least_squares_settings least_squares = m_settings.least_squares;
+  least_squares.detail_weight /= m_settings.handle_weight;
+  m_system.factor<ConcurrencyTag>(detail_operator_rows<ConcurrencyTag>(m_K, m_settings.filter, m_roi), m_anchors,
+                                  region_positions, least_squares);
+  if(!progress.report(0.6)) return false;
+
+  build_strength_field();
+  m_frame_builder.setup(m_samples, m_sample_normals, m_graph);
+  m_frames.resize(count);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t s) {
+    m_frames[s] = m_frame_builder.frame(m_samples, s, m_sample_normals.row(Eigen::Index(s)).transpose());
+  });
+  m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
+                                           std::min<std::size_t>(m_settings.diffusion_samples, count));
+
+  m_propagated.assign(count, Eigen::Matrix3d::Identity());
+  m_sample_rotation.assign(count, Eigen::Matrix3d::Identity());
+  m_deformed_samples = m_samples;
+  m_detail_change.resize(Eigen::Index(m_roi.size()), 3);
+  m_anchor_displacement.resize(Eigen::Index(m_anchors.size()), 3);
+  m_deformed_points = m_cloud.positions;
+  m_deformed_normals = m_normals;
+  if(!progress.report(1.0)) return false;
+
+  m_statistics.points = m_cloud.size();
+  m_statistics.samples = count;
+  m_statistics.roi_samples = m_roi.size();
+  m_statistics.handle_samples = m_anchors.size();
+  m_statistics.least_squares = m_system.statistics();
+  m_statistics.preprocess_seconds = seconds_since(start);
+  m_preprocessed = true;
+  return true;
+}
+
+template <typename ConcurrencyTag>
+bool Detail_preserving_deformation<ConcurrencyTag>::deform()
+{
+  using namespace internal;
+  if(!m_preprocessed && !preprocess()) return false;
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t groups = m_transforms.size();
+  std::vector<Eigen::Quaterniond> rotations(groups);
+  for(std::size_t g = 0; g < groups; ++g) rotations[g] = m_transforms[g].rotation;
+
+  for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
+    const std::size_t s = std::size_t(m_roi[r]);
+    const Eigen::Matrix3d R = m_settings.propagate_rotations
+                                ? internal::propagated_rotation(rotations, &m_d1[s * groups], &m_strength[s * groups]).toRotationMatrix()
+                                : Eigen::Matrix3d::Identity();
+    m_propagated[s] = R;
+    const Eigen::Vector3d delta = m_details.row(Eigen::Index(r)).transpose();
+    m_detail_change.row(Eigen::Index(r)) = (R * delta - delta).transpose();
+  });
+  for(std::size_t a = 0; a < m_anchors.size(); ++a) {
+    const Transform& T = m_transforms[std::size_t(m_anchor_group[a])];
+    const Eigen::Vector3d s = m_samples.row(m_roi[std::size_t(m_anchors[a])]).transpose();
+    m_anchor_displacement.row(Eigen::Index(a)) = (T.rotation * s + T.translation - s).transpose();
+  }
+  const Matrix_n3 u = m_system.solve<ConcurrencyTag>(m_detail_change, m_anchor_displacement);
+  for(std::size_t r = 0; r < m_roi.size(); ++r)
+    m_deformed_samples.row(m_roi[r]) = m_samples.row(m_roi[r]) + u.row(Eigen::Index(r));
+  m_statistics.least_squares = m_system.statistics();
+  m_statistics.deform_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
+{
+  using namespace internal;
+  if(!m_preprocessed)
+    throw Invalid_input(std::string(who) + ": diffuse() needs a deform() first");
+  const auto start = std::chrono::steady_clock::now();
+  // Each region sample point turns by its deformed frame against its original one. A sample point whose
+  // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts
+  // stay bit for bit; fixed sample points keep their frames (DESIGN.md 3.7).
+  for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
+    const std::size_t s = std::size_t(m_roi[r]);
+    bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));
+    for(const int* j = m_graph.begin(s); j != m_graph.end(s) && !moved; ++j)
+      moved = m_deformed_samples.row(*j) != m_samples.row(*j);
+    if(!moved) {
+      m_sample_rotation[s].setIdentity();
+      return;
+    }
+    const Eigen::Vector3d hint = m_propagated[s] * m_sample_normals.row(Eigen::Index(s)).transpose();
+    m_sample_rotation[s] = m_frame_builder.frame(m_deformed_samples, s, hint) * m_frames[s].transpose();
+  });
+  m_stencil.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_samples, m_deformed_samples,
+                                           m_sample_rotation,
+                                           m_settings.diffusion_origin == Diffusion_origin::nearest_sample
+                                             ? Offset_origin::nearest_sample
+                                             : Offset_origin::own_sample,
+                                           m_deformed_points, m_deformed_normals);
+  m_statistics.diffuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+template <typename ConcurrencyTag>
+template <typename PointRange, typename NamedParameters>
+void Detail_preserving_deformation<ConcurrencyTag>::diffuse(PointRange& points, const NamedParameters& np)
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  const std::size_t n = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
+  if(n != m_cloud.size())
+    throw Invalid_input(std::string(who) + ": diffuse() was given " + std::to_string(n) + " points, but the deformation has " +
+                        std::to_string(m_cloud.size()));
+  diffuse();
+  const auto point_map = NP_helper::get_point_map(points, np);
+  using Point = typename boost::property_traits<std::remove_const_t<decltype(point_map)>>::value_type;
+  constexpr bool with_normals =
+    !CGAL::parameters::is_default_parameter<NamedParameters, CGAL::internal_np::normal_t>::value;
+  // A Point_set_3 names a normal map even when it has no normal property: write normals only where they exist.
+  const bool write_normals = with_normals && internal::has_given_normals<NamedParameters>(points);
+  std::size_t i = 0;
+  for(auto& item : points) {
+    const Eigen::Index row = m_row_of[i++];
+    put(point_map, item, Point(m_deformed_points(row, 0), m_deformed_points(row, 1), m_deformed_points(row, 2)));
+    if constexpr(with_normals) {
+      if(!write_normals) continue;
+      const auto normal_map = NP_helper::get_normal_map(points, np);
+      using Vector = typename boost::property_traits<decltype(normal_map)>::value_type;
+      put(normal_map, item, Vector(m_deformed_normals(row, 0), m_deformed_normals(row, 1), m_deformed_normals(row, 2)));
+    }
+  }
+}
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H

@@ -1,0 +1,185 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_SSP_DIFFUSION_H
+#define CGAL_EXT_INTERNAL_SSP_DIFFUSION_H
+
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// Local frames of the simplification sample points (DESIGN.md 3.7), built the same way before and after an
+/// edit: the third axis is the normal of a plane fitted to the sample point and its frame neighbours
+/// (oriented like a given hint), the first axis the tangent part of the direction to a fixed reference
+/// neighbour. Columns of a frame: e1, e2, n.
+class Ssp_frames
+{
+public:
+  /// Chooses the reference neighbour of every sample point: its nearest frame neighbour that does not lie
+  /// (almost) along the normal hint.
+  void setup(const Matrix_n3& positions, const Matrix_n3& normal_hints, Neighbor_graph neighbors)
+  {
+    m_neighbors = std::move(neighbors);
+    const std::size_t n = m_neighbors.size();
+    m_reference.assign(n, -1);
+    for(std::size_t i = 0; i < n; ++i) {
+      const Eigen::RowVector3d hint = normal_hints.row(Eigen::Index(i));
+      for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) {
+        const Eigen::RowVector3d d = positions.row(*j) - positions.row(Eigen::Index(i));
+        const double along = d.dot(hint) / hint.norm();
+        if((d.squaredNorm() - along * along) > 1e-6 * d.squaredNorm()) { m_reference[i] = *j; break; }
+      }
+    }
+  }
+
+  /// The frame of sample point `i` from `positions`, its normal oriented like `hint`.
+  Eigen::Matrix3d frame(const Matrix_n3& positions, std::size_t i, const Eigen::Vector3d& hint) const
+  {
+    const Eigen::Vector3d origin = positions.row(Eigen::Index(i)).transpose();
+    Eigen::Vector3d normal = hint.normalized();
+    const int degree = m_neighbors.degree(i);
+    if(degree >= 2) {
+      Eigen::Vector3d centroid = origin;
+      for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) centroid += positions.row(*j).transpose();
+      centroid /= double(degree + 1);
+      Eigen::Matrix3d covariance = (origin - centroid) * (origin - centroid).transpose();
+      for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) {
+        const Eigen::Vector3d d = positions.row(*j).transpose() - centroid;
+        covariance += d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+      // A plane needs two spread directions; a fit on collinear neighbours keeps the hint.
+      if(eigen.eigenvalues()(1) > 1e-12 * eigen.eigenvalues()(2)) normal = eigen.eigenvectors().col(0);
+      if(normal.dot(hint) < 0) normal = -normal;
+    }
+    Eigen::Vector3d e1;
+    if(m_reference[i] >= 0) {
+      const Eigen::Vector3d d = positions.row(m_reference[i]).transpose() - origin;
+      e1 = d - d.dot(normal) * normal;
+    }
+    if(m_reference[i] < 0 || !(e1.squaredNorm() > 0)) {
+      // No usable reference: any tangent direction, the same before and after only if the normal is.
+      Eigen::Index axis;
+      normal.cwiseAbs().minCoeff(&axis);
+      e1 = Eigen::Vector3d::Unit(axis) - normal(axis) * normal;
+    }
+    e1.normalize();
+    Eigen::Matrix3d F;
+    F.col(0) = e1;
+    F.col(1) = normal.cross(e1);
+    F.col(2) = normal;
+    return F;
+  }
+
+private:
+  Neighbor_graph m_neighbors;
+  std::vector<int> m_reference;
+};
+
+/// How a point's offset is stored in the frames of its sample points (DESIGN.md 3.7).
+enum class Offset_origin
+{
+  nearest_sample, ///< the paper's: `p - s_0` (the nearest sample point) in every frame
+  own_sample      ///< `p - s_j` in the frame of sample point j
+};
+
+/// The per-point data of the diffusion, fixed at preprocessing: the `m` nearest sample points and their weights.
+class Diffusion_stencil
+{
+public:
+  Neighbor_graph samples; ///< nearest first
+  std::vector<double> weights;
+
+  /// Weights `1 / (d^2 + h^2)`, normalised per point, with `h` the mean distance of a point to its nearest
+  /// sample point: they fall off with distance and stay finite on a sample point.
+  template <typename ConcurrencyTag>
+  void setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m)
+  {
+    samples = k_nearest_samples<ConcurrencyTag>(sample_positions, points, m);
+    const std::size_t n = samples.size();
+    double nearest = 0;
+    for(std::size_t i = 0; i < n; ++i)
+      nearest += (points.row(Eigen::Index(i)) - sample_positions.row(*samples.begin(i))).norm();
+    const double h2 = std::pow(nearest / double(std::max<std::size_t>(n, 1)), 2) + 1e-300;
+    weights.resize(samples.indices.size());
+    for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+      double sum = 0;
+      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
+        const double d2 = (points.row(Eigen::Index(i)) - sample_positions.row(samples.indices[std::size_t(e)])).squaredNorm();
+        weights[std::size_t(e)] = 1.0 / (d2 + h2);
+        sum += weights[std::size_t(e)];
+      }
+      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) weights[std::size_t(e)] /= sum;
+    });
+  }
+
+  /// Moves every point by its sample points' motions: sample point j moves from `s_j` to `s'_j` and turns by
+  /// `rotation[j]` (its deformed frame times its original frame transposed), so the offset `p - o` seen from
+  /// the origin `o` becomes `R_j (p - o)` seen from `o'`; the results are blended by weight. Written as
+  /// displacements, `sum_j w_j ((s'_o - s_o) + (R_j - I)(p - o))`, so sample points with `R = I` and `s' = s`
+  /// contribute an exact zero and a point whose sample points all stayed keeps its position and normal bit
+  /// for bit. Normals turn by the blended rotation. Per point: one blend of 3x3 matrices, no allocation.
+  template <typename ConcurrencyTag>
+  void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
+             const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
+             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals)
+  {
+    // Per sample point: D = R - I and, for offsets from the sample point itself, the constant part of its
+    // displacement `(s' - s) - D s`, so that a point's displacement is `(sum w D) p + sum w e`.
+    const std::size_t count = rotation.size();
+    m_turn.resize(count);
+    m_constant.resize(Eigen::Index(count), 3);
+    for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
+      m_turn[j] = rotation[j] - Eigen::Matrix3d::Identity();
+      const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
+      const Eigen::Vector3d moved = deformed_sample_positions.row(Eigen::Index(j)).transpose() - s;
+      m_constant.row(Eigen::Index(j)) = (moved - m_turn[j] * s).transpose();
+    });
+    for_range<ConcurrencyTag>(0, samples.size(), [&](std::size_t i) {
+      const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
+      const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
+      Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
+      double weight_sum = 0;
+      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
+        const std::size_t j = std::size_t(samples.indices[std::size_t(e)]);
+        const double w = weights[std::size_t(e)];
+        turn.noalias() += w * m_turn[j];
+        displacement.noalias() += w * m_constant.row(Eigen::Index(j)).transpose();
+        weight_sum += w;
+      }
+      if(origin == Offset_origin::nearest_sample) {
+        // The paper's: every frame decodes p - s_0 from s'_0.
+        const Eigen::Index o = *samples.begin(i);
+        displacement = weight_sum * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
+                       turn * (p - sample_positions.row(o).transpose());
+      } else {
+        displacement.noalias() += turn * p;
+      }
+      if(turn.isZero(0) && displacement.isZero(0)) {
+        out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i));
+        out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
+        return;
+      }
+      out_points.row(Eigen::Index(i)) = (p + displacement).transpose();
+      out_normals.row(Eigen::Index(i)) = (n + turn * n).normalized().transpose();
+    });
+  }
+
+private:
+  std::vector<Eigen::Matrix3d> m_turn; // per sample point, R - I
+  Matrix_n3 m_constant;                // per sample point, (s' - s) - (R - I) s
+};
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_SSP_DIFFUSION_H

@@ -1,0 +1,269 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "edit_spec.h"
+
+#include "cli_support.h"
+#include "region_spec.h"
+
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace point_detail {
+
+namespace {
+
+using json = nlohmann::json;
+
+/// Keys of `object` must be among `allowed`: a misspelt key would otherwise be ignored silently.
+void check_keys(const json& object, const std::set<std::string>& allowed, const std::string& where)
+{
+  if(!object.is_object()) throw Cli_error(where + " must be a JSON object");
+  for(const auto& item : object.items())
+    if(!allowed.count(item.key())) {
+      std::string names;
+      for(const std::string& a : allowed) names += (names.empty() ? "" : ", ") + a;
+      throw Cli_error(where + ": unknown key '" + item.key() + "' (expected one of: " + names + ")");
+    }
+}
+
+double number(const json& value, const std::string& where)
+{
+  if(!value.is_number() || !std::isfinite(value.get<double>())) throw Cli_error(where + " must be a finite number");
+  return value.get<double>();
+}
+
+Eigen::Vector3d vector3(const json& value, const std::string& where)
+{
+  if(!value.is_array() || value.size() != 3) throw Cli_error(where + " must be an array of 3 numbers");
+  return {number(value[0], where + "[0]"), number(value[1], where + "[1]"), number(value[2], where + "[2]")};
+}
+
+std::vector<std::size_t> selection(const json& specs, const std::vector<Point>& points, const std::filesystem::path& base,
+                                   const std::string& where)
+{
+  if(!specs.is_array() || specs.empty()) throw Cli_error(where + " must be a non-empty array of region specs");
+  std::vector<Region_spec> parsed;
+  for(const json& s : specs) {
+    if(!s.is_string()) throw Cli_error(where + ": every region spec is a string such as \"sphere:x,y,z,r\"");
+    Region_spec spec = parse_region_spec(s.get<std::string>());
+    if(spec.kind == Region_spec::Kind::indices && std::filesystem::path(spec.file).is_relative())
+      spec.file = (base / spec.file).string();
+    parsed.push_back(spec);
+  }
+  return select_points(points, parsed);
+}
+
+/// A rotation from its JSON form: {"axis", "degrees"}, "quaternion" [w, x, y, z] or "matrix" (3 rows).
+Eigen::Matrix3d rotation(const json& handle, const std::string& where)
+{
+  const int given = int(handle.contains("rotation")) + int(handle.contains("quaternion")) + int(handle.contains("matrix"));
+  if(given > 1) throw Cli_error(where + ": give one of rotation, quaternion and matrix");
+  if(handle.contains("rotation")) {
+    const json& r = handle["rotation"];
+    check_keys(r, {"axis", "degrees"}, where + ".rotation");
+    if(!r.contains("axis") || !r.contains("degrees")) throw Cli_error(where + ".rotation needs axis and degrees");
+    const Eigen::Vector3d axis = vector3(r["axis"], where + ".rotation.axis");
+    if(!(axis.norm() > 0)) throw Cli_error(where + ".rotation.axis must not be zero");
+    return Eigen::AngleAxisd(number(r["degrees"], where + ".rotation.degrees") * M_PI / 180, axis.normalized()).toRotationMatrix();
+  }
+  if(handle.contains("quaternion")) {
+    const json& q = handle["quaternion"];
+    if(!q.is_array() || q.size() != 4) throw Cli_error(where + ".quaternion must be [w, x, y, z]");
+    const Eigen::Quaterniond quaternion(number(q[0], where + ".quaternion"), number(q[1], where + ".quaternion"),
+                                        number(q[2], where + ".quaternion"), number(q[3], where + ".quaternion"));
+    if(std::abs(quaternion.norm() - 1) > 1e-6)
+      throw Cli_error(where + ".quaternion has norm " + std::to_string(quaternion.norm()) + "; a rotation needs a unit quaternion");
+    return quaternion.toRotationMatrix();
+  }
+  if(handle.contains("matrix")) {
+    const json& m = handle["matrix"];
+    if(!m.is_array() || m.size() != 3) throw Cli_error(where + ".matrix must be 3 rows of 3 numbers");
+    Eigen::Matrix3d R;
+    for(int r = 0; r < 3; ++r) R.row(r) = vector3(m[std::size_t(r)], where + ".matrix[" + std::to_string(r) + "]").transpose();
+    return R; // checked to be a rotation by the deformation
+  }
+  return Eigen::Matrix3d::Identity();
+}
+
+/// The rotation nearest to `M` (polar decomposition) when `M` is one within `tolerance`.
+Eigen::Matrix3d snapped_rotation(const Eigen::Matrix3d& M, double tolerance, const std::string& where)
+{
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
+  const double error = (M - R).norm();
+  if(!(R.determinant() > 0) || !(error < tolerance)) {
+    std::ostringstream os;
+    os << where << ": the 3x3 part is not a rotation (distance to the nearest one " << error
+       << "); deformation handles move rigidly: no scaling, shear or mirroring";
+    throw Cli_error(os.str());
+  }
+  return R;
+}
+
+/// Non-comment, non-blank lines of a text file with their line numbers.
+std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesystem::path& path)
+{
+  std::ifstream in(path);
+  if(!in) throw Cli_error("cannot read " + path.string());
+  std::vector<std::pair<std::size_t, std::string>> lines;
+  std::string line;
+  for(std::size_t number = 1; std::getline(in, line); ++number) {
+    line.erase(0, line.find_first_not_of(" \t\r"));
+    line.erase(line.find_last_not_of(" \t\r") + 1);
+    if(line.empty() || line[0] == '#') continue;
+    lines.emplace_back(number, line);
+  }
+  return lines;
+}
+
+} // namespace
+
+Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
+{
+  std::ifstream in(path);
+  if(!in) throw Cli_error("cannot read " + path.string());
+  json edit;
+  try {
+    edit = json::parse(in);
+  } catch(const json::parse_error& e) {
+    throw Cli_error(path.string() + ": not valid JSON: " + e.what());
+  }
+  const std::string file = path.filename().string();
+  check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "propagate_rotations",
+                    "diffusion", "simplification"}, file);
+  const std::filesystem::path base = path.parent_path();
+  Edit_description out;
+  auto& settings = out.settings;
+  if(edit.contains("roi")) {
+    out.roi = selection(edit["roi"], points, base, file + ": roi");
+    if(out.roi.empty()) throw Cli_error(file + ": roi selects none of the " + std::to_string(points.size()) + " points");
+  } else {
+    out.roi.resize(points.size());
+    for(std::size_t i = 0; i < points.size(); ++i) out.roi[i] = i;
+  }
+  if(!edit.contains("handles") || !edit["handles"].is_array() || edit["handles"].empty())
+    throw Cli_error(file + ": handles must be a non-empty array of handle groups");
+  for(std::size_t g = 0; g < edit["handles"].size(); ++g) {
+    const json& h = edit["handles"][g];
+    const std::string where = file + ": handles[" + std::to_string(g) + "]";
+    check_keys(h, {"select", "translation", "rotation", "quaternion", "matrix", "pivot"}, where);
+    if(!h.contains("select")) throw Cli_error(where + " needs select (region specs of its points)");
+    Handle_edit handle;
+    handle.points = selection(h["select"], points, base, where + ".select");
+    if(handle.points.empty()) throw Cli_error(where + ".select selects no point");
+    handle.rotation = rotation(h, where);
+    const Eigen::Vector3d t = h.contains("translation") ? vector3(h["translation"], where + ".translation") : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d pivot = h.contains("pivot") ? vector3(h["pivot"], where + ".pivot") : Eigen::Vector3d::Zero();
+    handle.translation = pivot - handle.rotation * pivot + t; // p -> R (p - pivot) + pivot + t
+    out.handles.push_back(std::move(handle));
+  }
+  if(edit.contains("filter")) {
+    const json& f = edit["filter"];
+    check_keys(f, {"order", "lambda", "mu"}, file + ": filter");
+    if(f.contains("order")) {
+      const std::string order = f["order"].is_string() ? f["order"].get<std::string>() : "";
+      if(order == "linear") settings.filter.order = CGAL_ext::Detail_order::linear;
+      else if(order == "quadric") settings.filter.order = CGAL_ext::Detail_order::quadric;
+      else if(order == "cubic") settings.filter.order = CGAL_ext::Detail_order::cubic;
+      else throw Cli_error(file + ": filter.order must be \"linear\", \"quadric\" or \"cubic\"");
+    }
+    if(f.contains("lambda")) settings.filter.lambda = number(f["lambda"], file + ": filter.lambda");
+    if(f.contains("mu")) settings.filter.mu = number(f["mu"], file + ": filter.mu");
+  }
+  auto whole = [&](const json& v, const std::string& where) {
+    const double x = number(v, where);
+    if(!(x >= 1 && x == std::floor(x) && x < 1e9)) throw Cli_error(where + " must be a whole number >= 1");
+    return x;
+  };
+  if(edit.contains("k")) settings.sample_neighbors = unsigned(whole(edit["k"], file + ": k"));
+  if(edit.contains("strength_distance")) {
+    const json& d = edit["strength_distance"];
+    if(d == "euclidean") settings.strength_distance = CGAL_ext::Strength_distance::euclidean;
+    else if(d == "geodesic") settings.strength_distance = CGAL_ext::Strength_distance::geodesic;
+    else throw Cli_error(file + ": strength_distance must be \"euclidean\" or \"geodesic\"");
+  }
+  if(edit.contains("handle_weight")) settings.handle_weight = number(edit["handle_weight"], file + ": handle_weight");
+  if(edit.contains("propagate_rotations")) {
+    if(!edit["propagate_rotations"].is_boolean()) throw Cli_error(file + ": propagate_rotations must be true or false");
+    settings.propagate_rotations = edit["propagate_rotations"].get<bool>();
+  }
+  if(edit.contains("diffusion")) {
+    const json& d = edit["diffusion"];
+    check_keys(d, {"samples", "origin"}, file + ": diffusion");
+    if(d.contains("samples")) settings.diffusion_samples = unsigned(whole(d["samples"], file + ": diffusion.samples"));
+    if(d.contains("origin")) {
+      if(d["origin"] == "own") settings.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
+      else if(d["origin"] == "nearest") settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
+      else throw Cli_error(file + ": diffusion.origin must be \"own\" or \"nearest\"");
+    }
+  }
+  if(edit.contains("simplification")) {
+    const json& s = edit["simplification"];
+    check_keys(s, {"max_cluster_size", "target_count", "mode_threshold"}, file + ": simplification");
+    if(s.contains("max_cluster_size"))
+      settings.simplification.max_cluster_size = std::size_t(whole(s["max_cluster_size"], file + ": simplification.max_cluster_size"));
+    if(s.contains("target_count"))
+      settings.simplification.target_count = std::size_t(whole(s["target_count"], file + ": simplification.target_count"));
+    if(s.contains("mode_threshold"))
+      settings.simplification.mode_spread_threshold =
+        s["mode_threshold"] == "inf" ? INFINITY : number(s["mode_threshold"], file + ": simplification.mode_threshold");
+  }
+  try {
+    settings.validate();
+  } catch(const CGAL_ext::Invalid_input& e) {
+    throw Cli_error(file + ": " + e.what());
+  }
+  return out;
+}
+
+Edit_description read_botsch_sorkine(const std::filesystem::path& sel, const std::filesystem::path& def, std::size_t point_count)
+{
+  Edit_description out;
+  Handle_edit handle;
+  const auto statuses = content_lines(sel);
+  if(statuses.size() != point_count)
+    throw Cli_error(sel.string() + " has " + std::to_string(statuses.size()) + " status lines but the model has " +
+                    std::to_string(point_count) + " points (one line per point, in file order)");
+  for(std::size_t i = 0; i < statuses.size(); ++i) {
+    const auto& [line, text] = statuses[i];
+    if(text != "0" && text != "1" && text != "2")
+      throw Cli_error(sel.string() + ":" + std::to_string(line) + ": '" + text + "' is not a status (0 fixed, 1 deformable, 2 handle)");
+    if(text != "0") out.roi.push_back(i);
+    if(text == "2") handle.points.push_back(i);
+  }
+  if(out.roi.empty()) throw Cli_error(sel.string() + " marks no point deformable (1) or handle (2)");
+  if(handle.points.empty()) throw Cli_error(sel.string() + " marks no handle point (2)");
+
+  std::vector<double> numbers;
+  for(const auto& [line, text] : content_lines(def)) {
+    std::istringstream in(text);
+    std::string token;
+    while(in >> token) {
+      char* end = nullptr;
+      const double value = std::strtod(token.c_str(), &end);
+      if(end != token.c_str() + token.size() || !std::isfinite(value))
+        throw Cli_error(def.string() + ":" + std::to_string(line) + ": '" + token + "' is not a finite number");
+      numbers.push_back(value);
+    }
+  }
+  if(numbers.size() != 16)
+    throw Cli_error(def.string() + " holds " + std::to_string(numbers.size()) + " numbers; a 4x4 transform has 16");
+  Eigen::Matrix4d M;
+  for(int r = 0; r < 4; ++r)
+    for(int c = 0; c < 4; ++c) M(r, c) = numbers[std::size_t(4 * r + c)];
+  if((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)
+    throw Cli_error(def.string() + ": the last row of the transform must be 0 0 0 1 (an affine, not a projective, map)");
+  handle.rotation = snapped_rotation(M.topLeftCorner<3, 3>(), 1e-3, def.string());
+  handle.translation = M.topRightCorner<3, 1>();
+  out.handles.push_back(std::move(handle));
+  return out;
+}
+
+} // namespace point_detail

@@ -1,0 +1,55 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Edit descriptions for `point-detail edit`: a JSON file, or the .sel/.def pair of the Botsch & Sorkine 2008
+// deformation benchmark (the format of CGAL's Surface_mesh_deformation examples).
+#ifndef POINT_DETAIL_EDIT_SPEC_H
+#define POINT_DETAIL_EDIT_SPEC_H
+
+#include "point_io.h"
+
+#include <CGAL_ext/Detail_preserving_deformation.h>
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <vector>
+
+namespace point_detail {
+
+/// One handle group: its points and the rigid transform `p -> R p + t` (world frame).
+struct Handle_edit
+{
+  std::vector<std::size_t> points;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
+/// What to edit: the region of interest (handles included) and the handle groups; settings as the file gives
+/// them over the defaults.
+struct Edit_description
+{
+  std::vector<std::size_t> roi;
+  std::vector<Handle_edit> handles;
+  CGAL_ext::Detail_preserving_deformation_settings settings;
+};
+
+/*!
+  Reads a JSON edit (documented in doc/editing.md):
+  `{"roi": [SPEC...], "handles": [{"select": [SPEC...], "translation": [x,y,z],
+    "rotation": {"axis": [x,y,z], "degrees": a} | "quaternion": [w,x,y,z] | "matrix": [[..],[..],[..]],
+    "pivot": [x,y,z]}], "filter": {"order", "lambda", "mu"}, "k", "strength_distance", "handle_weight",
+    "propagate_rotations", "diffusion": {"samples", "origin"}, "simplification": {"max_cluster_size",
+    "target_count", "mode_threshold"}}`. SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
+  relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos).
+  Throws Cli_error naming the key and the problem.
+*/
+Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points);
+
+/// Reads a `.sel` file (one status per point in file order: 0 fixed, 1 deformable, 2 handle; `#` lines are
+/// comments) and a `.def` file (the handle's 4x4 world transform, row by row; `#` comments). A matrix printed
+/// with few digits is snapped to the nearest rotation when it is one within 1e-3; otherwise it is refused.
+Edit_description read_botsch_sorkine(const std::filesystem::path& sel, const std::filesystem::path& def, std::size_t point_count);
+
+} // namespace point_detail
+
+#endif
