@@ -510,7 +510,8 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
                  {"diffusion_s", st.diffuse_seconds}};
   r["clustering_s"] = st.clustering_seconds;
   r["solver"] = {{"method", ls.method}, {"normal_nonzeros", ls.normal_nonzeros}, {"assembly_s", ls.assembly_seconds},
-                 {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds}, {"relative_residual", ls.relative_residual}};
+                 {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds}, {"refinement_steps", ls.iterations},
+                 {"relative_residual", ls.relative_residual}};
   r["max_handle_ssp_error"] = handle_error;
 }
 
@@ -812,7 +813,7 @@ int main(int argc, char** argv)
                                        ->check(CLI::IsMember({"own", "nearest"}));
   edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of the handle constraints (default 1)");
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
-  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 4000)");
+  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
   edit_app->add_flag("--no-rotation-propagation", edit.no_propagation, "keep the details' world orientation (plain Laplacian editing)");
   add_render_options(*edit_app, edit.render, edit.view);
 

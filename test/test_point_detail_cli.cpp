@@ -1,4 +1,5 @@
 // The point-detail program, run as a user would: outputs, errors, and files it must not touch.
+#include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/scale_geometric_details.h>
@@ -199,9 +200,12 @@ TEST_F(Cli, render_and_demo_write_pictures)
   EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["points"], 2000);
   const Program_run demo = run("demo --points 3000 -o " + path("demo") + " --report " + path("demo.json"));
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
-  EXPECT_EQ(nlohmann::json::parse(contents(path("demo.json")))["runs"].size(), 7u);
+  const auto runs = nlohmann::json::parse(contents(path("demo.json")))["runs"];
+  ASSERT_EQ(runs.size(), 10u); // 3 detail maps, 2 scalings, 2 enhancements, 3 edits
+  EXPECT_GT(runs[9]["roi_ssps"].get<std::size_t>(), 0u);
   for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png",
-                       "scale_0.6.png", "scale_1.2.ply", "enhance_2.0.png", "enhance_3.0.ply"})
+                       "scale_0.6.png", "scale_1.2.ply", "enhance_2.0.png", "enhance_3.0.ply", "edit_linear.png",
+                       "edit_quadric.ply", "edit_cubic.png"})
     EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
 }
 
@@ -390,4 +394,119 @@ TEST_F(Cli, details_on_mean_shift_neighbourhoods_match_the_library)
   const Program_run bad = run("details -i " + in + " -o " + path("x.ply") + " --neighbors delaunay");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("delaunay"), std::string::npos) << bad.output;
+}
+
+TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
+{
+  const std::string in = write_sphere_ply("in.ply", 3000);
+  {
+    std::ofstream edit(path("edit.json"));
+    edit << R"({"roi": ["box:-2,-2,0,2,2,2"],
+               "handles": [{"select": ["sphere:0,0,1,0.25"], "translation": [0.1, 0, 0.2],
+                            "rotation": {"axis": [0, 1, 0], "degrees": 25}, "pivot": [0, 0, 1]}],
+               "filter": {"order": "cubic", "lambda": 0.8, "mu": 1.6}, "diffusion": {"origin": "nearest"}})";
+  }
+  const Program_run r = run("edit -i " + in + " -o " + path("out.ply") + " --edit " + path("edit.json") + " --png " +
+                            path("out.png") + " --report " + path("out.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> input, output;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), output));
+  ASSERT_EQ(output.size(), input.size());
+  auto status = output.property_map<double>("status");
+  ASSERT_TRUE(status.second);
+
+  // The same edit through the library.
+  CGAL_ext::Detail_preserving_deformation_settings settings(CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.8, 1.6});
+  settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
+  CGAL_ext::Detail_preserving_deformation<> deformation(input, settings, input.parameters());
+  const std::size_t g = deformation.create_handle_group();
+  std::size_t roi = 0, handles = 0;
+  for(auto i : input) {
+    const Point& p = input.point(i);
+    if(p.z() >= 0) { deformation.insert_roi_point(i); ++roi; }
+    if(CGAL::squared_distance(p, Point(0, 0, 1)) <= 0.0625) { deformation.insert_handle_point(g, i); ++handles; }
+  }
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  deformation.set_handle_transform(g, R, Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2));
+  ASSERT_TRUE(deformation.deform());
+  deformation.diffuse(input, input.parameters());
+  EXPECT_LT(max_distance(std::vector<Point>(output.points().begin(), output.points().end()),
+                         std::vector<Point>(input.points().begin(), input.points().end())), 1e-12);
+  std::size_t marked_roi = 0, marked_handles = 0;
+  for(auto i : output) {
+    marked_roi += status.first[i] >= 1;
+    marked_handles += status.first[i] == 2;
+  }
+  EXPECT_EQ(marked_roi, roi);
+  EXPECT_EQ(marked_handles, handles);
+  const auto report = nlohmann::json::parse(contents(path("out.json")));
+  EXPECT_EQ(report["points"], 3000);
+  EXPECT_EQ(report["ssps"], deformation.number_of_sample_points());
+  EXPECT_EQ(report["roi_ssps"], deformation.number_of_roi_sample_points());
+  EXPECT_EQ(report["order"], "cubic");
+  EXPECT_GT(report["table1"]["editing_ssps_s"].get<double>(), 0.0);
+  EXPECT_GE(report["table1"]["diffusion_s"].get<double>(), 0.0);
+  EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
+  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json"});
+}
+
+TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)
+{
+  const std::string in = write_sphere_ply("in.ply", 2000);
+  CGAL::Point_set_3<Point> input;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  {
+    std::ofstream sel(path("in.sel"));
+    sel << "# per vertex status: 0=fixed, 1=deformable-region, 2=handle\n";
+    for(auto i : input) sel << (input.point(i).z() > 0.8 ? 2 : input.point(i).z() > 0 ? 1 : 0) << "\n";
+  }
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  };
+  // An identity transform: every point stays where it is.
+  write("identity.def", "# 4x4 handle transformation matrix\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  Program_run r = run("edit -i " + in + " -o " + path("same.ply") + " --sel " + path("in.sel") + " --def " + path("identity.def"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> same;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("same.ply"), same));
+  EXPECT_EQ(max_distance(std::vector<Point>(same.points().begin(), same.points().end()),
+                         std::vector<Point>(input.points().begin(), input.points().end())), 0.0);
+  // A rotation printed with six digits, as Botsch and Sorkine's files are, is snapped to a rotation.
+  write("turn.def", "0.999641 0.021031 0.016579 -0.019322\n-0.022776 0.342021 0.939416 -0.134331\n"
+                    "0.014087 -0.939457 0.342378 0.821073\n0 0 0 1\n");
+  r = run("edit -i " + in + " -o " + path("turned.ply") + " --sel " + path("in.sel") + " --def " + path("turn.def"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+
+  write("short.sel", "1\n2\n");
+  std::string bad_sel = "x\n"; // the right number of lines, the first one not a status
+  for(std::size_t i = 1; i < input.size(); ++i) bad_sel += "1\n";
+  write("bad.sel", bad_sel);
+  write("scaled.def", "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n");
+  write("few.def", "1 0 0\n");
+  write("broken.json", "{\"handles\": [");
+  write("typo.json", R"({"handles": [{"select": ["sphere:0,0,1,0.2"]}], "handle_wieght": 2})");
+  write("empty_handle.json", R"({"handles": [{"select": ["sphere:5,5,5,0.1"]}]})");
+  write("outside.json", R"({"roi": ["box:-2,-2,0.5,2,2,2"], "handles": [{"select": ["sphere:0,0,-1,0.2"]}]})");
+  write("quaternion.json", R"({"handles": [{"select": ["sphere:0,0,1,0.2"], "quaternion": [2, 0, 0, 0]}]})");
+  for(const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+        {"--sel " + path("short.sel") + " --def " + path("identity.def"), "has 2 status lines but the model has 2000 points"},
+        {"--sel " + path("bad.sel") + " --def " + path("identity.def"), "is not a status"},
+        {"--sel " + path("in.sel") + " --def " + path("scaled.def"), "not a rotation"},
+        {"--sel " + path("in.sel") + " --def " + path("few.def"), "holds 3 numbers"},
+        {"--edit " + path("broken.json"), "not valid JSON"},
+        {"--edit " + path("typo.json"), "unknown key 'handle_wieght'"},
+        {"--edit " + path("empty_handle.json"), "selects no point"},
+        {"--edit " + path("outside.json"), "is not in the region of interest"},
+        {"--edit " + path("quaternion.json"), "unit quaternion"},
+        {"", "edit needs --edit"}}) {
+    const Program_run bad = run("edit -i " + in + " -o " + path("x.ply") + " " + args);
+    EXPECT_EQ(bad.exit_code, 1) << args << "\n" << bad.output;
+    EXPECT_NE(bad.output.find(needle), std::string::npos) << args << "\n" << bad.output;
+  }
+  // The program never writes over an input.
+  const Program_run over = run("edit -i " + in + " -o " + path("in.sel") + " --sel " + path("in.sel") + " --def " + path("identity.def"));
+  EXPECT_EQ(over.exit_code, 1);
+  EXPECT_FALSE(fs::exists(path("x.ply")));
 }

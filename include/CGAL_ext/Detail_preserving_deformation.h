@@ -72,10 +72,14 @@ struct Detail_preserving_deformation_settings
   /// Neighbours of a sample point in the sample points' Laplacian (smaller when there are fewer sample points).
   unsigned int sample_neighbors = default_laplacian_neighbors;
   /// How the points are clustered into sample points; every point is its own sample point when the input
-  /// has at most `simplification.target_count` points and no `max_cluster_size` is set.
-  Simplification_settings simplification;
+  /// has at most `simplification.target_count` points and no `max_cluster_size` is set. Editing's defaults
+  /// (target 3,000, mode-spread threshold 2) give a few thousand sample points on a scan of any size, as in
+  /// the paper's Table 1, so that a drag stays interactive (doc/editing.md measures the quality cost).
+  Simplification_settings simplification = editing_simplification();
   /// alpha (`least_squares.detail_weight`) and the solver; handles are soft constraints of weight `handle_weight`.
-  Least_squares_settings least_squares;
+  /// Editing refines each drag's solve to a relative residual of 1e-10 (positions to about 1e-10 of their
+  /// displacement), which saves back-substitutions on every drag.
+  Least_squares_settings least_squares = editing_least_squares();
   /// Weight of the handle constraints relative to the detail equations (the paper: 1). Larger values pull
   /// the handles closer to their targets.
   double handle_weight = 1.0;
@@ -89,6 +93,21 @@ struct Detail_preserving_deformation_settings
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
 
   Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
+
+  static Least_squares_settings editing_least_squares()
+  {
+    Least_squares_settings s;
+    s.refinement_tolerance = 1e-10;
+    return s;
+  }
+
+  static Simplification_settings editing_simplification()
+  {
+    Simplification_settings s;
+    s.target_count = 3000;
+    s.mode_spread_threshold = 2.0;
+    return s;
+  }
 
   void validate() const
   {
@@ -427,6 +446,7 @@ private:
   std::vector<Eigen::Matrix3d> m_propagated, m_sample_rotation, m_frames;
   internal::Ssp_frames m_frame_builder;
   internal::Diffusion_stencil m_stencil;
+  std::vector<int> m_active_points; // rows carried by at least one region sample point
   Matrix_n3 m_anchor_displacement, m_detail_change; // per-edit buffers
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
@@ -595,6 +615,14 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   });
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
                                            std::min<std::size_t>(m_settings.diffusion_samples, count));
+  // Points carried by fixed sample points only never move: each drag skips them.
+  m_active_points.clear();
+  for(std::size_t row = 0; row < m_cloud.size(); ++row)
+    for(const int* s = m_stencil.samples.begin(row); s != m_stencil.samples.end(row); ++s)
+      if(m_sample_label[std::size_t(*s)] != fixed_label) {
+        m_active_points.push_back(int(row));
+        break;
+      }
 
   m_propagated.assign(count, Eigen::Matrix3d::Identity());
   m_sample_rotation.assign(count, Eigen::Matrix3d::Identity());
@@ -674,7 +702,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
                                            m_settings.diffusion_origin == Diffusion_origin::nearest_sample
                                              ? Offset_origin::nearest_sample
                                              : Offset_origin::own_sample,
-                                           m_deformed_points, m_deformed_normals);
+                                           m_deformed_points, m_deformed_normals, &m_active_points);
   m_statistics.diffuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

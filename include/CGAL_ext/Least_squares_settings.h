@@ -36,6 +36,9 @@ struct Least_squares_settings
   double detail_weight = 1.0;   ///< alpha, the weight of the detail equations (anchors weigh 1), > 0
   double tolerance = 1e-10;     ///< conjugate gradients stop at this relative residual of the normal equations
   int max_iterations = 100000;  ///< conjugate-gradient iteration cap (an unconverged solve is an error)
+  /// Cholesky: iterative refinement stops once the relative residual of the normal equations is below this
+  /// (or when a step no longer halves it, or after 5 steps). Each step costs one more back-substitution.
+  double refinement_tolerance = 1e-14;
 
   void validate() const
   {
@@ -43,6 +46,8 @@ struct Least_squares_settings
       throw Invalid_input("least squares: detail_weight (alpha) must be a finite number > 0");
     if(!(std::isfinite(tolerance) && tolerance > 0 && tolerance < 1))
       throw Invalid_input("least squares: tolerance must be in (0, 1)");
+    if(!(refinement_tolerance > 0 && refinement_tolerance < 1))
+      throw Invalid_input("least squares: refinement_tolerance must be in (0, 1)");
     if(max_iterations < 1)
       throw Invalid_input("least squares: max_iterations must be at least 1");
   }

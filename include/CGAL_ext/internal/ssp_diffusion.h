@@ -127,10 +127,12 @@ public:
   /// displacements, `sum_j w_j ((s'_o - s_o) + (R_j - I)(p - o))`, so sample points with `R = I` and `s' = s`
   /// contribute an exact zero and a point whose sample points all stayed keeps its position and normal bit
   /// for bit. Normals turn by the blended rotation. Per point: one blend of 3x3 matrices, no allocation.
+  /// Only the points listed in `active` are computed (all when it is null): the others keep whatever
+  /// `out_points` / `out_normals` hold.
   template <typename ConcurrencyTag>
   void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
-             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals)
+             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr)
   {
     // Per sample point: D = R - I and, for offsets from the sample point itself, the constant part of its
     // displacement `(s' - s) - D s`, so that a point's displacement is `(sum w D) p + sum w e`.
@@ -143,7 +145,8 @@ public:
       const Eigen::Vector3d moved = deformed_sample_positions.row(Eigen::Index(j)).transpose() - s;
       m_constant.row(Eigen::Index(j)) = (moved - m_turn[j] * s).transpose();
     });
-    for_range<ConcurrencyTag>(0, samples.size(), [&](std::size_t i) {
+    for_range<ConcurrencyTag>(0, active ? active->size() : samples.size(), [&](std::size_t a) {
+      const std::size_t i = active ? std::size_t((*active)[a]) : a;
       const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
       const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
       Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
