@@ -479,6 +479,31 @@ TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)
   r = run("edit -i " + in + " -o " + path("turned.ply") + " --sel " + path("in.sel") + " --def " + path("turn.def"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
 
+  // No fixed point (no 0 status) and a rigid .def: the whole model moves rigidly with its handle.
+  {
+    std::ofstream sel(path("all.sel"));
+    for(auto i : input) sel << (input.point(i).z() > 0.8 ? 2 : 1) << "\n";
+  }
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 2).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.3, -0.2, 0.5);
+  std::ostringstream rigid;
+  rigid.precision(17);
+  for(int row = 0; row < 3; ++row) rigid << R(row, 0) << " " << R(row, 1) << " " << R(row, 2) << " " << t(row) << "\n";
+  rigid << "0 0 0 1\n";
+  write("rigid.def", rigid.str());
+  r = run("edit -i " + in + " -o " + path("rigid.ply") + " --sel " + path("all.sel") + " --def " + path("rigid.def"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> moved;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("rigid.ply"), moved));
+  double error = 0;
+  auto m = moved.begin();
+  for(auto i = input.begin(); i != input.end(); ++i, ++m) {
+    const Point& p = input.point(*i);
+    const Eigen::Vector3d want = R * Eigen::Vector3d(p.x(), p.y(), p.z()) + t;
+    error = std::max(error, (want - Eigen::Vector3d(moved.point(*m).x(), moved.point(*m).y(), moved.point(*m).z())).norm());
+  }
+  EXPECT_LT(error, 1e-6 * 2 * std::sqrt(3.0)); // 1e-6 of the bounding diagonal
+
   write("short.sel", "1\n2\n");
   std::string bad_sel = "x\n"; // the right number of lines, the first one not a status
   for(std::size_t i = 1; i < input.size(); ++i) bad_sel += "1\n";
