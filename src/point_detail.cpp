@@ -452,7 +452,7 @@ struct Simplify_command
 void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_printer& progress, Report& rep, Point_cloud& out)
 {
   const std::size_t n = cloud.points.size();
-  const std::vector<std::size_t> all = index_range(n);
+  std::vector<std::size_t> all = index_range(n);
   CGAL_ext::Detail_preserving_deformation<> deformation(
     all, edit.settings,
     CGAL::parameters::point_map(CGAL::make_property_map(cloud.points)).normal_map(CGAL::make_property_map(cloud.normals))
@@ -470,9 +470,8 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   out = Point_cloud();
   out.points.resize(n);
   out.normals.resize(n);
-  std::vector<std::size_t> indices = all;
   rep.time("diffuse", [&] {
-    deformation.diffuse(indices, CGAL::parameters::point_map(CGAL::make_property_map(out.points))
+    deformation.diffuse(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points))
                                    .normal_map(CGAL::make_property_map(out.normals)));
   });
   std::vector<double> moved(n), status(n, 0.0), sample(n);

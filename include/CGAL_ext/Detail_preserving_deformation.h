@@ -207,6 +207,7 @@ public:
     internal::given_or_estimated_normals<ConcurrencyTag>(points, np, m_cloud, default_normal_neighbors, progress,
                                                          m_normals, who);
     m_label.assign(m_cloud.size(), fixed_label);
+    m_in_roi.assign(m_cloud.size(), 0);
     m_deformed_points = m_cloud.positions;
     m_deformed_normals = m_normals;
   }
@@ -220,7 +221,13 @@ public:
   /// @{
 
   /// Adds a point to the region of interest (the deformable part; every other point stays fixed).
-  void insert_roi_point(std::size_t i) { set_label(i, roi_label, false); }
+  void insert_roi_point(std::size_t i)
+  {
+    const std::size_t row = checked_row(i);
+    m_in_roi[row] = 1;
+    if(m_label[row] == fixed_label) m_label[row] = roi_label;
+    m_preprocessed = false;
+  }
 
   template <typename IndexRange>
   void insert_roi_points(const IndexRange& indices)
@@ -240,7 +247,8 @@ public:
   void insert_handle_point(std::size_t group, std::size_t i)
   {
     check_group(group);
-    set_label(i, first_handle_label + int(group), true);
+    m_label[checked_row(i)] = first_handle_label + int(group);
+    m_preprocessed = false;
   }
 
   template <typename IndexRange>
@@ -395,23 +403,13 @@ private:
                           std::to_string(m_transforms.size()) + " groups; create_handle_group() adds one)");
   }
 
-  void set_label(std::size_t i, int label, bool handle)
+  std::size_t checked_row(std::size_t i) const
   {
     if(i >= m_cloud.size())
       throw Invalid_input(std::string(who) + ": point index " + std::to_string(i) + " is out of range (" +
                           std::to_string(m_cloud.size()) + " points)");
-    const std::size_t row = std::size_t(m_row_of[i]);
-    if(handle) {
-      m_label[row] = label;
-    } else {
-      if(m_in_roi.empty()) m_in_roi.assign(m_cloud.size(), 0);
-      m_in_roi[row] = 1;
-      if(m_label[row] == fixed_label) m_label[row] = roi_label;
-    }
-    m_preprocessed = false;
+    return std::size_t(m_row_of[i]);
   }
-
-  bool in_roi(std::size_t row) const { return !m_in_roi.empty() && m_in_roi[row]; }
 
   void check_selection() const;
   void cluster(internal::Progress& progress);
@@ -423,7 +421,7 @@ private:
   std::vector<int> m_row_of;
   Matrix_n3 m_normals;
   std::vector<int> m_label;         // per row: fixed, ROI, or handle of group (label - 2)
-  std::vector<char> m_in_roi; // per row: inserted into the ROI
+  std::vector<char> m_in_roi;       // per row: inserted into the ROI (handles must be too)
   std::vector<Transform> m_transforms;
   bool m_preprocessed = false;
   internal::Mean_shift_analysis m_mean_shift; // selection-independent: computed once
@@ -455,7 +453,7 @@ private:
 template <typename ConcurrencyTag>
 void Detail_preserving_deformation<ConcurrencyTag>::check_selection() const
 {
-  if(m_in_roi.empty() || std::find(m_in_roi.begin(), m_in_roi.end(), 1) == m_in_roi.end())
+  if(std::find(m_in_roi.begin(), m_in_roi.end(), 1) == m_in_roi.end())
     throw Invalid_input(std::string(who) + ": the region of interest is empty; insert_roi_points() selects the "
                         "deformable part");
   if(m_transforms.empty())
@@ -465,7 +463,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::check_selection() const
   for(std::size_t row = 0; row < m_label.size(); ++row) {
     if(m_label[row] < first_handle_label) continue;
     ++count[std::size_t(m_label[row] - first_handle_label)];
-    if(!in_roi(row))
+    if(!m_in_roi[row])
       throw Invalid_input(std::string(who) + ": handle point #" + std::to_string(m_cloud.input_index[row]) +
                           " is not in the region of interest; handles are deformable points (insert it into the "
                           "region too)");
@@ -680,7 +678,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
 {
   using namespace internal;
   if(!m_preprocessed)
-    throw Invalid_input(std::string(who) + ": diffuse() needs a deform() first");
+    throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
   const auto start = std::chrono::steady_clock::now();
   // Each region sample point turns by its deformed frame against its original one. A sample point whose
   // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts

@@ -92,6 +92,16 @@ private:
   std::unique_ptr<Tree> m_tree;
 };
 
+/// A graph of `n` rows of `k` neighbours each, to be filled.
+inline Neighbor_graph fixed_degree_graph(std::size_t n, std::size_t k)
+{
+  Neighbor_graph graph;
+  graph.offsets.resize(n + 1);
+  for(std::size_t i = 0; i <= n; ++i) graph.offsets[i] = int(i * k);
+  graph.indices.resize(n * k);
+  return graph;
+}
+
 /// Directed k-nearest-neighbour graph (each row holds exactly k other points, nearest first) with CGAL's
 /// kd-tree, built once and queried in parallel. Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
@@ -99,10 +109,7 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
 {
   const std::size_t n = std::size_t(positions.rows());
   const Position_tree tree(positions, ConcurrencyTag());
-  Neighbor_graph graph;
-  graph.offsets.resize(n + 1);
-  for(std::size_t i = 0; i <= n; ++i) graph.offsets[i] = int(i * k);
-  graph.indices.resize(n * k);
+  Neighbor_graph graph = fixed_degree_graph(n, k);
   // Ask for k + 1 to skip the point itself; with exact duplicates the point need not come first.
   const bool completed = for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
     int* out = graph.indices.data() + i * k;
@@ -121,10 +128,7 @@ Neighbor_graph k_nearest_samples(const Matrix_n3& samples, const Matrix_n3& quer
 {
   const std::size_t n = std::size_t(queries.rows());
   const Position_tree tree(samples, ConcurrencyTag());
-  Neighbor_graph graph;
-  graph.offsets.resize(n + 1);
-  for(std::size_t i = 0; i <= n; ++i) graph.offsets[i] = int(i * k);
-  graph.indices.resize(n * k);
+  Neighbor_graph graph = fixed_degree_graph(n, k);
   for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
     int* out = graph.indices.data() + i * k;
     tree.nearest(Position_tree::point(queries, Eigen::Index(i)), k, [&](int j, double) { *out++ = j; });
