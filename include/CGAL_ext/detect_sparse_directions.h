@@ -1,0 +1,216 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_DETECT_SPARSE_DIRECTIONS_H
+#define CGAL_EXT_DETECT_SPARSE_DIRECTIONS_H
+
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+#include <CGAL/tags.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of hole detection (Miao et al. 2007, Sect. 6.3; DESIGN.md 3.8).
+
+  Around each point, the neighbours are projected onto its tangent plane; the principal axes `e1`, `e2` of
+  their covariance split the plane into four quarters around `+e1`, `-e1`, `+e2`, `-e2`. A quarter with no
+  sample within `2 h` (h the spacing) is *sparse*. A sparse direction is a hole boundary only if samples
+  appear again along it (within 30 degrees) no farther than `max_hole_size` spacings: an open border, with
+  nothing beyond it, is left alone.
+*/
+struct Sparse_direction_settings
+{
+  double spacing = 0;        ///< target spacing h; 0 = the median distance of a point to its nearest neighbour
+  double max_hole_size = 6;  ///< in spacings, > 2: the widest gap that is a hole
+
+  void validate() const
+  {
+    if(!(spacing >= 0) || !std::isfinite(spacing)) {
+      std::ostringstream os;
+      os << "sparse directions: spacing must be > 0 (or 0 for the median nearest-neighbour spacing), got " << spacing;
+      throw Invalid_input(os.str());
+    }
+    if(!(max_hole_size > 2) || !std::isfinite(max_hole_size))
+      throw Invalid_input("sparse directions: max_hole_size must be a finite number of spacings > 2");
+  }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  What `detect_sparse_directions` found.
+*/
+struct Sparse_direction_summary
+{
+  double spacing = 0;                ///< the spacing used
+  std::size_t sparse_points = 0;     ///< points with at least one sparse direction (hole or open border)
+  std::size_t hole_boundary_points = 0; ///< points with a sparse direction across which samples reappear
+};
+
+namespace internal {
+
+/// A gap across a hole: from row `from`, toward row `across` (the first sample beyond the gap).
+struct Hole_gap
+{
+  int from, across;
+};
+
+/// Median distance of a point to its nearest neighbour.
+template <typename ConcurrencyTag>
+double median_spacing(const Matrix_n3& positions, const Position_tree& tree)
+{
+  std::vector<double> nearest(std::size_t(positions.rows()), 0.0);
+  for_range<ConcurrencyTag>(0, nearest.size(), [&](std::size_t i) {
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), 2, [&](int j, double d2) {
+      if(std::size_t(j) != i) nearest[i] = std::sqrt(d2);
+    });
+  });
+  std::nth_element(nearest.begin(), nearest.begin() + std::ptrdiff_t(nearest.size() / 2), nearest.end());
+  return nearest[nearest.size() / 2];
+}
+
+/// The hole gaps of every point (DESIGN.md 3.8): for each sparse quarter of its tangent plane, the first
+/// sample that reappears along it within `max_gap`, if any. `sparse` counts the points with a sparse quarter.
+/// Gaps come out ordered by point, then quarter, so any thread count gives the same list.
+template <typename ConcurrencyTag>
+std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
+                                std::size_t k, double spacing, double max_gap, std::size_t& sparse)
+{
+  const std::size_t n = std::size_t(positions.rows());
+  // Enough candidates to see across a gap of max_gap spacings: about the samples of that disc.
+  const std::size_t reach = std::min<std::size_t>(n, std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_gap * max_gap))));
+  const double empty_radius = 2 * spacing, cos_cone = std::cos(30 * 3.14159265358979323846 / 180);
+  std::vector<std::array<int, 4>> across(n);
+  std::vector<char> is_sparse(n, 0);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    across[i].fill(-1);
+    const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
+    thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
+    candidates.clear();
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), reach, [&](int j, double) {
+      if(std::size_t(j) == i) return;
+      Eigen::Vector3d d = positions.row(j).transpose() - p;
+      d -= d.dot(normal) * normal;
+      candidates.emplace_back(j, d);
+    });
+    // Principal axes of the k nearest projected neighbours.
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    const std::size_t near = std::min(k, candidates.size());
+    for(std::size_t m = 0; m < near; ++m) covariance += candidates[m].second * candidates[m].second.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+    eigen.computeDirect(covariance);
+    Eigen::Vector3d e1 = eigen.eigenvectors().col(2);
+    e1 = (e1 - e1.dot(normal) * normal).normalized();
+    if(!e1.allFinite()) return;
+    const Eigen::Vector3d e2 = normal.cross(e1);
+    const std::array<Eigen::Vector3d, 4> directions{e1, Eigen::Vector3d(-e1), e2, Eigen::Vector3d(-e2)};
+    for(int q = 0; q < 4; ++q) {
+      const Eigen::Vector3d& d = directions[std::size_t(q)];
+      bool empty = true;
+      double best = max_gap;
+      for(const auto& [j, offset] : candidates) {
+        const double length = offset.norm();
+        if(!(length > 0)) continue;
+        const double along = offset.dot(d) / length;
+        if(length < empty_radius && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
+        if(length >= empty_radius && length < best && along > cos_cone) {
+          best = length;
+          across[i][std::size_t(q)] = j;
+        }
+      }
+      if(!empty) across[i][std::size_t(q)] = -1;
+      else is_sparse[i] = 1;
+    }
+  });
+  sparse = std::size_t(std::count(is_sparse.begin(), is_sparse.end(), 1));
+  std::vector<Hole_gap> gaps;
+  for(std::size_t i = 0; i < n; ++i)
+    for(int j : across[i])
+      if(j >= 0) gaps.push_back({int(i), j});
+  return gaps;
+}
+
+} // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Finds the points on the boundary of holes (Miao et al. 2007, Sect. 6.3, Fig. 9a): for each point, the
+  quarters of its tangent plane around the principal axes `±e1`, `±e2` of its projected neighbours that hold no
+  sample within two spacings, and among them the ones across which samples reappear within
+  `settings.max_hole_size` spacings (a hole, not an open border).
+
+  \tparam SparseDirectionMap a model of `WritablePropertyMap` whose value type is the kernel's `Vector_3`.
+
+  \param points the points, with normals (`normal_map`; required, the tangent planes come from them)
+  \param k neighbours that give a point's principal axes, `1 <= k < points.size()`
+  \param settings spacing and largest hole
+  \param hole_direction_map receives, for every point, the unit direction into its nearest hole (toward the
+         closest sample across it), or the zero vector when the point borders no hole
+  \param np `point_map`, `normal_map`, `geom_traits`
+
+  \return the spacing used and the counts of sparse and hole-boundary points.
+  \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, a bad
+          `k` or invalid settings.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SparseDirectionMap,
+          typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Sparse_direction_summary detect_sparse_directions(const PointRange& points, unsigned int k, const Sparse_direction_settings& settings,
+                                                  SparseDirectionMap hole_direction_map,
+                                                  const NamedParameters& np = CGAL::parameters::default_values())
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  using Kernel = typename NP_helper::Geom_traits;
+  using Vector = typename Kernel::Vector_3;
+  constexpr const char* who = "detect_sparse_directions";
+  settings.validate();
+  const internal::Spatial_point_cloud cloud =
+    internal::make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
+  internal::check_neighbor_count(k, cloud.size(), who);
+  if(!internal::has_given_normals<NamedParameters>(points))
+    throw Invalid_input(std::string(who) + ": the points need normals (normal_map): the tangent planes come from them");
+  const internal::Matrix_n3 normals = internal::gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
+  const internal::Position_tree tree(cloud.positions, ConcurrencyTag());
+  Sparse_direction_summary summary;
+  summary.spacing = settings.spacing > 0 ? settings.spacing : internal::median_spacing<ConcurrencyTag>(cloud.positions, tree);
+  if(!(summary.spacing > 0))
+    throw Invalid_input(std::string(who) + ": the points coincide (zero nearest-neighbour spacing); give a spacing");
+  const std::vector<internal::Hole_gap> gaps = internal::hole_gaps<ConcurrencyTag>(
+    cloud.positions, normals, tree, k, summary.spacing, settings.max_hole_size * summary.spacing, summary.sparse_points);
+
+  // The nearest gap of each point gives its direction.
+  std::vector<Eigen::Vector3d> direction(cloud.size(), Eigen::Vector3d::Zero());
+  std::vector<double> length(cloud.size(), INFINITY);
+  for(const internal::Hole_gap& g : gaps) {
+    const Eigen::Vector3d d = (cloud.positions.row(g.across) - cloud.positions.row(g.from)).transpose();
+    if(d.norm() < length[std::size_t(g.from)]) {
+      length[std::size_t(g.from)] = d.norm();
+      direction[std::size_t(g.from)] = d.normalized();
+    }
+  }
+  const std::vector<int> row_of = cloud.spatial_index();
+  std::size_t i = 0;
+  for(const auto& item : points) {
+    const Eigen::Vector3d& d = direction[std::size_t(row_of[i++])];
+    summary.hole_boundary_points += d.squaredNorm() > 0;
+    put(hole_direction_map, item, Vector(d.x(), d.y(), d.z()));
+  }
+  return summary;
+}
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_DETECT_SPARSE_DIRECTIONS_H

@@ -1,0 +1,85 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_LOCAL_FIT_H
+#define CGAL_EXT_INTERNAL_LOCAL_FIT_H
+
+#include <Eigen/Core>
+#include <Eigen/Cholesky>
+
+#include <cmath>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// A local surface: the degree-2 height function `z = c0 + c1 x + c2 y + c3 x^2 + c4 xy + c5 y^2` over the
+/// tangent plane (u, v) of a normal at an origin, fitted by least squares to nearby samples (coordinates
+/// scaled by their mean distance, so the normal equations stay well conditioned at any model size), with a
+/// light ridge so that degenerate neighbourhoods fit a flatter surface rather than none.
+class Height_fit
+{
+public:
+  Height_fit(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal) : m_origin(origin), m_n(normal.normalized())
+  {
+    const Eigen::Vector3d helper = std::abs(m_n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    m_u = m_n.cross(helper).normalized();
+    m_v = m_n.cross(m_u);
+  }
+
+  /// Fits to the samples `point(0) .. point(count - 1)`. Fewer than 6 samples fit the tangent plane at the
+  /// samples' mean height instead.
+  template <typename PointAt>
+  void fit(int count, const PointAt& point)
+  {
+    double mean = 0;
+    for(int m = 0; m < count; ++m) mean += (point(m) - m_origin).norm();
+    m_scale = mean > 0 ? count / mean : 1.0;
+    m_c.setZero();
+    if(count < 6) {
+      for(int m = 0; m < count; ++m) m_c(0) += (point(m) - m_origin).dot(m_n) * m_scale / count;
+      return;
+    }
+    Eigen::Matrix<double, 6, 6> AtA = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> Atz = Eigen::Matrix<double, 6, 1>::Zero();
+    for(int m = 0; m < count; ++m) {
+      const Eigen::Vector3d d = point(m) - m_origin;
+      const double x = d.dot(m_u) * m_scale, y = d.dot(m_v) * m_scale;
+      Eigen::Matrix<double, 6, 1> row;
+      row << 1, x, y, x * x, x * y, y * y;
+      AtA.noalias() += row * row.transpose();
+      Atz += d.dot(m_n) * m_scale * row;
+    }
+    // A light ridge on the slope and curvature terms: samples on two lines (two rings of a stretched tube)
+    // leave a curvature undetermined, which then stays zero instead of exploding.
+    for(int c = 1; c < 6; ++c) AtA(c, c) += 1e-3 * count;
+    m_c = AtA.ldlt().solve(Atz);
+    if(!m_c.allFinite()) m_c.setZero();
+  }
+
+  /// The surface point above (or below) `p` along the fit's normal axis.
+  Eigen::Vector3d project(const Eigen::Vector3d& p) const
+  {
+    const Eigen::Vector3d d = p - m_origin;
+    const double x = d.dot(m_u) * m_scale, y = d.dot(m_v) * m_scale;
+    const double z = m_c(0) + m_c(1) * x + m_c(2) * y + m_c(3) * x * x + m_c(4) * x * y + m_c(5) * y * y;
+    return m_origin + (x * m_u + y * m_v + z * m_n) / m_scale;
+  }
+
+  /// The fitted surface's unit normal above `p`, on the side of the fit's normal.
+  Eigen::Vector3d normal(const Eigen::Vector3d& p) const
+  {
+    const Eigen::Vector3d d = p - m_origin;
+    const double x = d.dot(m_u) * m_scale, y = d.dot(m_v) * m_scale;
+    const double zx = m_c(1) + 2 * m_c(3) * x + m_c(4) * y, zy = m_c(2) + m_c(4) * x + 2 * m_c(5) * y;
+    return (m_n - zx * m_u - zy * m_v).normalized();
+  }
+
+private:
+  Eigen::Vector3d m_origin, m_n, m_u, m_v;
+  double m_scale = 1;
+  Eigen::Matrix<double, 6, 1> m_c = Eigen::Matrix<double, 6, 1>::Zero();
+};
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_LOCAL_FIT_H

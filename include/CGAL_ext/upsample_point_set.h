@@ -1,0 +1,259 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_UPSAMPLE_POINT_SET_H
+#define CGAL_EXT_UPSAMPLE_POINT_SET_H
+
+#include <CGAL_ext/detect_sparse_directions.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/local_fit.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <CGAL/Named_function_parameters.h>
+#include <CGAL/boost/graph/named_params_helper.h>
+#include <CGAL/tags.h>
+
+#include <cmath>
+#include <functional>
+#include <tuple>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of `upsample_point_set`.
+*/
+struct Upsampling_settings
+{
+  Sparse_direction_settings detection; ///< spacing (the target spacing of the new samples) and largest hole
+  unsigned int neighbors = 12;         ///< k of the principal axes and of the local surface fits, >= 6
+  unsigned int relaxation_iterations = 10;
+  unsigned int max_rounds = 4;         ///< detect, insert and relax at most this often (a wide hole fills in rounds)
+
+  void validate() const
+  {
+    detection.validate();
+    if(neighbors < 6) throw Invalid_input("upsampling: neighbors must be at least 6 (the surface fit has 6 coefficients)");
+    if(max_rounds < 1) throw Invalid_input("upsampling: max_rounds must be at least 1");
+  }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  What `upsample_point_set` did.
+*/
+struct Upsampling_result
+{
+  double spacing = 0;         ///< the target spacing used
+  std::size_t inserted = 0;   ///< new points written to the output
+  std::size_t rounds = 0;     ///< detection rounds that inserted points
+  std::size_t hole_boundary_points = 0; ///< input points on hole boundaries (first round)
+};
+
+namespace internal {
+
+/// A hash of grid cells of side `cell`: the points already accepted, to keep new samples apart.
+class Cell_set
+{
+public:
+  explicit Cell_set(double cell) : m_cell(cell) {}
+  using Key = std::tuple<long long, long long, long long>;
+
+  Key key(const Eigen::Vector3d& p) const
+  {
+    return Key((long long)std::floor(p.x() / m_cell), (long long)std::floor(p.y() / m_cell), (long long)std::floor(p.z() / m_cell));
+  }
+  /// Whether a point of the set lies within `cell` of `p`.
+  bool near(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points) const
+  {
+    const Key c = key(p);
+    for(long long dx = -1; dx <= 1; ++dx)
+      for(long long dy = -1; dy <= 1; ++dy)
+        for(long long dz = -1; dz <= 1; ++dz) {
+          const auto it = m_members.find(Key(std::get<0>(c) + dx, std::get<1>(c) + dy, std::get<2>(c) + dz));
+          if(it == m_members.end()) continue;
+          for(int m : it->second)
+            if((points[std::size_t(m)] - p).norm() < m_cell) return true;
+        }
+    return false;
+  }
+  void insert(const Eigen::Vector3d& p, int index) { m_members[key(p)].push_back(index); }
+
+private:
+  struct Hash
+  {
+    std::size_t operator()(const Key& k) const
+    {
+      return std::size_t(std::get<0>(k) * 73856093LL ^ std::get<1>(k) * 19349663LL ^ std::get<2>(k) * 83492791LL);
+    }
+  };
+  double m_cell;
+  std::unordered_map<Key, std::vector<int>, Hash> m_members;
+};
+
+/// Projects `x` onto the surface fitted to the `k` input samples nearest to it, with a normal oriented like
+/// `normal`; updates both.
+inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, std::size_t k, Eigen::Vector3d& x,
+                                 Eigen::Vector3d& normal)
+{
+  thread_local std::vector<int> near;
+  near.clear();
+  tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), k, [&](int j, double) { near.push_back(j); });
+  Height_fit fit(x, normal);
+  fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
+  x = fit.project(x);
+  const Eigen::Vector3d n = fit.normal(x);
+  normal = n.dot(normal) < 0 ? Eigen::Vector3d(-n) : n;
+}
+
+} // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Fills the holes of an oriented point set, such as the stretched parts of an edit (Miao et al. 2007,
+  Sect. 6.3, Fig. 9): hole boundaries are found by `detect_sparse_directions`; across each gap, new samples
+  are placed at the target spacing on the segment to the sample that reappears beyond it, with interpolated
+  normals, and kept only where no sample lies within half a spacing; then they are relaxed by repulsion
+  (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
+  projected back onto a degree-2 height function fitted to the nearest input samples. Detection, insertion
+  and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
+  within `max_hole_size` beyond them, never grow. Input points are not moved.
+
+  \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
+          unit normal (the input points are not repeated, so every output point is a new one).
+
+  \param points the points, with normals (`normal_map`, required)
+  \param settings target spacing (0: the median nearest-neighbour spacing), largest hole, neighbours,
+         relaxation
+  \param output receives the new points
+  \param np `point_map`, `normal_map`, `callback` (false cancels; nothing is then written), `geom_traits`
+
+  \return the spacing used, the number of new points and rounds; `inserted` is 0 and nothing is written
+          when the callback cancelled.
+  \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, fewer
+          points than neighbours, or invalid settings.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename OutputIterator,
+          typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_settings& settings, OutputIterator output,
+                                     const NamedParameters& np = CGAL::parameters::default_values())
+{
+  using CGAL::parameters::choose_parameter;
+  using CGAL::parameters::get_parameter;
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  using Kernel = typename NP_helper::Geom_traits;
+  using namespace internal;
+  constexpr const char* who = "upsample_point_set";
+  settings.validate();
+  const std::function<bool(double)> callback =
+    choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
+  const Spatial_point_cloud cloud = make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
+  const std::size_t k = settings.neighbors;
+  check_neighbor_count(k, cloud.size(), who);
+  if(!has_given_normals<NamedParameters>(points))
+    throw Invalid_input(std::string(who) + ": the points need normals (normal_map): hole detection and the new "
+                        "samples' surface come from them");
+  const Matrix_n3 input_normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
+  const Position_tree input_tree(cloud.positions, ConcurrencyTag());
+
+  Upsampling_result result;
+  const double h = settings.detection.spacing > 0 ? settings.detection.spacing
+                                                  : median_spacing<ConcurrencyTag>(cloud.positions, input_tree);
+  if(!(h > 0)) throw Invalid_input(std::string(who) + ": the points coincide (zero nearest-neighbour spacing); give a spacing");
+  result.spacing = h;
+  Progress progress(callback);
+
+  // All samples so far: the input first, then the new ones (rows n..).
+  const std::size_t n = cloud.size();
+  Matrix_n3 all = cloud.positions, all_normals = input_normals;
+  std::vector<Eigen::Vector3d> new_points, new_normals;
+  for(std::size_t round = 0; round < settings.max_rounds; ++round) {
+    progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
+    if(!progress.report(0.0)) return {};
+    const Position_tree tree(all, ConcurrencyTag());
+    std::size_t sparse = 0;
+    const std::vector<Hole_gap> gaps =
+      hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, h, settings.detection.max_hole_size * h, sparse);
+    if(round == 0) {
+      std::vector<char> boundary(n, 0);
+      for(const Hole_gap& g : gaps) boundary[std::size_t(g.from)] = 1;
+      result.hole_boundary_points = std::size_t(std::count(boundary.begin(), boundary.end(), 1));
+    }
+    // Candidates along every gap at the target spacing; a candidate is kept only at least half a spacing from
+    // every sample and from the candidates kept before it.
+    Cell_set kept(0.5 * h);
+    std::vector<Eigen::Vector3d> round_points, round_normals;
+    for(const Hole_gap& g : gaps) {
+      const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
+      const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
+      const int steps = int(std::lround((b - a).norm() / h));
+      for(int s = 1; s < steps; ++s) {
+        const double t = double(s) / steps;
+        const Eigen::Vector3d x = a + t * (b - a);
+        bool crowded = kept.near(x, round_points);
+        if(!crowded)
+          tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1, [&](int, double d2) { crowded = d2 < 0.25 * h * h; });
+        if(crowded) continue;
+        kept.insert(x, int(round_points.size()));
+        round_points.push_back(x);
+        Eigen::Vector3d normal = (1 - t) * na + t * nb;
+        round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
+      }
+    }
+    if(round_points.empty()) break;
+    ++result.rounds;
+
+    // Relaxation (Jacobi steps, so the result does not depend on the thread count): repulsion in the tangent
+    // plane from every sample closer than 1.5 spacings, then back onto the surface of the input samples.
+    const double radius = 1.5 * h;
+    for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
+      Matrix_n3 current(Eigen::Index(n + new_points.size() + round_points.size()), 3);
+      current.topRows(all.rows()) = all;
+      for(std::size_t m = 0; m < round_points.size(); ++m) current.row(all.rows() + Eigen::Index(m)) = round_points[m].transpose();
+      const Position_tree current_tree(current, ConcurrencyTag());
+      std::vector<Eigen::Vector3d> moved(round_points.size()), turned(round_points.size());
+      for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
+        Eigen::Vector3d x = round_points[m], normal = round_normals[m];
+        if(iteration < settings.relaxation_iterations) {
+          Eigen::Vector3d push = Eigen::Vector3d::Zero();
+          current_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, [&](int j, double d2) {
+            const double d = std::sqrt(d2);
+            if(d >= radius || !(d > 0)) return;
+            const double w = 1 - d / radius;
+            push += w * w * (x - current.row(j).transpose()) / d;
+          });
+          push = 0.5 * h * (push - push.dot(normal) * normal);
+          if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
+          x += push;
+        }
+        project_onto_surface(cloud.positions, input_tree, 2 * k, x, normal);
+        moved[m] = x;
+        turned[m] = normal;
+      });
+      round_points.swap(moved);
+      round_normals.swap(turned);
+    }
+    new_points.insert(new_points.end(), round_points.begin(), round_points.end());
+    new_normals.insert(new_normals.end(), round_normals.begin(), round_normals.end());
+    all.conservativeResize(Eigen::Index(n + new_points.size()), 3);
+    all_normals.conservativeResize(all.rows(), 3);
+    for(std::size_t m = 0; m < new_points.size(); ++m) {
+      all.row(Eigen::Index(n + m)) = new_points[m].transpose();
+      all_normals.row(Eigen::Index(n + m)) = new_normals[m].transpose();
+    }
+  }
+  if(!progress.report(1.0)) return {};
+  for(std::size_t m = 0; m < new_points.size(); ++m)
+    *output++ = std::make_pair(typename Kernel::Point_3(new_points[m].x(), new_points[m].y(), new_points[m].z()),
+                               typename Kernel::Vector_3(new_normals[m].x(), new_normals[m].y(), new_normals[m].z()));
+  result.inserted = new_points.size();
+  return result;
+}
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_UPSAMPLE_POINT_SET_H

@@ -1,0 +1,120 @@
+// Tests of upsample_point_set (paper Sect. 6.3; DESIGN.md 3.8, 5): coverage restored, new points on the
+// surface, nothing grown past open borders, nothing added where nothing is missing.
+#include "upsampling_fixtures.h"
+
+#include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/upsample_point_set.h>
+
+#include <gtest/gtest.h>
+
+#include <iterator>
+
+namespace {
+
+using Inserted = std::vector<std::pair<Point, Vector>>;
+
+std::vector<Point> with(const std::vector<Point>& points, const Inserted& inserted)
+{
+  std::vector<Point> all = points;
+  for(const auto& p : inserted) all.push_back(p.first);
+  return all;
+}
+
+} // namespace
+
+TEST(UpsamplePointSet, FillsAPlanarHoleOnThePlaneAndNotPastTheBorder)
+{
+  const Oriented_points plane = plane_with_hole(2.6);
+  std::vector<Eigen::Vector3d> surface;
+  for(double x = 0.5; x <= 39.5; x += 0.1)
+    for(double y = 0.5; y <= 39.5; y += 0.1) surface.emplace_back(x, y, 0);
+  EXPECT_GT(covering_radius(plane.points, surface), 2.0);
+
+  CGAL_ext::Upsampling_settings settings;
+  settings.detection.spacing = 1;
+  Inserted inserted;
+  const auto result = CGAL_ext::upsample_point_set(plane.indices(), settings, std::back_inserter(inserted), plane.np());
+  EXPECT_EQ(result.inserted, inserted.size());
+  EXPECT_GT(inserted.size(), 10u);
+  EXPECT_LT(inserted.size(), 40u); // the disc holds about 21 samples
+  EXPECT_LE(covering_radius(with(plane.points, inserted), surface), 1.0);
+  for(const auto& [p, n] : inserted) {
+    EXPECT_LE(std::abs(p.z()), 0.01);
+    EXPECT_LT(std::hypot(p.x() - 20, p.y() - 20), 2.6 + 0.5) << "a point outside the hole";
+    EXPECT_NEAR(n.z(), 1.0, 1e-6);
+  }
+}
+
+TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
+{
+  const double h = 0.1;
+  const Oriented_points cylinder = stretched_cylinder(h);
+  std::vector<Eigen::Vector3d> surface;
+  for(int a = 0; a < 400; ++a)
+    for(double z = 0.05; z <= 9.95; z += 0.02) {
+      const double angle = 2 * 3.14159265358979323846 * a / 400;
+      surface.emplace_back(std::cos(angle), std::sin(angle), z);
+    }
+  const double before = covering_radius(cylinder.points, surface);
+  EXPECT_GT(before, 1.4 * h);
+
+  CGAL_ext::Upsampling_settings settings;
+  settings.detection.spacing = h;
+  Inserted inserted;
+  CGAL_ext::upsample_point_set(cylinder.indices(), settings, std::back_inserter(inserted), cylinder.np());
+  const double after = covering_radius(with(cylinder.points, inserted), surface);
+  EXPECT_LE(after, 1.0 * h) << "before " << before / h << " h";
+  for(const auto& [p, n] : inserted) {
+    const double r = std::hypot(p.x(), p.y());
+    EXPECT_LT(std::abs(r - 1), 0.02);
+    EXPECT_GT(p.z(), 2.0 - h); // only the stretched part gets new samples, nothing past the open ends
+    EXPECT_LT(p.z(), 8.0 + h);
+    const Eigen::Vector3d radial(p.x() / r, p.y() / r, 0);
+    EXPECT_GT(radial.dot(Eigen::Vector3d(n.x(), n.y(), n.z())), std::cos(10 * 3.14159265358979323846 / 180));
+  }
+}
+
+TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
+{
+  const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(4000, 1.0, 0.0);
+  const Oriented_points sphere{shape.points, shape.normals};
+  Inserted inserted;
+  const auto result = CGAL_ext::upsample_point_set(sphere.indices(), CGAL_ext::Upsampling_settings(),
+                                                   std::back_inserter(inserted), sphere.np());
+  EXPECT_GT(result.spacing, 0.0);
+  EXPECT_LT(inserted.size(), sphere.points.size() / 100);
+}
+
+TEST(UpsamplePointSet, SequentialAndParallelAgree)
+{
+  const Oriented_points plane = plane_with_hole(2.9);
+  CGAL_ext::Upsampling_settings settings;
+  Inserted sequential, parallel;
+  CGAL_ext::upsample_point_set<CGAL::Sequential_tag>(plane.indices(), settings, std::back_inserter(sequential), plane.np());
+  CGAL_ext::upsample_point_set<CGAL::Parallel_if_available_tag>(plane.indices(), settings, std::back_inserter(parallel), plane.np());
+  ASSERT_EQ(sequential.size(), parallel.size());
+  for(std::size_t i = 0; i < sequential.size(); ++i) EXPECT_EQ(sequential[i].first, parallel[i].first);
+}
+
+TEST(UpsamplePointSet, BadInputIsAClearError)
+{
+  const Oriented_points plane = plane_with_hole(2.6);
+  Inserted inserted;
+  auto message = [](auto&& f) -> std::string {
+    try { f(); } catch(const CGAL_ext::Invalid_input& e) { return e.what(); }
+    return "no error";
+  };
+  EXPECT_NE(message([&] { CGAL_ext::upsample_point_set(plane.indices(), {}, std::back_inserter(inserted), plane.points_only()); }).find("need normals"),
+            std::string::npos);
+  CGAL_ext::Upsampling_settings bad;
+  bad.detection.spacing = -0.5;
+  EXPECT_NE(message([&] { CGAL_ext::upsample_point_set(plane.indices(), bad, std::back_inserter(inserted), plane.np()); }).find("spacing"),
+            std::string::npos);
+  const std::vector<Point> empty;
+  EXPECT_NE(message([&] { CGAL_ext::upsample_point_set(empty, {}, std::back_inserter(inserted)); }).find("empty"), std::string::npos);
+  // A cancelled run writes nothing.
+  const auto result = CGAL_ext::upsample_point_set(plane.indices(), {}, std::back_inserter(inserted),
+                                                   plane.np().callback([](double) { return false; }));
+  EXPECT_EQ(result.inserted, 0u);
+  EXPECT_TRUE(inserted.empty());
+}
