@@ -17,6 +17,7 @@
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/scale_geometric_details.h>
+#include <CGAL_ext/upsample_point_set.h>
 
 #include <CLI/CLI.hpp>
 
@@ -446,6 +447,44 @@ struct Simplify_command
   }
 };
 
+/// The typical spacing of `cloud` (the median of the points' mean distance to 6 neighbours): what an edit keeps.
+double typical_spacing(const Point_cloud& cloud)
+{
+  const auto spatial = CGAL_ext::internal::make_spatial_point_cloud<CGAL::Parallel_if_available_tag>(
+    cloud.points, CGAL::Identity_property_map<const Point>(), "spacing");
+  const CGAL_ext::internal::Position_tree tree(spatial.positions, CGAL::Parallel_if_available_tag());
+  return CGAL_ext::internal::typical_spacing<CGAL::Parallel_if_available_tag>(spatial.positions, tree);
+}
+
+/// Fills the holes of `cloud` (which has normals) at `spacing` (0: its own median spacing): the new points are
+/// appended with the flag `inserted` = 1, 0 in the other scalars and grey; the report gets the figures.
+void upsample_cloud(Point_cloud& cloud, CGAL_ext::Upsampling_settings settings, double spacing, Progress_printer& progress,
+                    Report& rep)
+{
+  settings.detection.spacing = spacing;
+  std::vector<std::pair<Point, Vector>> added;
+  const std::size_t n = cloud.points.size();
+  const CGAL_ext::Upsampling_result result = rep.time("upsample", [&] {
+    return CGAL_ext::upsample_point_set(index_range(n), settings, std::back_inserter(added),
+                                        CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+                                          .normal_map(CGAL::make_property_map(cloud.normals))
+                                          .callback(progress.stage("upsample")));
+  });
+  progress.finish();
+  if(!result) throw Cancelled();
+  for(auto& [name, values] : cloud.scalars) values.resize(n + added.size(), 0.0);
+  if(!cloud.colors.empty()) cloud.colors.resize(n + added.size(), Color{200, 200, 200});
+  std::vector<double> inserted(n + added.size(), 0.0);
+  for(std::size_t m = 0; m < added.size(); ++m) {
+    cloud.points.push_back(added[m].first);
+    cloud.normals.push_back(added[m].second);
+    inserted[n + m] = 1;
+  }
+  cloud.set_scalar("inserted", std::move(inserted));
+  rep.data()["upsampling"] = {{"spacing", result.spacing}, {"inserted", result.inserted}, {"rounds", result.rounds},
+                              {"hole_boundary_points", result.hole_boundary_points}};
+}
+
 /// Runs an edit on `cloud` (which has normals): preprocess, deform, diffuse. `out` receives the deformed points
 /// and normals, the distance each point moved, its status (0 fixed, 1 region, 2 handle) and its sample point;
 /// the report gets the paper's Table 1 fields.
@@ -522,7 +561,7 @@ struct Edit_command
   double lambda = 0, mu = 0, handle_weight = 0;
   unsigned int k = 0;
   std::size_t max_cluster_size = 0, target = 0;
-  bool no_propagation = false;
+  bool no_propagation = false, upsample = false;
   std::map<std::string, CLI::Option*> given;
   Render_settings render;
 
@@ -565,6 +604,8 @@ struct Edit_command
 
     Point_cloud out;
     run_edit(cloud, description, progress, rep, out);
+    // What the edit stretched is filled at the spacing the model had before it.
+    if(upsample) upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(cloud), progress, rep);
     rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
     if(!png.empty())
       write_file(png_tmp, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
@@ -576,6 +617,44 @@ struct Edit_command
                    r["points"].get<std::size_t>(), r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(),
                    r["table1"]["editing_ssps_s"].get<double>(), r["table1"]["diffusion_s"].get<double>());
     }
+  }
+};
+
+/// `upsample`: fills the holes of an oriented point set (paper Sect. 6.3).
+struct Upsample_command
+{
+  std::string input, output, png, report, view = "front";
+  double spacing = 0;
+  CGAL_ext::Upsampling_settings settings;
+  Render_settings render;
+
+  void run(const Common_options& common)
+  {
+    Output_files outputs({input});
+    const fs::path ply_tmp = outputs.add(output);
+    const fs::path png_tmp = add_if_given(outputs, png);
+    const fs::path report_tmp = add_if_given(outputs, report);
+    render.view = parse_view(view);
+    settings.detection.spacing = spacing;
+    settings.validate();
+    Progress_printer progress(common.quiet);
+    Report rep("upsample");
+    rep.data()["input"] = input;
+    Point_cloud cloud = read_for_neighbors(input, settings.neighbors, rep);
+    ensure_normals(cloud, progress, rep);
+    const std::size_t n = cloud.points.size();
+    upsample_cloud(cloud, settings, spacing, progress, rep);
+    rep.data()["points"] = n;
+    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
+    if(!png.empty())
+      write_file(png_tmp, rep.time("render", [&] {
+        return render_png(cloud.points, cloud.normals, sequential_colors(*cloud.scalar("inserted")), render);
+      }));
+    if(!report.empty()) write_file(report_tmp, rep.dump());
+    outputs.commit();
+    if(!common.quiet)
+      std::fprintf(stderr, "upsample: %zu points + %zu new at spacing %g\n", n, cloud.points.size() - n,
+                   rep.data()["upsampling"]["spacing"].get<double>());
   }
 };
 
@@ -707,6 +786,23 @@ struct Demo_command
                   r["table1"]["diffusion_s"].get<double>(), stem.c_str(), stem.c_str());
       runs.push_back(r);
     }
+    // Up-sampling (paper Sect. 6.3, Fig. 9-10): the tip pulled 1.0 further along the tube stretches the region;
+    // what the stretch thinned is filled at the pre-edit spacing. Grey: the new points.
+    {
+      Edit_description pull = bend;
+      pull.handles.front().rotation.setIdentity();
+      pull.handles.front().translation = Eigen::Vector3d(-1.0, 0, 0);
+      Report rep("demo stretch and upsample");
+      Point_cloud out;
+      run_edit(input, pull, progress, rep, out);
+      write_file(outputs.add(dir / "edit_stretch.png"), render_png(out.points, out.normals, out.colors, render));
+      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(input), progress, rep);
+      write_file(outputs.add(dir / "edit_stretch_upsampled.ply"), ply_bytes(out));
+      write_file(outputs.add(dir / "edit_stretch_upsampled.png"), render_png(out.points, out.normals, out.colors, render));
+      std::printf("demo: tip pulled by 1.0, then %zu points inserted where the stretch thinned the tentacle -> "
+                  "edit_stretch.png, edit_stretch_upsampled.{ply,png}\n", rep.data()["upsampling"]["inserted"].get<std::size_t>());
+      runs.push_back(rep.data());
+    }
     if(!report.empty()) write_file(report_tmp, nlohmann::json{{"command", "demo"}, {"runs", runs}}.dump(2) + "\n");
     outputs.commit();
     std::printf("demo: wrote %s/{tentacle,details_*,scale_*,enhance_*,edit_*}.{ply,png}\n", directory.c_str());
@@ -814,7 +910,19 @@ int main(int argc, char** argv)
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
   edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
   edit_app->add_flag("--no-rotation-propagation", edit.no_propagation, "keep the details' world orientation (plain Laplacian editing)");
+  edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched at the model's pre-edit spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
+
+  Upsample_command upsample;
+  CLI::App* upsample_app = app.add_subcommand("upsample", "fill holes and stretched parts with new samples, relaxed on the surface (paper Sect. 6.3)");
+  upsample_app->add_option("-i,--input", upsample.input, "input points with normals (.ply, .off, .xyz, .pwn)")->required();
+  upsample_app->add_option("-o,--output", upsample.output, "output binary PLY: the input, then the new points (inserted = 1)")->required();
+  upsample_app->add_option("--spacing", upsample.spacing, "target spacing (0: the median of the points' mean distance to 6 neighbours)")->capture_default_str();
+  upsample_app->add_option("--max-hole-size", upsample.settings.detection.max_hole_size, "widest gap filled, in spacings (open borders are never grown)")->capture_default_str();
+  upsample_app->add_option("-k,--neighbor-count", upsample.settings.neighbors, "neighbours of the tangent axes and surface fits (>= 6)")->capture_default_str();
+  upsample_app->add_option("--png", upsample.png, "also render the result, new points highlighted");
+  upsample_app->add_option("--report", upsample.report, "write counts, spacing and timings as JSON");
+  add_render_options(*upsample_app, upsample.render, upsample.view);
 
   Render_command render;
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
@@ -825,7 +933,7 @@ int main(int argc, char** argv)
   add_render_options(*render_app, render.render, render.view);
 
   Demo_command demo;
-  CLI::App* demo_app = app.add_subcommand("demo", "detail colour maps, scaling, enhancement and editing on a generated tentacle");
+  CLI::App* demo_app = app.add_subcommand("demo", "detail colour maps, scaling, enhancement, editing and up-sampling on a generated tentacle");
   demo_app->add_option("-o,--output", demo.directory, "output directory (created)")->capture_default_str();
   demo_app->add_option("--report", demo.report, "write stage timings and counts as JSON");
   demo_app->add_option("--points", demo.points, "number of samples")->check(CLI::Range(1000, 5000000))->capture_default_str();
@@ -847,6 +955,7 @@ int main(int argc, char** argv)
       if(edit.edit.empty() && edit.sel.empty()) throw Cli_error("edit needs --edit EDIT.json or --sel S --def D");
       edit.run(common);
     }
+    if(*upsample_app) upsample.run(common);
     if(*render_app) render.run(common);
     if(*demo_app) demo.run(common);
   } catch(const Cancelled&) {

@@ -201,11 +201,12 @@ TEST_F(Cli, render_and_demo_write_pictures)
   const Program_run demo = run("demo --points 3000 -o " + path("demo") + " --report " + path("demo.json"));
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
   const auto runs = nlohmann::json::parse(contents(path("demo.json")))["runs"];
-  ASSERT_EQ(runs.size(), 10u); // 3 detail maps, 2 scalings, 2 enhancements, 3 edits
+  ASSERT_EQ(runs.size(), 11u); // 3 detail maps, 2 scalings, 2 enhancements, 3 edits, a stretch up-sampled
   EXPECT_GT(runs[9]["roi_ssps"].get<std::size_t>(), 0u);
+  EXPECT_GT(runs[10]["upsampling"]["inserted"].get<std::size_t>(), 0u);
   for(const char* f : {"tentacle.ply", "tentacle.png", "details_linear.png", "details_quadric.ply", "details_cubic.png",
                        "scale_0.6.png", "scale_1.2.ply", "enhance_2.0.png", "enhance_3.0.ply", "edit_linear.png",
-                       "edit_quadric.ply", "edit_cubic.png"})
+                       "edit_quadric.ply", "edit_cubic.png", "edit_stretch.png", "edit_stretch_upsampled.ply"})
     EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
 }
 
@@ -534,4 +535,51 @@ TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)
   const Program_run over = run("edit -i " + in + " -o " + path("in.sel") + " --sel " + path("in.sel") + " --def " + path("identity.def"));
   EXPECT_EQ(over.exit_code, 1);
   EXPECT_FALSE(fs::exists(path("x.ply")));
+}
+
+TEST_F(Cli, upsample_fills_a_hole_and_edit_upsample_fills_a_stretch)
+{
+  // A unit grid with a hole of radius 2.6 in its middle.
+  {
+    std::ofstream out(path("holed.xyz"));
+    for(int i = 0; i < 30; ++i)
+      for(int j = 0; j < 30; ++j)
+        if(std::hypot(i - 14.5, j - 14.5) >= 2.6) out << i << " " << j << " 0 0 0 1\n";
+  }
+  Program_run r = run("upsample -i " + path("holed.xyz") + " -o " + path("filled.ply") + " --spacing 1 --report " + path("u.json") +
+                      " --png " + path("u.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CGAL::Point_set_3<Point> filled;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("filled.ply"), filled));
+  auto inserted = filled.property_map<double>("inserted");
+  ASSERT_TRUE(inserted.second);
+  const auto report = nlohmann::json::parse(contents(path("u.json")));
+  std::size_t count = 0;
+  for(auto i : filled)
+    if(inserted.first[i] == 1) {
+      ++count;
+      EXPECT_LT(std::hypot(filled.point(i).x() - 14.5, filled.point(i).y() - 14.5), 3.1);
+      EXPECT_LT(std::abs(filled.point(i).z()), 0.01);
+    }
+  EXPECT_EQ(count, report["upsampling"]["inserted"].get<std::size_t>());
+  EXPECT_GT(count, 10u);
+  EXPECT_EQ(filled.size(), report["points"].get<std::size_t>() + count);
+  EXPECT_EQ(contents(path("u.png")).substr(1, 3), "PNG");
+  const Program_run bad = run("upsample -i " + path("holed.xyz") + " -o " + path("x.ply") + " --spacing -1");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("spacing"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(path("x.ply")));
+
+  // An edit that pulls one end of a strip far away: the stretched part is filled at the pre-edit spacing.
+  {
+    std::ofstream out(path("strip.xyz"));
+    for(int i = 0; i < 40; ++i)
+      for(int j = 0; j < 8; ++j) out << i << " " << j << " 0 0 0 1\n";
+    std::ofstream(path("pull.json")) << R"({"roi": ["box:10,-1,-1,50,10,1"], "handles": [{"select": ["box:35,-1,-1,50,10,1"], "translation": [30, 0, 0]}]})";
+  }
+  r = run("edit -i " + path("strip.xyz") + " -o " + path("pulled.ply") + " --edit " + path("pull.json") + " --upsample --report " + path("e.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto edit_report = nlohmann::json::parse(contents(path("e.json")));
+  EXPECT_GT(edit_report["upsampling"]["inserted"].get<std::size_t>(), 50u);
+  EXPECT_NEAR(edit_report["upsampling"]["spacing"].get<double>(), 1.2, 0.25); // the grid's, before the edit
 }

@@ -35,14 +35,14 @@ namespace CGAL_ext {
 */
 struct Sparse_direction_settings
 {
-  double spacing = 0;        ///< target spacing h; 0 = the median distance of a point to its nearest neighbour
+  double spacing = 0;        ///< target spacing h; 0 = the median over points of their mean distance to 6 neighbours
   double max_hole_size = 6;  ///< in spacings, > 2: the widest gap that is a hole
 
   void validate() const
   {
     if(!(spacing >= 0) || !std::isfinite(spacing)) {
       std::ostringstream os;
-      os << "sparse directions: spacing must be > 0 (or 0 for the median nearest-neighbour spacing), got " << spacing;
+      os << "sparse directions: spacing must be > 0 (or 0 for the sampling's typical spacing), got " << spacing;
       throw Invalid_input(os.str());
     }
     if(!(max_hole_size > 2) || !std::isfinite(max_hole_size))
@@ -69,18 +69,21 @@ struct Hole_gap
   int from, across;
 };
 
-/// Median distance of a point to its nearest neighbour.
+/// The typical spacing of a sampling: the median over points of their mean distance to their 6 nearest
+/// neighbours (`CGAL::compute_average_spacing`'s measure, with a median against outliers). The nearest
+/// neighbour alone underestimates a jittered sampling, whose natural gaps would then look like holes.
 template <typename ConcurrencyTag>
-double median_spacing(const Matrix_n3& positions, const Position_tree& tree)
+double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
 {
-  std::vector<double> nearest(std::size_t(positions.rows()), 0.0);
-  for_range<ConcurrencyTag>(0, nearest.size(), [&](std::size_t i) {
-    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), 2, [&](int j, double d2) {
-      if(std::size_t(j) != i) nearest[i] = std::sqrt(d2);
+  const std::size_t k = std::min<std::size_t>(6, std::size_t(positions.rows()) - 1);
+  std::vector<double> mean(std::size_t(positions.rows()), 0.0);
+  for_range<ConcurrencyTag>(0, mean.size(), [&](std::size_t i) {
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), k + 1, [&](int j, double d2) {
+      if(std::size_t(j) != i) mean[i] += std::sqrt(d2) / double(k);
     });
   });
-  std::nth_element(nearest.begin(), nearest.begin() + std::ptrdiff_t(nearest.size() / 2), nearest.end());
-  return nearest[nearest.size() / 2];
+  std::nth_element(mean.begin(), mean.begin() + std::ptrdiff_t(mean.size() / 2), mean.end());
+  return mean[mean.size() / 2];
 }
 
 /// The hole gaps of every point (DESIGN.md 3.8): for each sparse quarter of its tangent plane, the first
@@ -185,9 +188,9 @@ Sparse_direction_summary detect_sparse_directions(const PointRange& points, unsi
   const internal::Matrix_n3 normals = internal::gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
   const internal::Position_tree tree(cloud.positions, ConcurrencyTag());
   Sparse_direction_summary summary;
-  summary.spacing = settings.spacing > 0 ? settings.spacing : internal::median_spacing<ConcurrencyTag>(cloud.positions, tree);
+  summary.spacing = settings.spacing > 0 ? settings.spacing : internal::typical_spacing<ConcurrencyTag>(cloud.positions, tree);
   if(!(summary.spacing > 0))
-    throw Invalid_input(std::string(who) + ": the points coincide (zero nearest-neighbour spacing); give a spacing");
+    throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
   const std::vector<internal::Hole_gap> gaps = internal::hole_gaps<ConcurrencyTag>(
     cloud.positions, normals, tree, k, summary.spacing, settings.max_hole_size * summary.spacing, summary.sparse_points);
 

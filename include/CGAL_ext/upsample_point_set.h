@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
@@ -48,10 +49,13 @@ struct Upsampling_settings
 */
 struct Upsampling_result
 {
+  bool completed = false;     ///< false when the callback cancelled (nothing was written)
   double spacing = 0;         ///< the target spacing used
   std::size_t inserted = 0;   ///< new points written to the output
   std::size_t rounds = 0;     ///< detection rounds that inserted points
   std::size_t hole_boundary_points = 0; ///< input points on hole boundaries (first round)
+
+  explicit operator bool() const { return completed; }
 };
 
 namespace internal {
@@ -127,13 +131,13 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
           unit normal (the input points are not repeated, so every output point is a new one).
 
   \param points the points, with normals (`normal_map`, required)
-  \param settings target spacing (0: the median nearest-neighbour spacing), largest hole, neighbours,
+  \param settings target spacing (0: the sampling's typical spacing, see `Sparse_direction_settings`), largest hole, neighbours,
          relaxation
   \param output receives the new points
   \param np `point_map`, `normal_map`, `callback` (false cancels; nothing is then written), `geom_traits`
 
-  \return the spacing used, the number of new points and rounds; `inserted` is 0 and nothing is written
-          when the callback cancelled.
+  \return the spacing used, the number of new points and rounds; converts to `false` (and nothing is
+          written) when the callback cancelled.
   \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, fewer
           points than neighbours, or invalid settings.
 */
@@ -162,8 +166,8 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
 
   Upsampling_result result;
   const double h = settings.detection.spacing > 0 ? settings.detection.spacing
-                                                  : median_spacing<ConcurrencyTag>(cloud.positions, input_tree);
-  if(!(h > 0)) throw Invalid_input(std::string(who) + ": the points coincide (zero nearest-neighbour spacing); give a spacing");
+                                                  : typical_spacing<ConcurrencyTag>(cloud.positions, input_tree);
+  if(!(h > 0)) throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
   result.spacing = h;
   Progress progress(callback);
 
@@ -251,6 +255,7 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
     *output++ = std::make_pair(typename Kernel::Point_3(new_points[m].x(), new_points[m].y(), new_points[m].z()),
                                typename Kernel::Vector_3(new_normals[m].x(), new_normals[m].y(), new_normals[m].z()));
   result.inserted = new_points.size();
+  result.completed = true;
   return result;
 }
 
