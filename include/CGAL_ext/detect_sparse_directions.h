@@ -103,13 +103,37 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
     across[i].fill(-1);
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
-    candidates.clear();
-    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), reach, [&](int j, double) {
-      if(std::size_t(j) == i) return;
-      Eigen::Vector3d d = positions.row(j).transpose() - p;
-      d -= d.dot(normal) * normal;
-      candidates.emplace_back(j, d);
-    });
+    auto gather = [&](std::size_t count) {
+      candidates.clear();
+      tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
+        if(std::size_t(j) == i) return;
+        Eigen::Vector3d d = positions.row(j).transpose() - p;
+        d -= d.dot(normal) * normal;
+        candidates.emplace_back(j, d);
+      });
+    };
+    // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter
+    // looks empty among them.
+    gather(std::min(reach, std::max<std::size_t>(k, 16) + 1));
+    const bool all_quarters_seen = [&] {
+      Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+      for(std::size_t m = 0; m < std::min(k, candidates.size()); ++m) c += candidates[m].second * candidates[m].second.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> e;
+      e.computeDirect(c);
+      Eigen::Vector3d a = e.eigenvectors().col(2);
+      a = (a - a.dot(normal) * normal).normalized();
+      if(!a.allFinite()) return false;
+      const Eigen::Vector3d b = normal.cross(a);
+      int seen = 0;
+      for(const Eigen::Vector3d& d : {a, Eigen::Vector3d(-a), b, Eigen::Vector3d(-b)})
+        for(const auto& candidate : candidates) {
+          const double length = candidate.second.norm();
+          if(length > 0 && length < empty_radius && candidate.second.dot(d) > std::sqrt(0.5) * length) { ++seen; break; }
+        }
+      return seen == 4;
+    }();
+    if(all_quarters_seen) return;
+    gather(reach);
     // Principal axes of the k nearest projected neighbours.
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     const std::size_t near = std::min(k, candidates.size());

@@ -214,22 +214,27 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
     // Relaxation (Jacobi steps, so the result does not depend on the thread count): repulsion in the tangent
     // plane from every sample closer than 1.5 spacings, then back onto the surface of the input samples.
     const double radius = 1.5 * h;
+    // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
+    Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
     for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
-      Matrix_n3 current(Eigen::Index(n + new_points.size() + round_points.size()), 3);
-      current.topRows(all.rows()) = all;
-      for(std::size_t m = 0; m < round_points.size(); ++m) current.row(all.rows() + Eigen::Index(m)) = round_points[m].transpose();
-      const Position_tree current_tree(current, ConcurrencyTag());
+      for(std::size_t m = 0; m < round_points.size(); ++m) moving.row(Eigen::Index(m)) = round_points[m].transpose();
+      const Position_tree moving_tree(moving, ConcurrencyTag());
       std::vector<Eigen::Vector3d> moved(round_points.size()), turned(round_points.size());
       for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
         Eigen::Vector3d x = round_points[m], normal = round_normals[m];
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
-          current_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, [&](int j, double d2) {
-            const double d = std::sqrt(d2);
-            if(d >= radius || !(d > 0)) return;
-            const double w = 1 - d / radius;
-            push += w * w * (x - current.row(j).transpose()) / d;
-          });
+          auto repel = [&](const Matrix_n3& from) {
+            return [&](int j, double d2) {
+              const double d = std::sqrt(d2);
+              if(d >= radius || !(d > 0)) return;
+              const double w = 1 - d / radius;
+              push += w * w * (x - from.row(j).transpose()) / d;
+            };
+          };
+          const Position_tree::Point query(x.x(), x.y(), x.z());
+          tree.nearest(query, 12, repel(all));
+          moving_tree.nearest(query, std::min<std::size_t>(12, round_points.size()), repel(moving));
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
