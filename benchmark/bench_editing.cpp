@@ -58,20 +58,6 @@ std::vector<std::size_t> all_indices(std::size_t n)
   return i;
 }
 
-double diagonal_of(const std::vector<Point>& points)
-{
-  Eigen::AlignedBox3d box;
-  for(const Point& p : points) box.extend(Eigen::Vector3d(p.x(), p.y(), p.z()));
-  return box.diagonal().norm();
-}
-
-internal::Matrix_n3 to_matrix(const std::vector<Point>& points)
-{
-  internal::Matrix_n3 m(Eigen::Index(points.size()), 3);
-  for(std::size_t i = 0; i < points.size(); ++i) m.row(Eigen::Index(i)) << points[i].x(), points[i].y(), points[i].z();
-  return m;
-}
-
 /// Symmetric Hausdorff distance between two point sets (nearest neighbours by CGAL's kd-tree).
 double hausdorff(const internal::Matrix_n3& a, const internal::Matrix_n3& b)
 {

@@ -4,6 +4,10 @@
 
 #include "point_io.h"
 
+#include <CGAL_ext/internal/Point_arrays.h>
+
+#include <Eigen/Geometry>
+
 #include <CGAL/IO/polygon_soup_io.h>
 
 #include <algorithm>
@@ -46,6 +50,22 @@ inline double peak_rss_mib()
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_maxrss) / 1024.0;
+}
+
+/// The length of the bounding box's diagonal.
+inline double diagonal_of(const std::vector<Point>& points)
+{
+  Eigen::AlignedBox3d box;
+  for(const Point& p : points) box.extend(Eigen::Vector3d(p.x(), p.y(), p.z()));
+  return box.diagonal().norm();
+}
+
+/// The points as an n x 3 array, for the library's internal numerics.
+inline CGAL_ext::internal::Matrix_n3 to_matrix(const std::vector<Point>& points)
+{
+  CGAL_ext::internal::Matrix_n3 m(Eigen::Index(points.size()), 3);
+  for(std::size_t i = 0; i < points.size(); ++i) m.row(Eigen::Index(i)) << points[i].x(), points[i].y(), points[i].z();
+  return m;
 }
 
 /// `n` points sampled uniformly on the surface of a triangle mesh, with the normals of their faces.

@@ -43,20 +43,6 @@ void say(const std::string& line)
   std::printf("%s", line.c_str());
 }
 
-double diagonal_of(const std::vector<Point>& points)
-{
-  Eigen::AlignedBox3d box;
-  for(const Point& p : points) box.extend(Eigen::Vector3d(p.x(), p.y(), p.z()));
-  return box.diagonal().norm();
-}
-
-internal::Matrix_n3 to_matrix(const std::vector<Point>& points)
-{
-  internal::Matrix_n3 m(Eigen::Index(points.size()), 3);
-  for(std::size_t i = 0; i < points.size(); ++i) m.row(Eigen::Index(i)) << points[i].x(), points[i].y(), points[i].z();
-  return m;
-}
-
 /// The largest distance from the reference samples to their nearest point of `samples`.
 double covering_radius(const std::vector<Point>& samples, const std::vector<Point>& reference)
 {
