@@ -86,21 +86,24 @@ double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
   return mean[mean.size() / 2];
 }
 
-/// The hole gaps of every point (DESIGN.md 3.8): for each sparse quarter of its tangent plane, the first
-/// sample that reappears along it within `max_gap`, if any. `sparse` counts the points with a sparse quarter.
-/// Gaps come out ordered by point, then quarter, so any thread count gives the same list.
+/// The hole gaps of the points `rows` (all when null; DESIGN.md 3.8): for each sparse quarter of a point's
+/// tangent plane, the first sample that reappears along it within `max_gap`, if any. `sparse` receives the
+/// examined points with a sparse quarter, increasing. Gaps come out ordered by point, then quarter, so any
+/// thread count gives the same list.
 template <typename ConcurrencyTag>
 std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
-                                std::size_t k, double spacing, double max_gap, std::size_t& sparse)
+                                std::size_t k, double spacing, double max_gap, const std::vector<int>* rows,
+                                std::vector<int>& sparse)
 {
-  const std::size_t n = std::size_t(positions.rows());
+  const std::size_t n = rows ? rows->size() : std::size_t(positions.rows());
   // Enough candidates to see across a gap of max_gap spacings: about the samples of that disc.
-  const std::size_t reach = std::min<std::size_t>(n, std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_gap * max_gap))));
+  const std::size_t reach = std::min<std::size_t>(std::size_t(positions.rows()), std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_gap * max_gap))));
   const double empty_radius = 2 * spacing, cos_cone = std::cos(30 * 3.14159265358979323846 / 180);
   std::vector<std::array<int, 4>> across(n);
   std::vector<char> is_sparse(n, 0);
-  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
-    across[i].fill(-1);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
+    across[r].fill(-1);
+    const std::size_t i = rows ? std::size_t((*rows)[r]) : r;
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
     auto gather = [&](std::size_t count) {
@@ -156,18 +159,21 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
         if(length < empty_radius && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
         if(length >= empty_radius && length < best && along > cos_cone) {
           best = length;
-          across[i][std::size_t(q)] = j;
+          across[r][std::size_t(q)] = j;
         }
       }
-      if(!empty) across[i][std::size_t(q)] = -1;
-      else is_sparse[i] = 1;
+      if(!empty) across[r][std::size_t(q)] = -1;
+      else is_sparse[r] = 1;
     }
   });
-  sparse = std::size_t(std::count(is_sparse.begin(), is_sparse.end(), 1));
+  sparse.clear();
   std::vector<Hole_gap> gaps;
-  for(std::size_t i = 0; i < n; ++i)
-    for(int j : across[i])
-      if(j >= 0) gaps.push_back({int(i), j});
+  for(std::size_t r = 0; r < n; ++r) {
+    const int i = rows ? (*rows)[r] : int(r);
+    if(is_sparse[r]) sparse.push_back(i);
+    for(int j : across[r])
+      if(j >= 0) gaps.push_back({i, j});
+  }
   return gaps;
 }
 
@@ -215,8 +221,10 @@ Sparse_direction_summary detect_sparse_directions(const PointRange& points, unsi
   summary.spacing = settings.spacing > 0 ? settings.spacing : internal::typical_spacing<ConcurrencyTag>(cloud.positions, tree);
   if(!(summary.spacing > 0))
     throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
+  std::vector<int> sparse;
   const std::vector<internal::Hole_gap> gaps = internal::hole_gaps<ConcurrencyTag>(
-    cloud.positions, normals, tree, k, summary.spacing, settings.max_hole_size * summary.spacing, summary.sparse_points);
+    cloud.positions, normals, tree, k, summary.spacing, settings.max_hole_size * summary.spacing, nullptr, sparse);
+  summary.sparse_points = sparse.size();
 
   // The nearest gap of each point gives its direction.
   std::vector<Eigen::Vector3d> direction(cloud.size(), Eigen::Vector3d::Zero());
