@@ -226,17 +226,17 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
         Eigen::Vector3d x = round_points[m], normal = round_normals[m];
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
-          auto repel = [&](const Matrix_n3& from) {
-            return [&](int j, double d2) {
+          auto repel = [&push, &x, radius](const Matrix_n3* from) {
+            return [&push, &x, radius, from](int j, double d2) {
               const double d = std::sqrt(d2);
               if(d >= radius || !(d > 0)) return;
               const double w = 1 - d / radius;
-              push += w * w * (x - from.row(j).transpose()) / d;
+              push += w * w * (x - from->row(j).transpose()) / d;
             };
           };
           const Position_tree::Point query(x.x(), x.y(), x.z());
-          tree.nearest(query, 12, repel(all));
-          moving_tree.nearest(query, std::min<std::size_t>(12, round_points.size()), repel(moving));
+          tree.nearest(query, 12, repel(&all));
+          moving_tree.nearest(query, std::min<std::size_t>(12, round_points.size()), repel(&moving));
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
