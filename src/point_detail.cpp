@@ -456,19 +456,21 @@ double typical_spacing(const Point_cloud& cloud)
   return CGAL_ext::internal::typical_spacing<CGAL::Parallel_if_available_tag>(spatial.positions, tree);
 }
 
-/// Fills the holes of `cloud` (which has normals) at `spacing` (0: its own median spacing): the new points are
-/// appended with the flag `inserted` = 1, 0 in the other scalars and grey; the report gets the figures.
-void upsample_cloud(Point_cloud& cloud, CGAL_ext::Upsampling_settings settings, double spacing, Progress_printer& progress,
-                    Report& rep)
+/// Fills the holes of `cloud` (which has normals) at `spacing` (0: its typical spacing), looking for gaps from the
+/// points `region` only (all when null): the new points are appended with the flag `inserted` = 1, 0 in the other
+/// scalars and grey; the report gets the figures.
+void upsample_cloud(Point_cloud& cloud, CGAL_ext::Upsampling_settings settings, double spacing,
+                    const std::vector<std::size_t>* region, Progress_printer& progress, Report& rep)
 {
   settings.detection.spacing = spacing;
   std::vector<std::pair<Point, Vector>> added;
   const std::size_t n = cloud.points.size();
+  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+                    .normal_map(CGAL::make_property_map(cloud.normals))
+                    .callback(progress.stage("upsample"));
   const CGAL_ext::Upsampling_result result = rep.time("upsample", [&] {
-    return CGAL_ext::upsample_point_set(index_range(n), settings, std::back_inserter(added),
-                                        CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
-                                          .normal_map(CGAL::make_property_map(cloud.normals))
-                                          .callback(progress.stage("upsample")));
+    return region ? CGAL_ext::upsample_point_set(index_range(n), *region, settings, std::back_inserter(added), np)
+                  : CGAL_ext::upsample_point_set(index_range(n), settings, std::back_inserter(added), np);
   });
   progress.finish();
   if(!result) throw Cancelled();
@@ -604,8 +606,14 @@ struct Edit_command
 
     Point_cloud out;
     run_edit(cloud, description, progress, rep, out);
-    // What the edit stretched is filled at the spacing the model had before it.
-    if(upsample) upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(cloud), progress, rep);
+    // What the edit stretched is filled at the spacing the model had before it, from the points it moved.
+    if(upsample) {
+      const std::vector<double>& moved = *out.scalar("displacement");
+      std::vector<std::size_t> region;
+      for(std::size_t i = 0; i < moved.size(); ++i)
+        if(moved[i] > 0) region.push_back(i);
+      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(cloud), &region, progress, rep);
+    }
     rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
     if(!png.empty())
       write_file(png_tmp, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
@@ -643,7 +651,7 @@ struct Upsample_command
     Point_cloud cloud = read_for_neighbors(input, settings.neighbors, rep);
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
-    upsample_cloud(cloud, settings, spacing, progress, rep);
+    upsample_cloud(cloud, settings, spacing, nullptr, progress, rep);
     rep.data()["points"] = n;
     rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
     if(!png.empty())
@@ -796,7 +804,10 @@ struct Demo_command
       Point_cloud out;
       run_edit(input, pull, progress, rep, out);
       write_file(outputs.add(dir / "edit_stretch.png"), render_png(out.points, out.normals, out.colors, render));
-      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(input), progress, rep);
+      std::vector<std::size_t> moved;
+      for(std::size_t i = 0; i < out.points.size(); ++i)
+        if((*out.scalar("displacement"))[i] > 0) moved.push_back(i);
+      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(input), &moved, progress, rep);
       write_file(outputs.add(dir / "edit_stretch_upsampled.ply"), ply_bytes(out));
       write_file(outputs.add(dir / "edit_stretch_upsampled.png"), render_png(out.points, out.normals, out.colors, render));
       std::printf("demo: tip pulled by 1.0, then %zu points inserted where the stretch thinned the tentacle -> "
@@ -910,7 +921,7 @@ int main(int argc, char** argv)
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
   edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
   edit_app->add_flag("--no-rotation-propagation", edit.no_propagation, "keep the details' world orientation (plain Laplacian editing)");
-  edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched at the model's pre-edit spacing (new points: inserted = 1)");
+  edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at the model's pre-edit spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
 
   Upsample_command upsample;

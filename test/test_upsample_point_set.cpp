@@ -75,6 +75,28 @@ TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
   }
 }
 
+TEST(UpsamplePointSet, ARegionLimitsWhereGapsAreFilled)
+{
+  // Gaps are looked for from the points of the left half only: the hole fills from its left rim.
+  Oriented_points plane = plane_with_hole(2.6);
+  std::vector<std::size_t> left;
+  for(std::size_t i = 0; i < plane.points.size(); ++i)
+    if(plane.points[i].x() < 20) left.push_back(i);
+  CGAL_ext::Upsampling_settings settings;
+  settings.detection.spacing = 1;
+  Inserted all, from_left;
+  CGAL_ext::upsample_point_set(plane.indices(), settings, std::back_inserter(all), plane.np());
+  CGAL_ext::upsample_point_set(plane.indices(), left, settings, std::back_inserter(from_left), plane.np());
+  EXPECT_GT(from_left.size(), 3u);
+  EXPECT_LT(from_left.size(), all.size());
+  std::size_t right_of_centre = 0;
+  for(const auto& p : from_left) right_of_centre += p.first.x() > 21;
+  EXPECT_LE(right_of_centre, from_left.size() / 4) << "the fill grows from the left rim";
+  const std::vector<std::size_t> out_of_range{plane.points.size()};
+  EXPECT_THROW(CGAL_ext::upsample_point_set(plane.indices(), out_of_range, settings, std::back_inserter(from_left), plane.np()),
+               CGAL_ext::Invalid_input);
+}
+
 TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
 {
   const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(4000, 1.0, 0.0);

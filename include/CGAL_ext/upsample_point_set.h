@@ -116,35 +116,11 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
 
 } // namespace internal
 
-/*!
-  \ingroup PkgCGALExtAlgorithms
-  Fills the holes of an oriented point set, such as the stretched parts of an edit (Miao et al. 2007,
-  Sect. 6.3, Fig. 9): hole boundaries are found by `detect_sparse_directions`; across each gap, new samples
-  are placed at the target spacing on the segment to the sample that reappears beyond it, with interpolated
-  normals, and kept only where no sample lies within half a spacing; then they are relaxed by repulsion
-  (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
-  projected back onto a degree-2 height function fitted to the nearest input samples. Detection, insertion
-  and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
-  within `max_hole_size` beyond them, never grow. Input points are not moved.
+namespace internal {
 
-  \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
-          unit normal (the input points are not repeated, so every output point is a new one).
-
-  \param points the points, with normals (`normal_map`, required)
-  \param settings target spacing (0: the sampling's typical spacing, see `Sparse_direction_settings`), largest hole, neighbours,
-         relaxation
-  \param output receives the new points
-  \param np `point_map`, `normal_map`, `callback` (false cancels; nothing is then written), `geom_traits`
-
-  \return the spacing used, the number of new points and rounds; converts to `false` (and nothing is
-          written) when the callback cancelled.
-  \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, fewer
-          points than neighbours, or invalid settings.
-*/
-template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename OutputIterator,
-          typename NamedParameters = CGAL::parameters::Default_named_parameters>
-Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_settings& settings, OutputIterator output,
-                                     const NamedParameters& np = CGAL::parameters::default_values())
+template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename OutputIterator, typename NamedParameters>
+Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexRange* region, const Upsampling_settings& settings,
+                                          OutputIterator output, const NamedParameters& np)
 {
   using CGAL::parameters::choose_parameter;
   using CGAL::parameters::get_parameter;
@@ -178,12 +154,13 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
   // New samples fill quarters; they empty one only by turning a point's principal axes, which is rare: after
   // the first round, only the points that were sparse and the new points are examined again.
   std::vector<int> examine, sparse;
+  if(region) examine = rows_of_indices(*region, cloud.spatial_index(), who, "region");
   for(std::size_t round = 0; round < settings.max_rounds; ++round) {
     progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
     if(!progress.report(0.0)) return {};
     const Position_tree tree(all, ConcurrencyTag());
     const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, h, settings.detection.max_hole_size * h,
-                                                                 round == 0 ? nullptr : &examine, sparse);
+                                                                 round == 0 && !region ? nullptr : &examine, sparse);
     if(round == 0) {
       std::vector<char> boundary(n, 0);
       for(const Hole_gap& g : gaps) boundary[std::size_t(g.from)] = 1;
@@ -267,6 +244,55 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
   result.completed = true;
   return result;
 }
+
+} // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  Fills the holes of an oriented point set, such as the stretched parts of an edit (Miao et al. 2007,
+  Sect. 6.3, Fig. 9): hole boundaries are found by `detect_sparse_directions`; across each gap, new samples
+  are placed at the target spacing on the segment to the sample that reappears beyond it, with interpolated
+  normals, and kept only where no sample lies within half a spacing; then they are relaxed by repulsion
+  (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
+  projected back onto a degree-2 height function fitted to the nearest input samples. Detection, insertion
+  and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
+  within `max_hole_size` beyond them, never grow. Input points are not moved.
+
+  \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
+          unit normal (the input points are not repeated, so every output point is a new one).
+
+  \param points the points, with normals (`normal_map`, required)
+  \param settings target spacing (0: the sampling's typical spacing, see `Sparse_direction_settings`), largest hole, neighbours,
+         relaxation
+  \param output receives the new points
+  \param np `point_map`, `normal_map`, `callback` (false cancels; nothing is then written), `geom_traits`
+
+  An overload takes `region`, the indices of the points whose gaps may be filled (say, the points an edit
+  moved): gaps are looked for from those points only, so a sampling's own gaps elsewhere stay as they are.
+
+  \return the spacing used, the number of new points and rounds; converts to `false` (and nothing is
+          written) when the callback cancelled.
+  \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, fewer
+          points than neighbours, or invalid settings.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename OutputIterator,
+          typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_settings& settings, OutputIterator output,
+                                     const NamedParameters& np = CGAL::parameters::default_values())
+{
+  return internal::upsample_point_set_impl<ConcurrencyTag>(points, static_cast<const std::vector<std::size_t>*>(nullptr),
+                                                           settings, output, np);
+}
+
+/// \cond SKIP_IN_MANUAL
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename IndexRange,
+          typename OutputIterator, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Upsampling_result upsample_point_set(const PointRange& points, const IndexRange& region, const Upsampling_settings& settings,
+                                     OutputIterator output, const NamedParameters& np = CGAL::parameters::default_values())
+{
+  return internal::upsample_point_set_impl<ConcurrencyTag>(points, &region, settings, output, np);
+}
+/// \endcond
 
 } // namespace CGAL_ext
 

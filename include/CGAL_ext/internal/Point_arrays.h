@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <iterator>
@@ -123,6 +124,24 @@ Matrix_n3 gather_normals(const PointRange& points, NormalMap normal_map,
   for(std::size_t s = 0; s < cloud.size(); ++s)
     sorted.row(Eigen::Index(s)) = in_order.row(cloud.input_index[s]);
   return sorted;
+}
+
+/// Rows of the cloud for the caller's point indices, increasing and without repeats.
+template <typename IndexRange>
+std::vector<int> rows_of_indices(const IndexRange& indices, const std::vector<int>& row_of, const char* who,
+                                 const char* what)
+{
+  std::vector<int> rows;
+  for(const auto& index : indices) {
+    const long long i = static_cast<long long>(index);
+    if(i < 0 || i >= static_cast<long long>(row_of.size()))
+      throw Invalid_input(std::string(who) + ": " + what + " index " + std::to_string(i) + " is not a point index (" +
+                          std::to_string(row_of.size()) + " points)");
+    rows.push_back(row_of[std::size_t(i)]);
+  }
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  return rows;
 }
 
 template <typename Range>

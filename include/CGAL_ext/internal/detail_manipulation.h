@@ -28,24 +28,6 @@
 namespace CGAL_ext {
 namespace internal {
 
-/// Rows of the cloud for the caller's point indices, increasing and without repeats.
-template <typename IndexRange>
-std::vector<int> rows_of_indices(const IndexRange& indices, const std::vector<int>& row_of, const char* who,
-                                 const char* what)
-{
-  std::vector<int> rows;
-  for(const auto& index : indices) {
-    const long long i = static_cast<long long>(index);
-    if(i < 0 || i >= static_cast<long long>(row_of.size()))
-      throw Invalid_input(std::string(who) + ": " + what + " index " + std::to_string(i) + " is not a point index (" +
-                          std::to_string(row_of.size()) + " points)");
-    rows.push_back(row_of[std::size_t(i)]);
-  }
-  std::sort(rows.begin(), rows.end());
-  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-  return rows;
-}
-
 /// The caller's points in spatial order, and a region of interest among them.
 struct Region
 {
