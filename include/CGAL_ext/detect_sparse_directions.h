@@ -106,13 +106,20 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
     const std::size_t i = rows ? std::size_t((*rows)[r]) : r;
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
+    thread_local std::vector<char> same_sheet; // whether a sample across a gap may continue this point's surface
     auto gather = [&](std::size_t count) {
       candidates.clear();
+      same_sheet.clear();
       tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
         if(std::size_t(j) == i) return;
         Eigen::Vector3d d = positions.row(j).transpose() - p;
-        d -= d.dot(normal) * normal;
+        const double height = d.dot(normal);
+        d -= height * normal;
         candidates.emplace_back(j, d);
+        // Within 30 degrees of the tangent plane, facing the same way: not a sample of another sheet (the body
+        // under an arm), whose bridge would cross empty space.
+        same_sheet.push_back(std::abs(height) <= std::tan(30 * 3.14159265358979323846 / 180) * d.norm() &&
+                             normals.row(j).dot(normal.transpose()) > 0.5);
       });
     };
     // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter
@@ -152,12 +159,13 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
       const Eigen::Vector3d& d = directions[std::size_t(q)];
       bool empty = true;
       double best = max_gap;
-      for(const auto& [j, offset] : candidates) {
+      for(std::size_t c = 0; c < candidates.size(); ++c) {
+        const auto& [j, offset] = candidates[c];
         const double length = offset.norm();
         if(!(length > 0)) continue;
         const double along = offset.dot(d) / length;
         if(length < empty_radius && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
-        if(length >= empty_radius && length < best && along > cos_cone) {
+        if(length >= empty_radius && length < best && along > cos_cone && same_sheet[c]) {
           best = length;
           across[r][std::size_t(q)] = j;
         }

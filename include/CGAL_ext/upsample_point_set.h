@@ -114,6 +114,20 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
   normal = n.dot(normal) < 0 ? Eigen::Vector3d(-n) : n;
 }
 
+/// Whether `x` continues the surface of its 3 nearest input samples: its offset from each leans at most 30
+/// degrees out of that sample's tangent plane. A projection that lands off the surface (a fit misled where the
+/// surface folds, or across a thin part) fails this, and the new point is dropped rather than written there.
+inline bool continues_surface(const Matrix_n3& samples, const Matrix_n3& normals, const Position_tree& tree, const Eigen::Vector3d& x)
+{
+  bool along = true;
+  tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 3, [&](int j, double) {
+    const Eigen::Vector3d offset = x - samples.row(j).transpose();
+    const double height = std::abs(offset.dot(normals.row(j).transpose()));
+    along = along && 3 * height * height <= offset.squaredNorm() - height * height;
+  });
+  return along;
+}
+
 } // namespace internal
 
 namespace internal {
@@ -225,6 +239,18 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
       round_points.swap(moved);
       round_normals.swap(turned);
     }
+    std::vector<char> keep(round_points.size());
+    for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
+      keep[m] = continues_surface(cloud.positions, input_normals, input_tree, round_points[m]);
+    });
+    std::size_t kept_count = 0;
+    for(std::size_t m = 0; m < round_points.size(); ++m)
+      if(keep[m]) {
+        round_points[kept_count] = round_points[m];
+        round_normals[kept_count++] = round_normals[m];
+      }
+    round_points.resize(kept_count);
+    round_normals.resize(kept_count);
     examine = sparse;
     for(std::size_t m = 0; m < round_points.size(); ++m) examine.push_back(int(n + new_points.size() + m));
     new_points.insert(new_points.end(), round_points.begin(), round_points.end());
@@ -254,7 +280,9 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   are placed at the target spacing on the segment to the sample that reappears beyond it, with interpolated
   normals, and kept only where no sample lies within half a spacing; then they are relaxed by repulsion
   (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
-  projected back onto a degree-2 height function fitted to the nearest input samples. Detection, insertion
+  projected back onto a degree-2 height function fitted to the nearest input samples; a new point whose offset
+  from one of its 3 nearest input samples leans more than 30 degrees out of that sample's tangent plane (a fit
+  misled where the surface folds) is dropped. Detection, insertion
   and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
   within `max_hole_size` beyond them, never grow. Input points are not moved.
 
