@@ -125,6 +125,14 @@ std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesy
 
 } // namespace
 
+CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where)
+{
+  if(name == "none") return CGAL_ext::Detail_rotation::none;
+  if(name == "propagate") return CGAL_ext::Detail_rotation::propagated;
+  if(name == "arap") return CGAL_ext::Detail_rotation::as_rigid_as_possible;
+  throw Cli_error(where + " must be \"none\", \"propagate\" or \"arap\", not \"" + name + "\"");
+}
+
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
 {
   std::ifstream in(path);
@@ -136,7 +144,7 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     throw Cli_error(path.string() + ": not valid JSON: " + e.what());
   }
   const std::string file = path.filename().string();
-  check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "propagate_rotations",
+  check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
                     "diffusion", "simplification"}, file);
   const std::filesystem::path base = path.parent_path();
   Edit_description out;
@@ -190,10 +198,11 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     else throw Cli_error(file + ": strength_distance must be \"euclidean\" or \"geodesic\"");
   }
   if(edit.contains("handle_weight")) settings.handle_weight = number(edit["handle_weight"], file + ": handle_weight");
-  if(edit.contains("propagate_rotations")) {
-    if(!edit["propagate_rotations"].is_boolean()) throw Cli_error(file + ": propagate_rotations must be true or false");
-    settings.propagate_rotations = edit["propagate_rotations"].get<bool>();
+  if(edit.contains("rotations")) {
+    if(!edit["rotations"].is_string()) throw Cli_error(file + ": rotations must be \"none\", \"propagate\" or \"arap\"");
+    settings.rotations = detail_rotation(edit["rotations"].get<std::string>(), file + ": rotations");
   }
+  if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("diffusion")) {
     const json& d = edit["diffusion"];
     check_keys(d, {"samples", "origin"}, file + ": diffusion");

@@ -563,7 +563,9 @@ struct Edit_command
   double lambda = 0, mu = 0, handle_weight = 0;
   unsigned int k = 0;
   std::size_t max_cluster_size = 0, target = 0;
-  bool no_propagation = false, upsample = false;
+  unsigned int rigid_iterations = 0;
+  std::string rotations;
+  bool upsample = false;
   std::map<std::string, CLI::Option*> given;
   Render_settings render;
 
@@ -600,7 +602,8 @@ struct Edit_command
     if(has("--handle-weight")) s.handle_weight = handle_weight;
     if(has("--max-cluster-size")) s.simplification.max_cluster_size = max_cluster_size;
     if(has("--target")) s.simplification.target_count = target;
-    if(no_propagation) s.propagate_rotations = false;
+    if(has("--rotations")) s.rotations = detail_rotation(rotations, "--rotations");
+    if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
     s.validate();
     ensure_normals(cloud, progress, rep);
 
@@ -920,7 +923,10 @@ int main(int argc, char** argv)
   edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of the handle constraints (default 1)");
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
   edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
-  edit_app->add_flag("--no-rotation-propagation", edit.no_propagation, "keep the details' world orientation (plain Laplacian editing)");
+  edit.given["--rotations"] = edit_app->add_option("--rotations", edit.rotations, "how the details turn: none, propagate (the paper's), arap (as rigid as possible)")
+    ->check(CLI::IsMember({"none", "propagate", "arap"}));
+  edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
+    ->check(CLI::Range(1u, 1000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at the model's pre-edit spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
 

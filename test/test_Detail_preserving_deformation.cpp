@@ -77,20 +77,25 @@ std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn_about(const Eigen::Vector3d& pi
   return {R, pivot - R * pivot + shift};
 }
 
-Settings with_order(Detail_order order)
+Settings with_order(Detail_order order, CGAL_ext::Detail_rotation rotations = CGAL_ext::Detail_rotation::propagated)
 {
   Settings s;
   s.filter.order = order;
+  s.rotations = rotations;
   return s;
 }
+
+constexpr CGAL_ext::Detail_rotation both_rotations[] = {CGAL_ext::Detail_rotation::propagated,
+                                                        CGAL_ext::Detail_rotation::as_rigid_as_possible};
 
 } // namespace
 
 TEST(DetailPreservingDeformation, UnmovedHandlesReturnEveryPointExactly)
 {
   const Tentacle t(2500);
+  for(auto rotations : both_rotations)
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
-    auto d = t.edit(with_order(order));
+    auto d = t.edit(with_order(order, rotations));
     ASSERT_TRUE(d->deform());
     d->diffuse();
     double moved = 0, turned = 0;
@@ -107,8 +112,9 @@ TEST(DetailPreservingDeformation, WholeModelMovesRigidlyWithItsHandles)
 {
   // No fixed point: d0 is infinite and the strength is 1 everywhere; two handle groups share one motion.
   Tentacle t(3000);
+  for(auto rotations : both_rotations)
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
-    Settings settings = with_order(order);
+    Settings settings = with_order(order, rotations);
     settings.simplification.max_cluster_size = 6; // clustered: the points are not their own sample points
     Deformation d(t.all(), settings, t.np());
     d.insert_roi_points(t.all());
@@ -118,7 +124,11 @@ TEST(DetailPreservingDeformation, WholeModelMovesRigidlyWithItsHandles)
     const std::size_t g0 = d.create_handle_group(), g1 = d.create_handle_group();
     d.insert_handle_points(g0, t.tip);
     d.insert_handle_points(g1, base);
-    const auto [R, shift] = turn_about(Eigen::Vector3d(0.3, -0.2, 0.5), Eigen::Vector3d(1, 2, 0.5), 0.9, Eigen::Vector3d(0.4, 0.1, -0.3));
+    // As rigid as possible, a drag that turns by more than 10 degrees is taken in steps, and the steps after
+    // the first converge to the rigid motion only as fast as the alternation does: one step is exact.
+    const double scale = rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible ? 0.1 : 1.0;
+    const auto [R, shift] = turn_about(Eigen::Vector3d(0.3, -0.2, 0.5), Eigen::Vector3d(1, 2, 0.5), 0.9 * scale,
+                                       scale * Eigen::Vector3d(0.4, 0.1, -0.3));
     d.set_handle_transform(g0, R, shift);
     d.set_handle_transform(g1, Eigen::Quaterniond(R), shift);
     ASSERT_TRUE(d.deform());
@@ -223,7 +233,7 @@ TEST(DetailPreservingDeformation, RotationPropagationKeepsTheDetailsOfABentTenta
     double change[2];
     for(bool propagate : {false, true}) {
       Settings settings = with_order(order);
-      settings.propagate_rotations = propagate;
+      settings.rotations = propagate ? CGAL_ext::Detail_rotation::propagated : CGAL_ext::Detail_rotation::none;
       auto d = t.edit(settings);
       d->set_handle_transform(0, R, shift);
       ASSERT_TRUE(d->deform());
@@ -231,6 +241,28 @@ TEST(DetailPreservingDeformation, RotationPropagationKeepsTheDetailsOfABentTenta
     }
     EXPECT_LT(change[1], 0.8 * change[0]) << CGAL_ext::Detail_filter::order_name(order) << ": with propagation " << change[1]
                                     << ", without " << change[0];
+  }
+}
+
+TEST(DetailPreservingDeformation, AsRigidAsPossibleKeepsTheDetailsOfATwistedTentacle)
+{
+  // The tip of the bent tentacle twisted by 180 degrees about the tube's axis there, the case where the
+  // strength field's rotations miss what the solve does (doc/editing.md). Rotations fitted to the solved
+  // shape keep the details closer to their turned originals: measured 0.075 / 0.123 against 0.299 / 0.309
+  // (the linear / quadric details measured; as rigid as possible solves for the graph's edges, whatever the
+  // order, in 18 steps of 3 iterations).
+  const Tentacle t(3000);
+  const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(1, 0, 0), pi);
+  for(Detail_order order : {Detail_order::linear, Detail_order::quadric}) {
+    double change[2];
+    for(int rigid : {0, 1}) {
+      auto d = t.edit(with_order(order, both_rotations[rigid]));
+      d->set_handle_transform(0, R, shift);
+      ASSERT_TRUE(d->deform());
+      change[rigid] = rotation_compensated_detail_change(*d);
+    }
+    EXPECT_LT(change[1], 0.5 * change[0]) << CGAL_ext::Detail_filter::order_name(order) << ": as rigid as possible " << change[1]
+                                    << ", propagated " << change[0];
   }
 }
 

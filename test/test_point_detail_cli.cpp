@@ -420,20 +420,26 @@ TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
   // The same edit through the library.
   CGAL_ext::Detail_preserving_deformation_settings settings(CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.8, 1.6});
   settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
-  CGAL_ext::Detail_preserving_deformation<> deformation(input, settings, input.parameters());
-  const std::size_t g = deformation.create_handle_group();
-  std::size_t roi = 0, handles = 0;
-  for(auto i : input) {
-    const Point& p = input.point(i);
-    if(p.z() >= 0) { deformation.insert_roi_point(i); ++roi; }
-    if(CGAL::squared_distance(p, Point(0, 0, 1)) <= 0.0625) { deformation.insert_handle_point(g, i); ++handles; }
-  }
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  deformation.set_handle_transform(g, R, Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2));
-  ASSERT_TRUE(deformation.deform());
-  deformation.diffuse(input, input.parameters());
-  EXPECT_LT(max_distance(std::vector<Point>(output.points().begin(), output.points().end()),
-                         std::vector<Point>(input.points().begin(), input.points().end())), 1e-12);
+  std::size_t roi = 0, handles = 0, ssps = 0, roi_ssps = 0;
+  auto library_edit = [&](const CGAL_ext::Detail_preserving_deformation_settings& s) {
+    CGAL::Point_set_3<Point> points = input;
+    CGAL_ext::Detail_preserving_deformation<> deformation(points, s, points.parameters());
+    const std::size_t g = deformation.create_handle_group();
+    roi = handles = 0;
+    for(auto i : points) {
+      const Point& p = points.point(i);
+      if(p.z() >= 0) { deformation.insert_roi_point(i); ++roi; }
+      if(CGAL::squared_distance(p, Point(0, 0, 1)) <= 0.0625) { deformation.insert_handle_point(g, i); ++handles; }
+    }
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    deformation.set_handle_transform(g, R, Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2));
+    EXPECT_TRUE(deformation.deform());
+    deformation.diffuse(points, points.parameters());
+    ssps = deformation.number_of_sample_points();
+    roi_ssps = deformation.number_of_roi_sample_points();
+    return std::vector<Point>(points.points().begin(), points.points().end());
+  };
+  EXPECT_LT(max_distance(std::vector<Point>(output.points().begin(), output.points().end()), library_edit(settings)), 1e-12);
   std::size_t marked_roi = 0, marked_handles = 0;
   for(auto i : output) {
     marked_roi += status.first[i] >= 1;
@@ -443,13 +449,33 @@ TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
   EXPECT_EQ(marked_handles, handles);
   const auto report = nlohmann::json::parse(contents(path("out.json")));
   EXPECT_EQ(report["points"], 3000);
-  EXPECT_EQ(report["ssps"], deformation.number_of_sample_points());
-  EXPECT_EQ(report["roi_ssps"], deformation.number_of_roi_sample_points());
+  EXPECT_EQ(report["ssps"], ssps);
+  EXPECT_EQ(report["roi_ssps"], roi_ssps);
   EXPECT_EQ(report["order"], "cubic");
   EXPECT_GT(report["table1"]["editing_ssps_s"].get<double>(), 0.0);
   EXPECT_GE(report["table1"]["diffusion_s"].get<double>(), 0.0);
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
-  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json"});
+
+  // As rigid as possible, chosen on the command line over the file, as the library does it.
+  const Program_run arap = run("edit -i " + in + " -o " + path("arap.ply") + " --edit " + path("edit.json") +
+                               " --rotations arap --rigid-iterations 2");
+  ASSERT_EQ(arap.exit_code, 0) << arap.output;
+  CGAL::Point_set_3<Point> rigid;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("arap.ply"), rigid));
+  settings.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
+  settings.rigid_iterations = 2;
+  const std::vector<Point> rigid_points(rigid.points().begin(), rigid.points().end());
+  EXPECT_LT(max_distance(rigid_points, library_edit(settings)), 1e-12);
+  EXPECT_GT(max_distance(rigid_points, std::vector<Point>(output.points().begin(), output.points().end())), 1e-3);
+  // A misspelt mode is named.
+  {
+    std::ofstream edit(path("bad.json"));
+    edit << R"({"handles": [{"select": ["sphere:0,0,1,0.25"], "translation": [0.1, 0, 0.2]}], "rotations": "rigid"})";
+  }
+  const Program_run bad = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad.json"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("rotations must be \"none\", \"propagate\" or \"arap\""), std::string::npos) << bad.output;
+  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "bad.json"});
 }
 
 TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)

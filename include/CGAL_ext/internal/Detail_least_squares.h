@@ -105,15 +105,16 @@ public:
   Detail_least_squares(const Detail_least_squares&) = delete;
   Detail_least_squares& operator=(const Detail_least_squares&) = delete;
 
-  /// Sets up the system for the operator rows `A` (square, |R| x |R|), the anchors (local indices,
-  /// increasing) and the positions of the region's points (they give the elimination order).
+  /// Sets up the system for the operator rows `A` (one column per unknown, |R|; the detail operator is square,
+  /// the edges of as-rigid-as-possible editing are not), the anchors (local indices, increasing) and the
+  /// positions of the region's points (they give the elimination order).
   /// Throws `Numerical_failure` when the normal matrix cannot be factored.
   template <typename ConcurrencyTag>
   void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
               const Least_squares_settings& settings)
   {
-    if(A.rows() != A.cols() || positions.rows() != A.rows())
-      throw Invalid_input("detail least squares: the operator must be square with one position per unknown");
+    if(positions.rows() != A.cols())
+      throw Invalid_input("detail least squares: the operator needs one position per unknown");
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     m_settings = settings;
@@ -121,14 +122,14 @@ public:
     m_At = m_A.transpose();
     m_anchors = std::move(anchors);
     m_statistics = Least_squares_statistics();
-    m_statistics.unknowns = std::size_t(m_A.rows());
+    m_statistics.unknowns = std::size_t(m_A.cols());
     m_statistics.anchors = m_anchors.size();
     m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
     m_main.reset();
     m_fallback.reset();
 
     const double alpha = settings.detail_weight;
-    const std::size_t n = std::size_t(m_A.rows());
+    const std::size_t n = std::size_t(m_A.cols());
     if(settings.solver == Linear_solver::conjugate_gradient) {
       // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
       m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));

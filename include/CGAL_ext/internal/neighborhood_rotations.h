@@ -1,0 +1,92 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_NEIGHBORHOOD_ROTATIONS_H
+#define CGAL_EXT_INTERNAL_NEIGHBORHOOD_ROTATIONS_H
+
+#include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/parallel.h>
+
+#include <Eigen/Core>
+#include <Eigen/SVD>
+#include <Eigen/SparseCore>
+
+#include <utility>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// The rotation `R` that minimises `sum_j |R e_j - e'_j|^2` given `covariance = sum_j e_j e'_j^T`: `V U^T` for
+/// `covariance = U S V^T`, with the singular vector of the smallest singular value flipped where that product
+/// would be a reflection (Sorkine and Alexa 2007). A flat neighbourhood (rank 2) still gives one rotation.
+inline Eigen::Matrix3d best_rotation(const Eigen::Matrix3d& covariance)
+{
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d v = svd.matrixV();
+  if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
+  return v * svd.matrixU().transpose();
+}
+
+/// The local step of as-rigid-as-possible editing: for each of the sample points `rows`, the best rotation of
+/// the edges to its graph neighbours from `rest` to `deformed` (uniform weights), written to `rotations[s]`.
+/// A sample point whose neighbourhood did not move gets the identity exactly, so unmoved parts stay exact.
+template <typename ConcurrencyTag>
+void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed, const Neighbor_graph& graph,
+                                const std::vector<int>& rows, std::vector<Eigen::Matrix3d>& rotations)
+{
+  for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
+    const std::size_t s = std::size_t(rows[r]);
+    const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
+    bool moved = p != q;
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+      moved = moved || rest.row(*j) != deformed.row(*j);
+      covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
+    }
+    rotations[s] = moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
+  });
+}
+
+/// The global step of as-rigid-as-possible editing as least squares: one row `u_i - u_j` per edge `i < j` of
+/// the (symmetric) graph with an end in the region, on the region's columns (`local[s]`, -1 outside; fixed
+/// sample points do not move). Its normal matrix is the graph Laplacian of the region, and the solution for
+/// the right-hand side of `rigid_edge_change` minimises the ARAP energy (Sorkine and Alexa 2007) for given
+/// rotations, so the alternation with `fit_neighborhood_rotations` never increases it.
+inline Sparse_row_matrix rigid_edge_rows(const Neighbor_graph& graph, const std::vector<int>& local, std::size_t region_size,
+                                         std::vector<std::pair<int, int>>& edges)
+{
+  edges.clear();
+  std::vector<Eigen::Triplet<double, int>> entries;
+  for(std::size_t i = 0; i < graph.size(); ++i)
+    for(const int* j = graph.begin(i); j != graph.end(i); ++j) {
+      if(*j <= int(i) || (local[i] < 0 && local[std::size_t(*j)] < 0)) continue;
+      const int row = int(edges.size());
+      edges.emplace_back(int(i), *j);
+      if(local[i] >= 0) entries.emplace_back(row, local[i], 1.0);
+      if(local[std::size_t(*j)] >= 0) entries.emplace_back(row, local[std::size_t(*j)], -1.0);
+    }
+  Sparse_row_matrix A(Eigen::Index(edges.size()), Eigen::Index(region_size));
+  A.setFromTriplets(entries.begin(), entries.end());
+  return A;
+}
+
+/// Right-hand side of the global step: for each edge, `((R_i + R_j) / 2 - I)(s_i - s_j)`, the change of the
+/// edge both ends' rotations ask for on average.
+template <typename ConcurrencyTag>
+Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const Matrix_n3& rest,
+                            const std::vector<Eigen::Matrix3d>& rotations)
+{
+  Matrix_n3 change(Eigen::Index(edges.size()), 3);
+  for_range<ConcurrencyTag>(0, edges.size(), [&](std::size_t e) {
+    const auto [i, j] = edges[e];
+    const Eigen::Matrix3d half_turn = 0.5 * (rotations[std::size_t(i)] + rotations[std::size_t(j)]) - Eigen::Matrix3d::Identity();
+    change.row(Eigen::Index(e)) = (half_turn * (rest.row(i) - rest.row(j)).transpose()).transpose();
+  });
+  return change;
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_NEIGHBORHOOD_ROTATIONS_H
