@@ -296,6 +296,85 @@ TEST(DetailPreservingDeformation, RotationsPropagateByTheStrengthField)
   }
 }
 
+namespace {
+
+/// A U-shaped tube: two legs of length `leg` along +z at x = +-spread, joined below z = 0 by a half-torus bend.
+/// Returns points and normals sampled about `spacing` apart.
+CGAL_ext::shapes::Oriented_sample<Kernel> u_tube(double spread, double radius, double leg, double spacing)
+{
+  CGAL_ext::shapes::Oriented_sample<Kernel> out;
+  const double bend = pi * spread, length = 2 * leg + bend;
+  const int rings = int(length / spacing), around = int(2 * pi * radius / spacing);
+  for(int i = 0; i < rings; ++i) {
+    const double u = (i + 0.5) * length / rings;
+    Eigen::Vector3d centre, axis;
+    if(u < leg) { centre = {-spread, 0, leg - u}; axis = {0, 0, -1}; }
+    else if(u < leg + bend) {
+      const double phi = pi - (u - leg) / spread; // from the -x leg under the bend to the +x leg
+      centre = {spread * std::cos(phi), 0, -spread * std::sin(phi)};
+      axis = {std::sin(phi), 0, std::cos(phi)};
+    } else { centre = {spread, 0, u - leg - bend}; axis = {0, 0, 1}; }
+    const Eigen::Vector3d e1 = Eigen::Vector3d::UnitY().cross(axis).normalized(), e2 = Eigen::Vector3d::UnitY();
+    for(int j = 0; j < around; ++j) {
+      const double a = 2 * pi * (j + 0.5 * (i % 2)) / around;
+      const Eigen::Vector3d n = std::cos(a) * e1 + std::sin(a) * e2, p = centre + radius * n;
+      out.points.emplace_back(p.x(), p.y(), p.z());
+      out.normals.emplace_back(n.x(), n.y(), n.z());
+    }
+  }
+  return out;
+}
+
+} // namespace
+
+TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
+{
+  // The upper parts of both legs of a U tube (above z = 0.7) are the region, the bend and the lower legs are
+  // fixed, the handle is the top of the +x leg, turned by 60 degrees and moved. The other leg is 0.3 away in
+  // space (far beyond the SSP graph's reach) but 2.7 away along the surface: Euclidean distances turn its
+  // details with the handle and move it by 66 % of the handle's displacement; geodesic ones by 5 %.
+  const auto tube = u_tube(0.25, 0.1, 1.0, 0.02);
+  const std::size_t n = tube.points.size();
+  std::vector<std::size_t> all(n);
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(tube.points)).normal_map(CGAL::make_property_map(tube.normals));
+  Eigen::Vector3d handle_centre = Eigen::Vector3d::Zero();
+  std::vector<std::size_t> handle;
+  for(std::size_t i = 0; i < n; ++i)
+    if(tube.points[i].x() > 0 && tube.points[i].z() > 0.9) {
+      handle.push_back(i);
+      handle_centre += Eigen::Vector3d(tube.points[i].x(), tube.points[i].y(), tube.points[i].z());
+    }
+  handle_centre /= double(handle.size());
+  const auto [R, shift] = turn_about(handle_centre, Eigen::Vector3d(0, 1, 0), 60 * pi / 180, Eigen::Vector3d(0.2, 0, 0.1));
+  double other_leg[2], handle_moved = 0;
+  for(auto distance : {CGAL_ext::Strength_distance::euclidean, CGAL_ext::Strength_distance::geodesic}) {
+    Settings settings;
+    settings.strength_distance = distance;
+    Deformation d(all, settings, np);
+    for(std::size_t i = 0; i < n; ++i)
+      if(tube.points[i].z() >= 0.7) d.insert_roi_point(i);
+    d.insert_handle_points(d.create_handle_group(), handle);
+    d.set_handle_transform(0, R, shift);
+    ASSERT_TRUE(d.deform());
+    d.diffuse();
+    double moved = 0;
+    handle_moved = 0;
+    for(std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d p(tube.points[i].x(), tube.points[i].y(), tube.points[i].z());
+      const double displacement = (d.deformed_point(i) - p).norm();
+      if(p.x() < 0) moved = std::max(moved, displacement);
+    }
+    for(std::size_t i : handle) {
+      const Eigen::Vector3d p(tube.points[i].x(), tube.points[i].y(), tube.points[i].z());
+      handle_moved += (R * p + shift - p).norm() / double(handle.size());
+    }
+    other_leg[distance == CGAL_ext::Strength_distance::geodesic] = moved / handle_moved;
+  }
+  EXPECT_LE(other_leg[1], 0.10) << "geodesic";
+  EXPECT_GT(other_leg[0], 2 * other_leg[1]) << "euclidean " << other_leg[0] << ", geodesic " << other_leg[1];
+}
+
 TEST(DetailPreservingDeformation, InteractiveStepsEqualAFreshSolve)
 {
   const Tentacle t(2500);
