@@ -1,5 +1,6 @@
 // Interactive editing: preprocess once, then move a handle along a path; each step is one back-substitution
-// and one diffusion, as a drag in an editor would be. Usage: interactive_deformation_example [points.ply|.off|.xyz|.pwn]
+// and one diffusion, as a drag in an editor would be (with --arap: three as-rigid-as-possible iterations).
+// Usage: interactive_deformation_example [--arap] [points.ply|.off|.xyz|.pwn]
 //        (default: the generated tentacle; region: above 30 % of the height; handle: the top 5 %)
 #include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/generated_shapes.h>
@@ -10,15 +11,22 @@
 #include <CGAL/bounding_box.h>
 
 #include <iostream>
+#include <string>
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point_set = CGAL::Point_set_3<Kernel::Point_3, Kernel::Vector_3>;
 
 int main(int argc, char** argv)
 {
+  CGAL_ext::Detail_preserving_deformation_settings settings(CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.8, 1.6});
+  std::string file;
+  for(int a = 1; a < argc; ++a) {
+    if(std::string(argv[a]) == "--arap") settings.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
+    else file = argv[a];
+  }
   Point_set points;
-  if(argc > 1) {
-    if(!CGAL::IO::read_point_set(argv[1], points)) { std::cerr << "cannot read " << argv[1] << "\n"; return 1; }
+  if(!file.empty()) {
+    if(!CGAL::IO::read_point_set(file, points)) { std::cerr << "cannot read " << file << "\n"; return 1; }
   } else {
     const auto tube = CGAL_ext::shapes::bumpy_tube<Kernel>(50000);
     points.add_normal_map();
@@ -27,8 +35,7 @@ int main(int argc, char** argv)
   const auto box = CGAL::bounding_box(points.points().begin(), points.points().end());
   const double height = box.zmax() - box.zmin();
   try {
-    CGAL_ext::Detail_preserving_deformation<> deformation(points, CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.8, 1.6},
-                                                          points.parameters());
+    CGAL_ext::Detail_preserving_deformation<> deformation(points, settings, points.parameters());
     const std::size_t handle = deformation.create_handle_group();
     for(Point_set::Index i : points) {
       const double z = points.point(i).z();
