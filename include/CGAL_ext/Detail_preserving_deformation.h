@@ -101,7 +101,8 @@ struct Detail_preserving_deformation_settings
   Strength_distance strength_distance = Strength_distance::euclidean;
   /// How the details turn.
   Detail_rotation rotations = Detail_rotation::propagated;
-  /// With `as_rigid_as_possible`: rotation fits and solves per `deform()`. Each drag starts from the last
+  /// With `as_rigid_as_possible`: rotation fits and solves per step of `deform()` (a change of the handles
+  /// larger than 10 degrees or 5 % of the region's size is taken in steps). Each drag starts from the last
   /// drag's rotations (the first from the propagated ones), so a drag in small steps converges as it goes.
   unsigned int rigid_iterations = 3;
   /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1.
