@@ -11,11 +11,13 @@
 #include <CGAL/IO/polygon_soup_io.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -94,6 +96,46 @@ inline Point_cloud sample_mesh(const std::filesystem::path& off, std::size_t n)
     cloud.normals.push_back(normal / std::sqrt(normal.squared_length()));
   }
   return cloud;
+}
+
+/// The mesh split `levels` times into four triangles at its edges' midpoints: the same surface with about four
+/// times the vertices per level, for references and comparisons at the scale of dense samplings. Each midpoint
+/// takes the mean of its ends' normals.
+template <typename Mesh>
+std::pair<Mesh, Point_cloud> split_at_midpoints(const Mesh& mesh, const Point_cloud& vertices, int levels)
+{
+  Point_cloud points = vertices;
+  std::vector<std::array<std::size_t, 3>> triangles;
+  for(typename Mesh::Face_index f : mesh.faces()) {
+    std::array<std::size_t, 3> t;
+    int m = 0;
+    for(typename Mesh::Vertex_index v : vertices_around_face(mesh.halfedge(f), mesh)) t[std::size_t(m++)] = v.idx();
+    triangles.push_back(t);
+  }
+  for(int level = 0; level < levels; ++level) {
+    std::map<std::pair<std::size_t, std::size_t>, std::size_t> midpoint;
+    auto middle = [&](std::size_t a, std::size_t b) {
+      const auto [it, added] = midpoint.emplace(std::minmax(a, b), points.points.size());
+      if(added) {
+        points.points.push_back(CGAL::midpoint(points.points[a], points.points[b]));
+        const Vector normal = points.normals[a] + points.normals[b];
+        points.normals.push_back(normal / std::sqrt(normal.squared_length()));
+      }
+      return it->second;
+    };
+    std::vector<std::array<std::size_t, 3>> finer;
+    for(const auto& [a, b, c] : triangles) {
+      const std::size_t ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
+      finer.insert(finer.end(), {{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}});
+    }
+    triangles.swap(finer);
+  }
+  Mesh refined;
+  for(const Point& p : points.points) refined.add_vertex(p);
+  for(const auto& [a, b, c] : triangles)
+    refined.add_face(typename Mesh::Vertex_index(typename Mesh::size_type(a)), typename Mesh::Vertex_index(typename Mesh::size_type(b)),
+                     typename Mesh::Vertex_index(typename Mesh::size_type(c)));
+  return {refined, points};
 }
 
 /// The command line every benchmark program takes: [--quick] [--data DIR] [--out DIR] [--reps N].

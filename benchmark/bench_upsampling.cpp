@@ -20,9 +20,7 @@
 
 #include <tbb/info.h>
 
-#include <array>
 #include <cstdio>
-#include <map>
 #include <fstream>
 #include <iterator>
 #include <numeric>
@@ -80,44 +78,6 @@ Point_cloud pull_arm(const Point_cloud& cloud, double diagonal)
   out.normals.resize(cloud.points.size());
   edit.diffuse(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points)).normal_map(CGAL::make_property_map(out.normals)));
   return out;
-}
-
-/// The mesh split `levels` times into four triangles at its edges' midpoints: the same surface, with vertices
-/// dense enough that the edit moves the flat triangles as it moves a dense sampling. Each midpoint takes the
-/// mean of its ends' normals.
-std::pair<Mesh, Point_cloud> split_at_midpoints(const Mesh& mesh, const Point_cloud& vertices, int levels)
-{
-  Point_cloud points = vertices;
-  std::vector<std::array<std::size_t, 3>> triangles;
-  for(Mesh::Face_index f : mesh.faces()) {
-    std::array<std::size_t, 3> t;
-    int m = 0;
-    for(Mesh::Vertex_index v : vertices_around_face(mesh.halfedge(f), mesh)) t[std::size_t(m++)] = v.idx();
-    triangles.push_back(t);
-  }
-  for(int level = 0; level < levels; ++level) {
-    std::map<std::pair<std::size_t, std::size_t>, std::size_t> midpoint;
-    auto middle = [&](std::size_t a, std::size_t b) {
-      const auto [it, added] = midpoint.emplace(std::minmax(a, b), points.points.size());
-      if(added) {
-        points.points.push_back(CGAL::midpoint(points.points[a], points.points[b]));
-        const Vector normal = points.normals[a] + points.normals[b];
-        points.normals.push_back(normal / std::sqrt(normal.squared_length()));
-      }
-      return it->second;
-    };
-    std::vector<std::array<std::size_t, 3>> finer;
-    for(const auto& [a, b, c] : triangles) {
-      const std::size_t ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
-      finer.insert(finer.end(), {{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}});
-    }
-    triangles.swap(finer);
-  }
-  Mesh refined;
-  for(const Point& p : points.points) refined.add_vertex(p);
-  for(const auto& [a, b, c] : triangles)
-    refined.add_face(Mesh::Vertex_index(Mesh::size_type(a)), Mesh::Vertex_index(Mesh::size_type(b)), Mesh::Vertex_index(Mesh::size_type(c)));
-  return {refined, points};
 }
 
 /// `input` is the mesh's vertices, or another sampling of its surface that the edit moves together with them
