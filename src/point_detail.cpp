@@ -95,6 +95,20 @@ fs::path add_if_given(Output_files& outputs, const std::string& destination)
   return destination.empty() ? fs::path() : outputs.add(destination);
 }
 
+/// The outputs of a subcommand that writes points, with an optional picture and report: each checked (never an
+/// input; its directory exists) and written to a temporary until `files.commit()`, so outputs are whole or absent.
+struct Point_outputs
+{
+  Output_files files;
+  fs::path ply, png, report; // the temporaries (empty when not asked for)
+
+  Point_outputs(std::vector<fs::path> inputs, const std::string& output, const std::string& png_destination,
+                const std::string& report_destination)
+    : files(std::move(inputs)), ply(files.add(output)), png(add_if_given(files, png_destination)),
+      report(add_if_given(files, report_destination))
+  {}
+};
+
 /// Reads `input` (timed in the report) and checks that it has more than `k` points.
 Point_cloud read_for_neighbors(const std::string& input, unsigned int k, Report& rep)
 {
@@ -193,10 +207,7 @@ struct Details_command
 
   void run(const Common_options& common)
   {
-    Output_files outputs({input});
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written({input}, output, png, report);
     render.view = parse_view(view);
     detail.settings().validate(); // before the (possibly long) read
 
@@ -206,10 +217,10 @@ struct Details_command
     Point_cloud cloud = read_for_neighbors(input, detail.k, rep);
     ensure_normals(cloud, progress, rep);
     add_details(cloud, detail, progress, rep);
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
-    if(!png.empty()) write_file(png_tmp, render_on_base_surface(cloud, detail.k, render, rep));
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
+    if(!png.empty()) write_file(written.png, render_on_base_surface(cloud, detail.k, render, rep));
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
   }
 };
 
@@ -264,10 +275,7 @@ struct Manipulate_command
   void run(const Common_options& common)
   {
     const char* name = enhance ? "enhance" : "scale";
-    Output_files outputs({input});
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written({input}, output, png, report);
     render.view = parse_view(view);
     std::vector<Region_spec> roi_specs, anchor_specs;
     for(const std::string& t : roi) roi_specs.push_back(parse_region_spec(t));
@@ -299,9 +307,9 @@ struct Manipulate_command
     });
     progress.finish();
     if(!result) throw Cancelled();
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
-      write_file(png_tmp, rep.time("render", [&] {
+      write_file(written.png, rep.time("render", [&] {
         return render_png(out.points, out.normals, diverging_colors(*out.scalar("displacement")), render);
       }));
     auto& r = rep.data();
@@ -316,8 +324,8 @@ struct Manipulate_command
     r["solver"] = {{"method", ls.method}, {"operator_nonzeros", ls.operator_nonzeros}, {"normal_nonzeros", ls.normal_nonzeros},
                    {"assembly_s", ls.assembly_seconds}, {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds},
                    {"iterations", ls.iterations}, {"relative_residual", ls.relative_residual}};
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
   }
 };
 
@@ -330,10 +338,7 @@ struct Curvature_command
 
   void run(const Common_options& common)
   {
-    Output_files outputs({input});
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written({input}, output, png, report);
     render.view = parse_view(view);
     Progress_printer progress(common.quiet);
     Report rep("curvature");
@@ -361,11 +366,11 @@ struct Curvature_command
     r["curvature_percentiles"] = {{"p02", sorted[n / 50]}, {"p50", sorted[n / 2]}, {"p98", sorted[n - 1 - n / 50]}};
     cloud.colors = diverging_colors(H);
     cloud.set_scalar("mean_curvature", std::move(H));
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
     if(!png.empty())
-      write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
   }
 };
 
@@ -380,11 +385,8 @@ struct Simplify_command
 
   void run(const Common_options& common)
   {
-    Output_files outputs({input});
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path clusters_tmp = add_if_given(outputs, clusters);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written({input}, output, png, report);
+    const fs::path clusters_tmp = add_if_given(written.files, clusters);
     render.view = parse_view(view);
     if(max_cluster_size_option->count() > 0) settings.max_cluster_size = max_cluster_size;
     settings.validate();
@@ -417,7 +419,7 @@ struct Simplify_command
     }
     surfels.set_scalar("radius", std::move(radius));
     surfels.set_scalar("member_count", std::move(member_count));
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(surfels)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(surfels)); });
     cloud.colors = label_colors(sample_of);
     if(!clusters.empty()) {
       std::vector<double> ssp_index(sample_of.begin(), sample_of.end());
@@ -425,7 +427,7 @@ struct Simplify_command
       write_file(clusters_tmp, ply_bytes(cloud));
     }
     if(!png.empty())
-      write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
 
     auto& r = rep.data();
     r["points"] = n;
@@ -439,8 +441,8 @@ struct Simplify_command
       r["mean_shift"] = {{"spatial_bandwidth", ms.spatial_bandwidth}, {"range_bandwidth", ms.range_bandwidth},
                          {"curvature_scale", ms.curvature_scale}, {"mean_iterations", ms.mean_iterations},
                          {"max_iterations", ms.max_iterations}, {"points_at_cap", ms.points_at_cap}};
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
     if(!common.quiet)
       std::fprintf(stderr, "simplify: %zu points -> %zu SSPs (%.1f points each, at most %zu)\n", n, ssps.size(),
                    double(n) / double(ssps.size()), ssps.max_cluster_size);
@@ -576,10 +578,7 @@ struct Edit_command
     std::vector<fs::path> inputs{input};
     for(const std::string& f : {edit, sel, def})
       if(!f.empty()) inputs.push_back(f);
-    Output_files outputs(inputs);
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written(inputs, output, png, report);
     render.view = parse_view(view);
 
     Progress_printer progress(common.quiet);
@@ -617,11 +616,11 @@ struct Edit_command
         if(moved[i] > 0) region.push_back(i);
       upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(cloud), &region, progress, rep);
     }
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(out)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
-      write_file(png_tmp, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+      write_file(written.png, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
     if(!common.quiet) {
       const auto& r = rep.data();
       std::fprintf(stderr, "edit: %zu points, %zu SSPs (%zu in the region): editing the SSPs %.3f s, diffusion %.3f s\n",
@@ -641,10 +640,7 @@ struct Upsample_command
 
   void run(const Common_options& common)
   {
-    Output_files outputs({input});
-    const fs::path ply_tmp = outputs.add(output);
-    const fs::path png_tmp = add_if_given(outputs, png);
-    const fs::path report_tmp = add_if_given(outputs, report);
+    Point_outputs written({input}, output, png, report);
     render.view = parse_view(view);
     settings.detection.spacing = spacing;
     settings.validate();
@@ -656,13 +652,13 @@ struct Upsample_command
     const std::size_t n = cloud.points.size();
     upsample_cloud(cloud, settings, spacing, nullptr, progress, rep);
     rep.data()["points"] = n;
-    rep.time("write", [&] { write_file(ply_tmp, ply_bytes(cloud)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
     if(!png.empty())
-      write_file(png_tmp, rep.time("render", [&] {
+      write_file(written.png, rep.time("render", [&] {
         return render_png(cloud.points, cloud.normals, sequential_colors(*cloud.scalar("inserted")), render);
       }));
-    if(!report.empty()) write_file(report_tmp, rep.dump());
-    outputs.commit();
+    if(!report.empty()) write_file(written.report, rep.dump());
+    written.files.commit();
     if(!common.quiet)
       std::fprintf(stderr, "upsample: %zu points + %zu new at spacing %g\n", n, cloud.points.size() - n,
                    rep.data()["upsampling"]["spacing"].get<double>());
