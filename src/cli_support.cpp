@@ -6,6 +6,8 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <system_error>
@@ -91,12 +93,18 @@ fs::path Output_files::add(const fs::path& destination)
     if(fs::weakly_canonical(f.second, ec) == fs::weakly_canonical(destination, ec))
       throw Cli_error("output " + destination.string() + " is named twice");
   const fs::path dir = destination.has_parent_path() ? destination.parent_path() : fs::path(".");
-  if(!fs::is_directory(dir, ec))
+  if(!fs::exists(dir, ec))
     throw Cli_error("cannot write " + destination.string() + ": directory " + dir.string() + " does not exist");
+  if(!fs::is_directory(dir, ec))
+    throw Cli_error("cannot write " + destination.string() + ": " + dir.string() + " is not a directory");
   if(fs::is_directory(destination, ec))
     throw Cli_error("cannot write " + destination.string() + ": it is a directory");
   std::random_device rd;
   const fs::path temporary = dir / ("." + destination.filename().string() + "." + std::to_string(rd()) + ".tmp");
+  // Created now, so an unwritable directory fails before the work, not after it.
+  if(!std::ofstream(temporary, std::ios::binary))
+    throw Cli_error("cannot write " + destination.string() + ": directory " + dir.string() + " is not writable (" +
+                    std::strerror(errno) + ")");
   m_files.emplace_back(temporary, destination);
   return temporary;
 }

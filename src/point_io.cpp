@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -80,6 +81,126 @@ bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, 
   return true;
 }
 
+/// Available memory in bytes (MemAvailable of /proc/meminfo), or 0 when it cannot be read.
+std::uint64_t available_memory()
+{
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::uint64_t kib = 0;
+  std::string unit;
+  while(meminfo >> key >> kib >> unit)
+    if(key == "MemAvailable:") return kib * 1024;
+  return 0;
+}
+
+std::string gibibytes(double bytes)
+{
+  std::ostringstream os;
+  os.precision(bytes < 1024.0 * 1024 * 1024 * 10 ? 2 : 0);
+  os << std::fixed << bytes / (1024.0 * 1024 * 1024) << " GiB";
+  return os.str();
+}
+
+/// What a PLY or OFF header announces, read without trusting it.
+struct Announced
+{
+  std::uint64_t vertices = 0;
+  std::uint64_t smallest_bytes = 0; ///< the fewest bytes of data after the header that can hold them
+  bool known = false;
+};
+
+std::uint64_t ply_scalar_size(const std::string& type)
+{
+  if(type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if(type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if(type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32") return 4;
+  if(type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+/// The vertex count of a PLY header and the bytes its vertices need at least (the size of a binary vertex
+/// record, or two characters per ASCII value: a digit and a separator).
+Announced ply_announced(std::istream& in, std::uint64_t& header_bytes)
+{
+  Announced a;
+  std::string line, format;
+  bool in_vertex = false, has_list = false;
+  std::uint64_t values = 0, record = 0;
+  while(std::getline(in, line)) {
+    if(!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if(word == "format") words >> format;
+    else if(word == "element") {
+      std::string name;
+      words >> name;
+      in_vertex = name == "vertex";
+      if(in_vertex && !(words >> a.vertices)) return Announced();
+    } else if(word == "property" && in_vertex) {
+      std::string type;
+      words >> type;
+      if(type == "list") has_list = true;
+      ++values;
+      record += ply_scalar_size(type);
+    } else if(word == "end_header") {
+      header_bytes = std::uint64_t(in.tellg());
+      a.known = !has_list && values > 0;
+      a.smallest_bytes = a.vertices * (format == "ascii" ? 2 * values : record);
+      return a;
+    }
+  }
+  return Announced();
+}
+
+/// The vertex count of an OFF header ([C][N]OFF, comments, then "vertices faces edges").
+Announced off_announced(std::istream& in, std::uint64_t& header_bytes)
+{
+  Announced a;
+  std::string word;
+  in >> word;
+  if(word.find("OFF") == std::string::npos) return a;
+  std::string token;
+  while(in >> token) {
+    if(token[0] == '#') { std::getline(in, token); continue; }
+    try {
+      std::size_t used = 0;
+      const long long count = std::stoll(token, &used);
+      if(used != token.size() || count < 0) return Announced();
+      a.vertices = std::uint64_t(count);
+    } catch(const std::exception&) { return Announced(); }
+    break;
+  }
+  header_bytes = std::uint64_t(in.tellg());
+  a.known = word.find("4") == std::string::npos && word.find("n") == std::string::npos; // not a higher-dimension OFF
+  a.smallest_bytes = a.vertices * 6; // "x y z\n", one digit each
+  return a;
+}
+
+/// Fails early, before CGAL's reader allocates, for a header that announces more points than the file holds
+/// or than this machine's memory can process (about 1 KiB per point for the program's largest run, an edit).
+std::uint64_t check_announced_points(const fs::path& path, const std::string& ext)
+{
+  std::ifstream in(path, std::ios::binary);
+  std::uint64_t header_bytes = 0;
+  const Announced a = ext == "ply" ? ply_announced(in, header_bytes) : ext == "off" ? off_announced(in, header_bytes)
+                                                                                    : Announced();
+  if(!a.known) return 0;
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(path, ec);
+  const std::uint64_t bytes_per_point = 1024;
+  const std::uint64_t available = available_memory();
+  if(available > 0 && a.vertices > available / bytes_per_point)
+    throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(a.vertices) +
+                    " points, which need about " + gibibytes(double(a.vertices) * bytes_per_point) +
+                    " of memory; this machine has " + gibibytes(double(available)) + " available");
+  if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
+    throw Cli_error("cannot read " + path.string() + ": truncated " + ext + " file (the header announces " +
+                    std::to_string(a.vertices) + " points, which need at least " + std::to_string(a.smallest_bytes) +
+                    " bytes; the file holds " + std::to_string(size - header_bytes) + " after its header)");
+  return a.vertices;
+}
+
 } // namespace
 
 Point_cloud read_point_cloud(const fs::path& path)
@@ -92,6 +213,7 @@ Point_cloud read_point_cloud(const fs::path& path)
   if(ext != "ply" && ext != "off" && ext != "xyz" && ext != "pwn")
     throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
 
+  const std::uint64_t announced = check_announced_points(path, ext);
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   std::string header;
@@ -115,6 +237,9 @@ Point_cloud read_point_cloud(const fs::path& path)
   }
   if(!ok) throw Cli_error("cannot read " + path.string() + ": malformed or truncated " + ext + " file");
   if(ps.number_of_points() == 0) throw Cli_error(path.string() + " contains no points");
+  if(announced > 0 && ps.number_of_points() != announced)
+    throw Cli_error("cannot read " + path.string() + ": the header announces " + std::to_string(announced) +
+                    " points but " + std::to_string(ps.number_of_points()) + " were read (truncated or malformed file)");
 
   Point_cloud cloud;
   cloud.points.assign(ps.points().begin(), ps.points().end());

@@ -5,6 +5,7 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
+#include "program_run.h"
 #include "test_support.h"
 
 #include <CGAL/Point_set_3.h>
@@ -18,29 +19,10 @@
 #include <fstream>
 #include <random>
 #include <sstream>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 
 namespace {
-
-struct Program_run
-{
-  int exit_code;
-  std::string output; // stdout and stderr
-};
-
-Program_run run(const std::string& arguments)
-{
-  const std::string command = std::string(POINT_DETAIL_EXE) + " --quiet " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  Program_run r{-1, {}};
-  char buffer[4096];
-  while(std::size_t got = std::fread(buffer, 1, sizeof buffer, pipe)) r.output.append(buffer, got);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 class Cli : public ::testing::Test
 {

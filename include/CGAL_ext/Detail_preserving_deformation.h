@@ -265,10 +265,17 @@ public:
   }
 
   /// Makes point `i`, which must be (or later be put) in the region of interest, a handle of `group`.
+  /// \throws Invalid_input if the point is already a handle of another group (it cannot follow two transforms).
   void insert_handle_point(std::size_t group, std::size_t i)
   {
     check_group(group);
-    m_label[checked_row(i)] = first_handle_label + int(group);
+    const std::size_t row = checked_row(i);
+    const int label = first_handle_label + int(group);
+    if(m_label[row] >= first_handle_label && m_label[row] != label)
+      throw Invalid_input(std::string(who) + ": point #" + std::to_string(i) + " is a handle of group " +
+                          std::to_string(m_label[row] - first_handle_label) + " and cannot also be one of group " +
+                          std::to_string(group) + " (handle groups must not overlap)");
+    m_label[row] = label;
     m_preprocessed = false;
   }
 

@@ -14,6 +14,7 @@
 #include <CGAL/property_map.h>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <climits>
@@ -58,6 +59,29 @@ inline std::string describe_point(std::size_t i, double x, double y, double z)
   return os.str();
 }
 
+/// Throws when three or more points all coincide or lie on one line: they sample no surface, and every
+/// tangent plane, normal and curvature of them is undefined.
+template <typename SC_point>
+void check_spans_a_surface(const std::vector<SC_point>& points, const char* who)
+{
+  if(points.size() < 3) return; // too few for any neighbourhood; the callers' k checks name that
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for(const SC_point& p : points) mean += Eigen::Vector3d(p.x(), p.y(), p.z());
+  mean /= double(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for(const SC_point& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), p.z()) - mean;
+    covariance += d * d.transpose();
+  }
+  const Eigen::Vector3d spread = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues();
+  if(!(spread(2) > 0))
+    throw Invalid_input(std::string(who) + ": all " + std::to_string(points.size()) + " points coincide; they sample no surface");
+  // Exactly collinear coordinates leave rounding noise of relative size 1e-32 in the middle eigenvalue.
+  if(spread(1) <= 1e-24 * spread(2))
+    throw Invalid_input(std::string(who) + ": all " + std::to_string(points.size()) +
+                        " points are collinear; they sample no surface");
+}
+
 /// Copies and validates the points of `points` (in range order) and sorts them spatially.
 /// `who` names the calling algorithm in error messages.
 template <typename ConcurrencyTag, typename PointRange, typename PointMap>
@@ -82,6 +106,7 @@ Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap 
     copy.emplace_back(x, y, z);
     ++i;
   }
+  check_spans_a_surface(copy, who);
 
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t(0));

@@ -1,0 +1,534 @@
+// The catalogue of bad inputs (doc/bad_input.md): one case per row, across the public functions and the
+// program. Each row gets a clear error naming the problem, or the documented result; nothing crashes, hangs
+// or writes a half file, and input files are never touched.
+#include <CGAL_ext/Detail_preserving_deformation.h>
+#include <CGAL_ext/balanced_flow_smooth_point_set.h>
+#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_mean_shift_modes.h>
+#include <CGAL_ext/compute_simplification_sample_points.h>
+#include <CGAL_ext/estimate_mean_curvature.h>
+#include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/scale_geometric_details.h>
+#include <CGAL_ext/upsample_point_set.h>
+
+#include "program_run.h"
+#include "test_support.h"
+
+#include <CGAL/Point_set_3.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <random>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace CGAL_ext;
+using Point_set = CGAL::Point_set_3<Point>;
+
+namespace {
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+Point_set with_normals(const std::vector<Point>& points, const std::vector<Vector>& normals)
+{
+  Point_set set;
+  set.add_normal_map();
+  for(std::size_t i = 0; i < points.size(); ++i) set.insert(points[i], normals[i]);
+  return set;
+}
+
+Point_set sphere(std::size_t n = 1500)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(n, 1.0, 0.02);
+  return with_normals(s.points, s.normals);
+}
+
+/// A 30 x 30 grid of unit spacing in the plane z = 0, normals +z.
+Point_set plane_grid()
+{
+  std::vector<Point> points;
+  for(int i = 0; i < 30; ++i)
+    for(int j = 0; j < 30; ++j) points.emplace_back(i, j, 0);
+  return with_normals(points, std::vector<Vector>(points.size(), Vector(0, 0, 1)));
+}
+
+std::vector<std::size_t> indices_where(const Point_set& set, const std::function<bool(const Point&)>& keep)
+{
+  std::vector<std::size_t> out;
+  for(std::size_t i = 0; i < set.size(); ++i)
+    if(keep(set.point(Point_set::Index(i)))) out.push_back(i);
+  return out;
+}
+
+/// The message of the `Invalid_input` that `f` throws ("" and a failure if it throws nothing or another type).
+std::string invalid_input_message(const std::function<void()>& f)
+{
+  try {
+    f();
+  } catch(const Invalid_input& e) {
+    return e.what();
+  } catch(const std::exception& e) {
+    ADD_FAILURE() << "threw another exception: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "threw nothing";
+  return "";
+}
+
+#define EXPECT_INVALID_INPUT(call, needle)                                                                       \
+  do {                                                                                                           \
+    const std::string message_ = invalid_input_message([&] { call; });                                           \
+    EXPECT_NE(message_.find(needle), std::string::npos) << "message: " << message_;                              \
+  } while(false)
+
+/// Details of a point set with the default filter (throws what the function throws).
+void details_of(const Point_set& set, unsigned int k = 10)
+{
+  Point_set copy = set;
+  auto detail = copy.add_property_map<Vector>("detail").first;
+  compute_geometric_details(copy, k, Detail_filter{}, detail, copy.parameters());
+}
+
+/// Selects the bumpy sphere's top cap as region of interest and its tip as handle group 0.
+void select_cap(Detail_preserving_deformation<>& d, const Point_set& set)
+{
+  d.insert_roi_points(indices_where(set, [](const Point& p) { return p.z() > 0.3; }));
+  d.insert_handle_points(d.create_handle_group(), indices_where(set, [](const Point& p) { return p.z() > 0.9; }));
+}
+
+/// A folder for the program's rows; checks that a failing run leaves it as it found it.
+class Workspace
+{
+public:
+  Workspace() : m_dir(fs::temp_directory_path() / ("bad_input_" + std::to_string(std::random_device{}())))
+  {
+    fs::create_directories(m_dir);
+  }
+  ~Workspace() { fs::remove_all(m_dir); }
+
+  std::string path(const std::string& name) const { return (m_dir / name).string(); }
+
+  std::string write(const std::string& name, const std::string& bytes) const
+  {
+    std::ofstream(path(name), std::ios::binary) << bytes;
+    return path(name);
+  }
+
+  std::string sphere_ply(const std::string& name = "in.ply", std::size_t n = 400) const
+  {
+    const auto s = shapes::bumpy_sphere<Kernel>(n, 1.0, 0.02);
+    std::ostringstream out;
+    out << "ply\nformat ascii 1.0\nelement vertex " << n << "\nproperty double x\nproperty double y\nproperty double z\n"
+        << "property double nx\nproperty double ny\nproperty double nz\nend_header\n";
+    out.precision(17);
+    for(std::size_t i = 0; i < n; ++i) out << s.points[i] << " " << s.normals[i] << "\n";
+    return write(name, out.str());
+  }
+
+  /// Runs the program; it must fail with one line or two that contain `needle`, touch no file of the folder
+  /// and leave no new one.
+  void expect_failure(const std::string& arguments, const std::string& needle) const
+  {
+    const std::map<std::string, std::string> before = snapshot();
+    const Program_run r = run(arguments);
+    EXPECT_EQ(r.exit_code, 1) << arguments << "\n" << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << arguments << "\n" << r.output;
+    EXPECT_LE(std::count(r.output.begin(), r.output.end(), '\n'), 2) << r.output;
+    EXPECT_EQ(snapshot(), before) << "a file of the folder was written, changed or left behind";
+  }
+
+private:
+  std::map<std::string, std::string> snapshot() const
+  {
+    std::map<std::string, std::string> files;
+    for(const auto& entry : fs::recursive_directory_iterator(m_dir)) {
+      std::ifstream in(entry.path(), std::ios::binary);
+      std::ostringstream bytes;
+      bytes << in.rdbuf();
+      files[entry.path().string()] = bytes.str();
+    }
+    return files;
+  }
+
+  fs::path m_dir;
+};
+
+std::string binary_ply_header(std::size_t vertices)
+{
+  return "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertices) +
+         "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+}
+
+std::string binary_xyz(const std::vector<std::array<double, 3>>& points)
+{
+  std::string bytes;
+  for(const auto& p : points) bytes.append(reinterpret_cast<const char*>(p.data()), sizeof p);
+  return bytes;
+}
+
+/// Points on a sphere as three doubles each.
+std::vector<std::array<double, 3>> sphere_coordinates(std::size_t n)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(n, 1.0, 0.0);
+  std::vector<std::array<double, 3>> out;
+  for(const Point& p : s.points) out.push_back({p.x(), p.y(), p.z()});
+  return out;
+}
+
+const char* const edit_json_sphere = R"({"handles": [{"select": ["sphere:0,0,1,0.3"], "translation": [0, 0, 0.2]}]})";
+
+struct Row
+{
+  const char* id;
+  std::function<void()> check;
+};
+
+const std::vector<Row>& catalogue()
+{
+  static const std::vector<Row> rows = {
+    // ---- The public functions ----
+    {"empty_input", [] { EXPECT_INVALID_INPUT(details_of(Point_set()), "empty"); }},
+    {"one_point", [] {
+       Point_set one = with_normals({Point(0, 0, 0)}, {Vector(0, 0, 1)});
+       EXPECT_INVALID_INPUT(details_of(one), "k = 10");
+       EXPECT_INVALID_INPUT(Detail_preserving_deformation<>(one, {}, one.parameters()), "at least two points");
+     }},
+    {"fewer_points_than_k", [] {
+       Point_set few = sphere(8);
+       EXPECT_INVALID_INPUT(details_of(few, 10), "k = 10");
+       std::vector<double> H(few.size());
+       EXPECT_INVALID_INPUT(estimate_mean_curvature(few, 12, CGAL::make_property_map(H), few.parameters()), "k = 12");
+     }},
+    {"nan_coordinate", [] {
+       Point_set set = sphere();
+       set.point(Point_set::Index(5)) = Point(nan, 0, 0);
+       EXPECT_INVALID_INPUT(details_of(set), "point #5");
+     }},
+    {"inf_coordinate", [] {
+       Point_set set = sphere();
+       set.point(Point_set::Index(7)) = Point(0, inf, 0);
+       std::vector<double> H(set.size());
+       EXPECT_INVALID_INPUT(estimate_mean_curvature(set, 12, CGAL::make_property_map(H), set.parameters()), "point #7");
+     }},
+    {"exact_duplicates", [] {
+       // Documented result: accepted. A copy is a separate point of the neighbour graph, so the copies' details
+       // need not agree, but all are finite and of the same size as without the copies.
+       const auto s = shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.02);
+       auto mean_magnitude = [](const std::vector<Point>& points, const std::vector<Vector>& normals) {
+         Point_set set = with_normals(points, normals);
+         auto detail = set.add_property_map<Vector>("detail").first;
+         EXPECT_TRUE(compute_geometric_details(set, 10, Detail_filter{}, detail, set.parameters()));
+         double sum = 0;
+         for(auto i : set) {
+           EXPECT_TRUE(std::isfinite(detail[i].squared_length()));
+           sum += std::sqrt(detail[i].squared_length());
+         }
+         return sum / double(set.size());
+       };
+       std::vector<Point> points = s.points;
+       std::vector<Vector> normals = s.normals;
+       points.insert(points.end(), s.points.begin(), s.points.end());
+       normals.insert(normals.end(), s.normals.begin(), s.normals.end());
+       const double once = mean_magnitude(s.points, s.normals), twice = mean_magnitude(points, normals);
+       EXPECT_GT(twice, 0.5 * once);
+       EXPECT_LT(twice, 2.0 * once);
+     }},
+    {"collinear_points", [] {
+       // No surface to fit: every function names the problem.
+       std::vector<Point> line;
+       for(int i = 0; i < 100; ++i) line.emplace_back(0.01 * i, 0, 0);
+       Point_set set = with_normals(line, std::vector<Vector>(line.size(), Vector(0, 0, 1)));
+       std::vector<double> H(set.size(), nan);
+       EXPECT_INVALID_INPUT(estimate_mean_curvature(set, 12, CGAL::make_property_map(H), set.parameters()),
+                            "100 points are collinear");
+       EXPECT_INVALID_INPUT(details_of(set), "collinear");
+     }},
+    {"coplanar_curvature", [] {
+       Point_set grid = plane_grid();
+       for(Curvature_fitting fitting : {Curvature_fitting::monge_jet_fitting, Curvature_fitting::closed_form}) {
+         std::vector<double> H(grid.size(), nan);
+         ASSERT_TRUE(estimate_mean_curvature(grid, 12, fitting, CGAL::make_property_map(H), grid.parameters()));
+         for(double h : H) ASSERT_LT(std::abs(h), 1e-9);
+       }
+     }},
+    {"coplanar_mean_shift", [] {
+       Point_set grid = plane_grid();
+       auto modes = grid.add_property_map<Mean_shift_mode<Kernel>>("mode").first;
+       ASSERT_TRUE(compute_mean_shift_modes(grid, default_mean_shift_neighbors, Mean_shift_settings(), modes,
+                                            grid.parameters()).completed);
+       for(auto i : grid) {
+         ASSERT_LT(std::abs(modes[i].position.z()), 1e-9);
+         ASSERT_LT(std::abs(modes[i].mean_curvature), 1e-9);
+       }
+     }},
+    {"coplanar_simplification", [] {
+       Point_set grid = plane_grid();
+       std::vector<std::size_t> sample_of(grid.size());
+       Simplification_settings settings;
+       settings.max_cluster_size = 20;
+       const auto samples = compute_simplification_sample_points(grid, settings, CGAL::make_property_map(sample_of),
+                                                                 grid.parameters());
+       ASSERT_TRUE(samples.completed);
+       EXPECT_GE(samples.size(), grid.size() / 20);
+       for(std::size_t s : sample_of) ASSERT_LT(s, samples.size());
+     }},
+    {"zero_normal", [] {
+       Point_set set = sphere();
+       set.normal(Point_set::Index(3)) = CGAL::NULL_VECTOR;
+       EXPECT_INVALID_INPUT(details_of(set), "normal of point #3");
+     }},
+    {"missing_normals", [] {
+       // Documented result: the functions that can estimate normals do; up-sampling needs them.
+       const auto s = shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.02);
+       std::vector<std::pair<Point, Vector>> inserted;
+       EXPECT_INVALID_INPUT(upsample_point_set(s.points, Upsampling_settings(), std::back_inserter(inserted)),
+                            "need normals");
+     }},
+    {"lambda_not_positive", [] {
+       EXPECT_INVALID_INPUT((Detail_filter{Detail_order::linear, 0.0, 1.6}.validate()), "lambda");
+       EXPECT_INVALID_INPUT((Detail_filter{Detail_order::quadric, -1.0, 1.6}.validate()), "lambda");
+     }},
+    {"mu_not_above_lambda", [] {
+       EXPECT_INVALID_INPUT((Detail_filter{Detail_order::cubic, 0.8, 0.8}.validate()), "mu");
+     }},
+    {"scale_factor_not_finite", [] {
+       Point_set set = sphere();
+       const auto roi = indices_where(set, [](const Point& p) { return p.z() > 0; });
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, roi, nan, Detail_scaling_settings(), set.parameters()),
+                            "s must be finite");
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, roi, inf, Detail_scaling_settings(), set.parameters()),
+                            "s must be finite");
+     }},
+    {"empty_roi", [] {
+       Point_set set = sphere();
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, std::vector<std::size_t>(), 2.0, Detail_scaling_settings(),
+                                                    set.parameters()),
+                            "region of interest is empty");
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       d.create_handle_group();
+       EXPECT_INVALID_INPUT(d.preprocess(), "region of interest is empty");
+     }},
+    {"whole_model_scaling_without_anchors", [] {
+       Point_set set = sphere();
+       std::vector<std::size_t> all(set.size());
+       std::iota(all.begin(), all.end(), 0);
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, all, 2.0, Detail_scaling_settings(), set.parameters()),
+                            "whole model and no anchors");
+     }},
+    {"anchor_outside_roi", [] {
+       Point_set set = sphere();
+       const auto roi = indices_where(set, [](const Point& p) { return p.z() > 0; });
+       const auto anchors = indices_where(set, [](const Point& p) { return p.z() < -0.9; });
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, roi, anchors, 2.0, Detail_scaling_settings(),
+                                                    set.parameters()),
+                            "is not in the region");
+     }},
+    {"index_out_of_range", [] {
+       Point_set set = sphere();
+       EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, std::vector<std::size_t>{0, set.size()}, 2.0,
+                                                    Detail_scaling_settings(), set.parameters()),
+                            "index 1500 is not a point index");
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       EXPECT_INVALID_INPUT(d.insert_roi_point(set.size() + 3), "out of range");
+     }},
+    {"handle_outside_roi", [] {
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       select_cap(d, set);
+       d.insert_handle_points(0, indices_where(set, [](const Point& p) { return p.z() < -0.95; }));
+       EXPECT_INVALID_INPUT(d.preprocess(), "handle point #");
+     }},
+    {"overlapping_handle_groups", [] {
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       select_cap(d, set);
+       const std::size_t second = d.create_handle_group();
+       EXPECT_INVALID_INPUT(d.insert_handle_points(second, indices_where(set, [](const Point& p) { return p.z() > 0.95; })),
+                            "handle groups must not overlap");
+       d.insert_handle_points(0, indices_where(set, [](const Point& p) { return p.z() > 0.95; })); // same group: fine
+     }},
+    {"non_rigid_handle_matrix", [] {
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       select_cap(d, set);
+       EXPECT_INVALID_INPUT(d.set_handle_transform(0, Eigen::Matrix3d(2 * Eigen::Matrix3d::Identity()), Eigen::Vector3d::Zero()),
+                            "is not a rotation");
+       EXPECT_INVALID_INPUT(d.set_handle_transform(0, Eigen::Matrix3d(Eigen::Vector3d(1, 1, -1).asDiagonal()),
+                                                   Eigen::Vector3d::Zero()),
+                            "is not a rotation"); // a mirror
+       EXPECT_INVALID_INPUT(d.set_handle_transform(0, Eigen::Quaterniond(2, 0, 0, 0), Eigen::Vector3d::Zero()),
+                            "unit quaternion");
+       EXPECT_INVALID_INPUT(d.set_handle_transform(0, Eigen::Matrix3d::Identity(), Eigen::Vector3d(nan, 0, 0)),
+                            "not finite");
+     }},
+    {"cancelled_callback", [] {
+       // Documented result: false, nothing changed, and the object can run again.
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters().callback(std::function<bool(double)>([](double) { return false; })));
+       select_cap(d, set);
+       EXPECT_FALSE(d.preprocess());
+       EXPECT_FALSE(d.deform());
+       EXPECT_INVALID_INPUT(d.diffuse(), "needs preprocess() or deform() first");
+
+       Point_set smoothed = set;
+       EXPECT_FALSE(balanced_flow_smooth_point_set(
+         smoothed, 10, Balanced_flow_settings(),
+         smoothed.parameters().callback(std::function<bool(double)>([](double f) { return f < 0.3; }))));
+       for(std::size_t i = 0; i < set.size(); ++i)
+         ASSERT_EQ(smoothed.point(Point_set::Index(i)), set.point(Point_set::Index(i))) << i;
+     }},
+    {"spacing_not_positive", [] {
+       Point_set set = sphere();
+       Upsampling_settings settings;
+       settings.detection.spacing = -1;
+       std::vector<std::pair<Point, Vector>> inserted;
+       EXPECT_INVALID_INPUT(upsample_point_set(set, settings, std::back_inserter(inserted), set.parameters()), "spacing");
+     }},
+    {"diffuse_into_another_point_set", [] {
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       select_cap(d, set);
+       ASSERT_TRUE(d.deform());
+       Point_set other = sphere(1000);
+       EXPECT_INVALID_INPUT(d.diffuse(other, other.parameters()), "was given 1000 points");
+     }},
+
+    // ---- The program ----
+    {"cli_empty_file", [] {
+       Workspace w;
+       w.expect_failure("details -i " + w.write("empty.xyz", "") + " -o " + w.path("o.ply"), "no points");
+     }},
+    {"cli_fewer_points_than_k", [] {
+       Workspace w;
+       w.expect_failure("details -i " + w.write("one.xyz", "0 0 0 0 0 1\n") + " -o " + w.path("o.ply"), "needs more than k points");
+     }},
+    {"cli_nan_in_file", [] {
+       Workspace w;
+       w.expect_failure("details -i " + w.write("nan.xyz", "0 0 0\n1 0 0\nnan 1 0\n0 1 1\n") + " -o " + w.path("o.ply"), "nan.xyz");
+     }},
+    {"cli_ply_truncated_binary", [] {
+       Workspace w;
+       const std::string in = w.write("cut.ply", binary_ply_header(1000) + binary_xyz(sphere_coordinates(1000)).substr(0, 5000));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "truncated");
+     }},
+    {"cli_ply_truncated_ascii", [] {
+       Workspace w;
+       std::string ply = "ply\nformat ascii 1.0\nelement vertex 400\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+       for(const auto& p : sphere_coordinates(300)) ply += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+       w.expect_failure("details -i " + w.write("cut.ply", ply) + " -o " + w.path("o.ply"), "truncated");
+     }},
+    {"cli_ply_corrupted_binary", [] {
+       // A whole file whose coordinates decode to NaN at point 17.
+       Workspace w;
+       auto points = sphere_coordinates(400);
+       points[17][1] = nan;
+       w.expect_failure("details -i " + w.write("nan.ply", binary_ply_header(400) + binary_xyz(points)) + " -o " + w.path("o.ply"),
+                        "point #17");
+     }},
+    {"cli_ply_corrupted_ascii", [] {
+       Workspace w;
+       std::string ply = "ply\nformat ascii 1.0\nelement vertex 300\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+       const auto points = sphere_coordinates(300);
+       for(std::size_t i = 0; i < points.size(); ++i)
+         ply += (i == 42 ? std::string("1.0e+x") : std::to_string(points[i][0])) + " " + std::to_string(points[i][1]) + " " +
+                std::to_string(points[i][2]) + "\n";
+       w.expect_failure("details -i " + w.write("bad.ply", ply) + " -o " + w.path("o.ply"), "bad.ply");
+     }},
+    {"cli_ply_corrupted_header", [] {
+       Workspace w;
+       const std::string in = w.write("bad.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty quadruple x\n"
+                                                 "end_header\n" + std::string(100, '\x7f'));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "bad.ply");
+     }},
+    {"cli_off_bad_counts", [] {
+       Workspace w;
+       std::string off = "OFF\n500 0 0\n";
+       for(const auto& p : sphere_coordinates(300)) off += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+       w.expect_failure("details -i " + w.write("bad.off", off) + " -o " + w.path("o.ply"), "announces 500 points");
+     }},
+    {"cli_file_too_large", [] {
+       // The header asks for more memory than any machine here has: refused before reading.
+       Workspace w;
+       const std::string in = w.write("huge.ply", binary_ply_header(100000000000ull) + binary_xyz(sphere_coordinates(10)));
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + w.write("e.json", edit_json_sphere), "of memory");
+     }},
+    {"cli_json_wrong_type", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       const std::string json = w.write("e.json", R"({"handles": [{"select": ["sphere:0,0,1,0.3"], "translation": "up"}]})");
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "translation");
+     }},
+    {"cli_json_missing_field", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       const std::string json = w.write("e.json", R"({"handles": [{"translation": [0, 0, 1]}]})");
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "select");
+     }},
+    {"cli_json_overlapping_handles", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       const std::string json = w.write("e.json", R"({"handles": [{"select": ["sphere:0,0,1,0.4"], "translation": [0, 0, 1]},
+                                                                  {"select": ["sphere:0,0,1,0.2"], "translation": [0, 1, 0]}]})");
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "must not overlap");
+     }},
+    {"cli_sel_too_few_lines", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --sel " + w.write("s.sel", "0\n1\n2\n") + " --def " +
+                          w.write("d.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"),
+                        "has 3 status lines but the model has 400 points");
+     }},
+    {"cli_def_not_4x4", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       std::string sel;
+       for(int i = 0; i < 400; ++i) sel += i < 10 ? "2\n" : "1\n";
+       w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --sel " + w.write("s.sel", sel) + " --def " +
+                          w.write("d.def", "1 0 0\n0 1 0\n0 0 1\n"),
+                        "holds 9 numbers");
+     }},
+    {"cli_output_is_input", [] {
+       Workspace w;
+       const std::string in = w.sphere_ply();
+       w.expect_failure("details -i " + in + " -o " + in, "is the input file");
+     }},
+    {"cli_output_directory_missing", [] {
+       Workspace w;
+       w.expect_failure("details -i " + w.sphere_ply() + " -o " + w.path("no/such/o.ply"), "does not exist");
+     }},
+    {"cli_output_directory_unwritable", [] {
+       // /proc takes no new files, not even from root (CI runs as root, for whom permission bits do not count).
+       Workspace w;
+       w.expect_failure("details -i " + w.sphere_ply() + " -o /proc/point-detail-out.ply", "is not writable");
+       w.expect_failure("details -i " + w.sphere_ply() + " -o " + w.sphere_ply() + "/o.ply", "is not a directory");
+     }},
+  };
+  return rows;
+}
+
+class Bad_input : public ::testing::TestWithParam<std::size_t>
+{};
+
+} // namespace
+
+TEST_P(Bad_input, gets_a_clear_error_or_the_documented_result) { catalogue()[GetParam()].check(); }
+
+INSTANTIATE_TEST_SUITE_P(Catalogue, Bad_input, ::testing::Range<std::size_t>(0, catalogue().size()),
+                         [](const ::testing::TestParamInfo<std::size_t>& info) { return std::string(catalogue()[info.param].id); });
+
+TEST(Bad_input_catalogue, has_at_least_30_rows_and_every_row_is_listed_in_the_manual)
+{
+  EXPECT_GE(catalogue().size(), 30u);
+  std::ifstream in(BAD_INPUT_DOC);
+  ASSERT_TRUE(in) << BAD_INPUT_DOC;
+  std::ostringstream doc;
+  doc << in.rdbuf();
+  for(const Row& row : catalogue())
+    EXPECT_NE(doc.str().find("`" + std::string(row.id) + "`"), std::string::npos) << row.id << " is not in " << BAD_INPUT_DOC;
+}
