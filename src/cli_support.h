@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -72,6 +73,10 @@ private:
   std::vector<std::filesystem::path> m_inputs;
   std::vector<std::pair<std::filesystem::path, std::filesystem::path>> m_files; // temporary, destination
 };
+
+/// Opens an input file for reading, or throws Cli_error: missing, not a regular file (a device such as
+/// /dev/zero would never end), or unreadable.
+std::ifstream open_input(const std::filesystem::path& path, std::ios::openmode mode = std::ios::in);
 
 /// Writes `bytes` to `path` or throws Cli_error.
 void write_file(const std::filesystem::path& path, const std::string& bytes);

@@ -110,8 +110,7 @@ Eigen::Matrix3d snapped_rotation(const Eigen::Matrix3d& M, double tolerance, con
 /// Non-comment, non-blank lines of a text file with their line numbers.
 std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesystem::path& path)
 {
-  std::ifstream in(path);
-  if(!in) throw Cli_error("cannot read " + path.string());
+  std::ifstream in = open_input(path);
   std::vector<std::pair<std::size_t, std::string>> lines;
   std::string line;
   for(std::size_t number = 1; std::getline(in, line); ++number) {
@@ -135,12 +134,11 @@ CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::st
 
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
 {
-  std::ifstream in(path);
-  if(!in) throw Cli_error("cannot read " + path.string());
+  std::ifstream in = open_input(path);
   json edit;
   try {
     edit = json::parse(in);
-  } catch(const json::parse_error& e) {
+  } catch(const json::exception& e) { // a syntax error, or a number out of range (1e999)
     throw Cli_error(path.string() + ": not valid JSON: " + e.what());
   }
   const std::string file = path.filename().string();

@@ -119,7 +119,7 @@ Point_cloud read_for_neighbors(const std::string& input, unsigned int k, Report&
   return cloud;
 }
 
-/// Gives the cloud normals when it has none: CGAL jet estimation and MST orientation.
+/// Gives the cloud normals when it has none: jet fitting and MST orientation.
 void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& report)
 {
   report.data()["normal_source"] = cloud.normals.empty() ? "estimated" : cloud.normal_source;
@@ -127,7 +127,7 @@ void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& repo
   report.time("normals", [&] {
     const auto spatial = CGAL_ext::internal::make_spatial_point_cloud<CGAL::Parallel_if_available_tag>(
       cloud.points, CGAL::Identity_property_map<const Point>(), "normal estimation");
-    if(spatial.size() < 3) throw Cli_error("normal estimation needs at least 3 points");
+    if(spatial.size() < 6) throw Cli_error("normal estimation needs at least 6 points (a jet fit has 6 coefficients)");
     CGAL_ext::internal::Progress p(progress.stage("normals"));
     CGAL_ext::internal::Matrix_n3 normals;
     if(!CGAL_ext::internal::estimate_oriented_normals<CGAL::Parallel_if_available_tag>(

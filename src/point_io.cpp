@@ -10,10 +10,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstdlib>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace point_detail {
@@ -42,14 +45,10 @@ std::string lower_extension(const fs::path& path)
   return ext.empty() ? ext : ext.substr(1);
 }
 
-/// Area-weighted vertex normals of the faces of a mesh file, or nothing if it has no usable faces.
-std::vector<Vector> mesh_vertex_normals(const fs::path& path, std::size_t expected_vertices)
+/// Area-weighted vertex normals of a polygon soup, or nothing if a vertex is on no usable face.
+std::vector<Vector> face_normals(const std::vector<Point>& vertices, const std::vector<std::vector<std::size_t>>& faces)
 {
-  std::vector<Point> vertices;
-  std::vector<std::vector<std::size_t>> faces;
-  if(!CGAL::IO::read_polygon_soup(path.string(), vertices, faces, CGAL::parameters::verbose(false)) || faces.empty() ||
-     vertices.size() != expected_vertices)
-    return {};
+  if(faces.empty()) return {};
   std::vector<Vector> normals(vertices.size(), CGAL::NULL_VECTOR);
   for(const auto& face : faces) {
     if(face.size() < 3) continue;
@@ -67,6 +66,111 @@ std::vector<Vector> mesh_vertex_normals(const fs::path& path, std::size_t expect
     n = n / len;
   }
   return normals;
+}
+
+/// Area-weighted vertex normals of the faces of a PLY mesh, or nothing if it has no usable faces.
+std::vector<Vector> ply_face_normals(const fs::path& path, std::size_t expected_vertices)
+{
+  std::vector<Point> vertices;
+  std::vector<std::vector<std::size_t>> faces;
+  if(!CGAL::IO::read_polygon_soup(path.string(), vertices, faces, CGAL::parameters::verbose(false)) ||
+     vertices.size() != expected_vertices)
+    return {};
+  return face_normals(vertices, faces);
+}
+
+/// An ASCII OFF file ([ST][C][N]OFF): vertices, their normals (NOFF) and faces. Colours and texture
+/// coordinates are skipped. The project reads OFF itself: CGAL 5.5's scanner reads past its buffer on some
+/// malformed colour entries (found by fuzz/fuzz_point_reader).
+struct Off_file
+{
+  std::vector<Point> vertices;
+  std::vector<Vector> normals;
+  std::vector<std::vector<std::size_t>> faces;
+};
+
+Off_file read_off(const fs::path& path)
+{
+  std::ifstream in = open_input(path);
+  const std::string name = path.string();
+  std::size_t line_number = 0;
+  std::vector<std::string> tokens;
+  // The next line with content, comments ('#' to the end of the line) removed, split at blanks.
+  auto next_line = [&]() {
+    std::string line;
+    while(std::getline(in, line)) {
+      ++line_number;
+      line = line.substr(0, line.find('#'));
+      std::istringstream words(line);
+      tokens.clear();
+      for(std::string word; words >> word;) tokens.push_back(word);
+      if(!tokens.empty()) return true;
+    }
+    return false;
+  };
+  auto where = [&]() { return name + ":" + std::to_string(line_number) + ": "; };
+  auto real = [&](const std::string& token) {
+    char* end = nullptr;
+    const double value = std::strtod(token.c_str(), &end);
+    if(end != token.c_str() + token.size()) throw Cli_error(where() + "'" + token + "' is not a number");
+    return value;
+  };
+  auto count = [&](const std::string& token, const char* what) {
+    char* end = nullptr;
+    errno = 0;
+    const long long value = std::strtoll(token.c_str(), &end, 10);
+    if(end != token.c_str() + token.size() || errno == ERANGE || value < 0)
+      throw Cli_error(where() + "'" + token + "' is not a " + what);
+    return std::uint64_t(value);
+  };
+
+  if(!next_line()) throw Cli_error(name + " contains no points");
+  const std::string keyword = tokens[0];
+  const std::size_t off_at = keyword.rfind("OFF");
+  if(off_at == std::string::npos || off_at + 3 != keyword.size())
+    throw Cli_error(where() + "not an OFF file (it starts with '" + keyword + "')");
+  const std::string prefix = keyword.substr(0, off_at);
+  if(prefix.find('4') != std::string::npos || prefix.find('n') != std::string::npos)
+    throw Cli_error(where() + keyword + " (4D or n-dimensional OFF) is not supported");
+  for(char c : prefix)
+    if(c != 'S' && c != 'T' && c != 'C' && c != 'N') throw Cli_error(where() + "unknown OFF variant '" + keyword + "'");
+  const bool with_normals = prefix.find('N') != std::string::npos;
+  tokens.erase(tokens.begin());
+  if(!tokens.empty() && tokens[0] == "BINARY")
+    throw Cli_error(where() + "binary OFF is not supported; convert it to PLY");
+  if(tokens.empty() && !next_line()) throw Cli_error(name + ": the header has no vertex count");
+  const std::uint64_t vertex_count = count(tokens[0], "vertex count");
+  const std::uint64_t face_count = tokens.size() > 1 ? count(tokens[1], "face count") : 0;
+
+  Off_file off;
+  const std::size_t per_vertex = with_normals ? 6 : 3;
+  for(std::uint64_t v = 0; v < vertex_count; ++v) {
+    if(!next_line())
+      throw Cli_error("cannot read " + name + ": truncated off file (the header announces " + std::to_string(vertex_count) +
+                      " points, " + std::to_string(v) + " were read)");
+    if(tokens.size() < per_vertex)
+      throw Cli_error(where() + "a vertex needs " + std::to_string(per_vertex) + " numbers, this line has " +
+                      std::to_string(tokens.size()));
+    off.vertices.emplace_back(real(tokens[0]), real(tokens[1]), real(tokens[2]));
+    if(with_normals) off.normals.emplace_back(real(tokens[3]), real(tokens[4]), real(tokens[5]));
+  }
+  // Faces give the vertex normals when the file has none; a file cut short in its faces loses only them.
+  for(std::uint64_t f = 0; f < face_count && next_line(); ++f) {
+    const std::uint64_t corners = count(tokens[0], "corner count");
+    if(tokens.size() < corners + 1)
+      throw Cli_error(where() + "a face of " + std::to_string(corners) + " corners has " +
+                      std::to_string(tokens.size() - 1) + " indices");
+    std::vector<std::size_t> face;
+    for(std::uint64_t c = 1; c <= corners; ++c) {
+      const std::uint64_t index = count(tokens[c], "vertex index");
+      if(index >= vertex_count)
+        throw Cli_error(where() + "vertex index " + tokens[c] + " is out of range (" + std::to_string(vertex_count) +
+                        " vertices)");
+      face.push_back(std::size_t(index));
+    }
+    off.faces.push_back(std::move(face));
+  }
+  return off;
 }
 
 template <typename T>
@@ -118,39 +222,90 @@ std::uint64_t ply_scalar_size(const std::string& type)
   return 0;
 }
 
-/// The vertex count of a PLY header and the bytes its vertices need at least (the size of a binary vertex
-/// record, or two characters per ASCII value: a digit and a separator).
-Announced ply_announced(std::istream& in, std::uint64_t& header_bytes)
+/// Reads and checks a PLY header, and returns its vertex count and the fewest bytes of data that can hold all
+/// its elements (binary: their records, with empty lists; ASCII: two characters per value). CGAL 5.5's reader
+/// does not check the header: a property before any element made it read before its element array (found by
+/// fuzz/fuzz_point_reader), so a malformed header is refused here first.
+Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std::string& name)
 {
   Announced a;
   std::string line, format;
-  bool in_vertex = false, has_list = false;
-  std::uint64_t values = 0, record = 0;
+  std::size_t line_number = 0;
+  auto fail = [&](const std::string& what) -> Announced {
+    throw Cli_error("cannot read " + name + ": malformed ply header (line " + std::to_string(line_number) + ": " + what + ")");
+  };
+  auto whole = [&](const std::string& token) {
+    if(token.empty() || token.size() > 18 || token.find_first_not_of("0123456789") != std::string::npos)
+      fail("'" + token + "' is not a count");
+    return std::uint64_t(std::stoull(token));
+  };
+  struct Element { std::string name; std::uint64_t count = 0, values = 0, bytes = 0; };
+  std::vector<Element> elements;
+  std::map<std::string, std::string> vertex_types; // CGAL's reader needs x y z (and nx ny nz) of one float type
+  auto same_float_type = [&](const char* a, const char* b, const char* c) {
+    const std::string& t = vertex_types[a];
+    const bool is_float = t == "float" || t == "float32" || t == "double" || t == "float64";
+    return is_float && vertex_types[b] == t && vertex_types[c] == t;
+  };
   while(std::getline(in, line)) {
+    ++line_number;
     if(!line.empty() && line.back() == '\r') line.pop_back();
+    // CGAL's reader cuts names at a NUL byte ("x\0" is x), and the duplicate check below could not see that.
+    if(std::any_of(line.begin(), line.end(), [](unsigned char c) { return (c < 0x20 && c != '\t') || c == 0x7f; }))
+      fail("a control character in the header");
     std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if(word == "format") words >> format;
-    else if(word == "element") {
-      std::string name;
-      words >> name;
-      in_vertex = name == "vertex";
-      if(in_vertex && !(words >> a.vertices)) return Announced();
-    } else if(word == "property" && in_vertex) {
-      std::string type;
-      words >> type;
-      if(type == "list") has_list = true;
-      ++values;
-      record += ply_scalar_size(type);
-    } else if(word == "end_header") {
-      header_bytes = std::uint64_t(in.tellg());
-      a.known = !has_list && values > 0;
-      a.smallest_bytes = a.vertices * (format == "ascii" ? 2 * values : record);
-      return a;
+    std::vector<std::string> w;
+    for(std::string word; words >> word;) w.push_back(word);
+    if(line_number == 1) {
+      if(line != "ply") fail("a PLY file starts with the line 'ply'");
+      continue;
     }
+    if(w.empty()) continue;
+    if(w[0] == "comment" || w[0] == "obj_info") continue;
+    if(w[0] == "format") {
+      if(w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        fail("the format is ascii, binary_little_endian or binary_big_endian, and a version");
+      format = w[1];
+    } else if(w[0] == "element") {
+      if(w.size() != 3) fail("an element line is 'element NAME COUNT'");
+      for(const Element& e : elements)
+        if(e.name == w[1]) fail("element '" + w[1] + "' appears twice"); // CGAL would size by one, read the other
+      elements.push_back({w[1], whole(w[2])});
+    } else if(w[0] == "property") {
+      if(elements.empty()) fail("a property before any element");
+      Element& e = elements.back();
+      if(w.size() == 5 && w[1] == "list") {
+        const std::uint64_t count_bytes = ply_scalar_size(w[2]);
+        if(count_bytes == 0 || ply_scalar_size(w[3]) == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
+        e.bytes += count_bytes;
+      } else if(w.size() == 3) {
+        const std::uint64_t bytes = ply_scalar_size(w[1]);
+        if(bytes == 0) fail("unknown property type '" + w[1] + "'");
+        e.bytes += bytes;
+        if(e.name == "vertex" && !vertex_types.emplace(w[2], w[1]).second) fail("property '" + w[2] + "' appears twice");
+      } else
+        fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
+      ++e.values;
+    } else if(w[0] == "end_header") {
+      if(format.empty()) fail("no format line");
+      if(!same_float_type("x", "y", "z")) fail("the vertices need x, y and z properties, all float or all double");
+      if((vertex_types.count("nx") || vertex_types.count("ny") || vertex_types.count("nz")) && !same_float_type("nx", "ny", "nz"))
+        fail("the normals need nx, ny and nz properties, all float or all double");
+      header_bytes = std::uint64_t(in.tellg());
+      a.known = true;
+      for(const Element& e : elements) {
+        // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
+        if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");
+        const std::uint64_t per_item = format == "ascii" ? 2 * e.values : e.bytes;
+        if(per_item > 0 && e.count > (std::uint64_t(1) << 62) / per_item) fail("element '" + e.name + "' is too large");
+        a.smallest_bytes += e.count * per_item;
+        if(e.name == "vertex") a.vertices = e.count;
+      }
+      return a;
+    } else
+      fail("unknown keyword '" + w[0] + "'");
   }
-  return Announced();
+  throw Cli_error("cannot read " + name + ": malformed ply header (no end_header line)");
 }
 
 /// The vertex count of an OFF header ([C][N]OFF, comments, then "vertices faces edges").
@@ -183,7 +338,7 @@ std::uint64_t check_announced_points(const fs::path& path, const std::string& ex
 {
   std::ifstream in(path, std::ios::binary);
   std::uint64_t header_bytes = 0;
-  const Announced a = ext == "ply" ? ply_announced(in, header_bytes) : ext == "off" ? off_announced(in, header_bytes)
+  const Announced a = ext == "ply" ? ply_announced(in, header_bytes, path.string()) : ext == "off" ? off_announced(in, header_bytes)
                                                                                     : Announced();
   if(!a.known) return 0;
   std::error_code ec;
@@ -196,8 +351,8 @@ std::uint64_t check_announced_points(const fs::path& path, const std::string& ex
                     " of memory; this machine has " + gibibytes(double(available)) + " available");
   if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
     throw Cli_error("cannot read " + path.string() + ": truncated " + ext + " file (the header announces " +
-                    std::to_string(a.vertices) + " points, which need at least " + std::to_string(a.smallest_bytes) +
-                    " bytes; the file holds " + std::to_string(size - header_bytes) + " after its header)");
+                    std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
+                    " bytes, the file holds " + std::to_string(size - header_bytes) + " after its header)");
   return a.vertices;
 }
 
@@ -205,35 +360,33 @@ std::uint64_t check_announced_points(const fs::path& path, const std::string& ex
 
 Point_cloud read_point_cloud(const fs::path& path)
 {
-  std::error_code ec;
-  if(!fs::exists(path, ec)) throw Cli_error("cannot read " + path.string() + ": no such file");
-  if(!fs::is_regular_file(path, ec)) throw Cli_error("cannot read " + path.string() + ": not a regular file");
-  if(!std::ifstream(path, std::ios::binary)) throw Cli_error("cannot read " + path.string() + ": permission denied");
+  open_input(path, std::ios::binary);
   const std::string ext = lower_extension(path);
   if(ext != "ply" && ext != "off" && ext != "xyz" && ext != "pwn")
     throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
 
   const std::uint64_t announced = check_announced_points(path, ext);
+  if(ext == "off") {
+    Off_file off = read_off(path);
+    if(off.vertices.empty()) throw Cli_error(path.string() + " contains no points");
+    Point_cloud cloud;
+    cloud.points = std::move(off.vertices);
+    if(!off.normals.empty()) {
+      cloud.normals = std::move(off.normals);
+      cloud.normal_source = "file";
+    } else {
+      cloud.normals = face_normals(cloud.points, off.faces);
+      if(!cloud.normals.empty()) cloud.normal_source = "mesh";
+    }
+    return cloud;
+  }
+
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
-  std::string header;
-  std::ifstream(path) >> header;
-  // CGAL's point-set reader refuses the OFF variants with colours (COFF, like CGAL's own cactus.off) and says
-  // so on stderr; its polygon-soup reader takes them.
-  const bool colored_off = ext == "off" && header.find("OFF") != std::string::npos && header != "OFF" && header != "NOFF";
   try {
-    if(!colored_off) ok = CGAL::IO::read_point_set(path.string(), ps);
+    ok = CGAL::IO::read_point_set(path.string(), ps);
   } catch(const std::exception& e) {
     throw Cli_error("cannot read " + path.string() + ": malformed " + ext + " file (" + e.what() + ")");
-  }
-  if(!ok && ext == "off") {
-    std::vector<Point> vertices;
-    std::vector<std::vector<std::size_t>> faces;
-    if(CGAL::IO::read_polygon_soup(path.string(), vertices, faces, CGAL::parameters::verbose(false)) && !vertices.empty()) {
-      ps.clear();
-      for(const Point& v : vertices) ps.insert(v);
-      ok = true;
-    }
   }
   if(!ok) throw Cli_error("cannot read " + path.string() + ": malformed or truncated " + ext + " file");
   if(ps.number_of_points() == 0) throw Cli_error(path.string() + " contains no points");
@@ -246,8 +399,8 @@ Point_cloud read_point_cloud(const fs::path& path)
   if(ps.has_normal_map()) {
     cloud.normals.assign(ps.normals().begin(), ps.normals().end());
     cloud.normal_source = "file";
-  } else if(ext == "off" || ext == "ply") {
-    cloud.normals = mesh_vertex_normals(path, cloud.points.size());
+  } else if(ext == "ply") {
+    cloud.normals = ply_face_normals(path, cloud.points.size());
     if(!cloud.normals.empty()) cloud.normal_source = "mesh";
   }
 

@@ -91,8 +91,7 @@ std::vector<std::size_t> select_points(const std::vector<Point>& points, const s
         }
         break;
       case Region_spec::Kind::indices: {
-        std::ifstream in(spec.file);
-        if(!in) throw Cli_error("region '" + spec.text + "': cannot read " + spec.file);
+        std::ifstream in = open_input(spec.file);
         std::string line;
         for(std::size_t number = 1; std::getline(in, line); ++number) {
           line = line.substr(0, line.find('#'));

@@ -165,6 +165,23 @@ std::string binary_ply_header(std::size_t vertices)
          "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
 }
 
+std::string ascii_ply_header(std::size_t vertices)
+{
+  return "ply\nformat ascii 1.0\nelement vertex " + std::to_string(vertices) +
+         "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+}
+
+/// "x y z" lines; the x of row `bad` (if any) is replaced by `bad_token`.
+std::string ascii_xyz(const std::vector<std::array<double, 3>>& points, std::size_t bad = std::size_t(-1),
+                      const std::string& bad_token = "")
+{
+  std::string text;
+  for(std::size_t i = 0; i < points.size(); ++i)
+    text += (i == bad ? bad_token : std::to_string(points[i][0])) + " " + std::to_string(points[i][1]) + " " +
+            std::to_string(points[i][2]) + "\n";
+  return text;
+}
+
 std::string binary_xyz(const std::vector<std::array<double, 3>>& points)
 {
   std::string bytes;
@@ -419,9 +436,8 @@ const std::vector<Row>& catalogue()
      }},
     {"cli_ply_truncated_ascii", [] {
        Workspace w;
-       std::string ply = "ply\nformat ascii 1.0\nelement vertex 400\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-       for(const auto& p : sphere_coordinates(300)) ply += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
-       w.expect_failure("details -i " + w.write("cut.ply", ply) + " -o " + w.path("o.ply"), "truncated");
+       const std::string in = w.write("cut.ply", ascii_ply_header(400) + ascii_xyz(sphere_coordinates(300)));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "truncated");
      }},
     {"cli_ply_corrupted_binary", [] {
        // A whole file whose coordinates decode to NaN at point 17.
@@ -433,24 +449,19 @@ const std::vector<Row>& catalogue()
      }},
     {"cli_ply_corrupted_ascii", [] {
        Workspace w;
-       std::string ply = "ply\nformat ascii 1.0\nelement vertex 300\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-       const auto points = sphere_coordinates(300);
-       for(std::size_t i = 0; i < points.size(); ++i)
-         ply += (i == 42 ? std::string("1.0e+x") : std::to_string(points[i][0])) + " " + std::to_string(points[i][1]) + " " +
-                std::to_string(points[i][2]) + "\n";
-       w.expect_failure("details -i " + w.write("bad.ply", ply) + " -o " + w.path("o.ply"), "bad.ply");
+       const std::string in = w.write("bad.ply", ascii_ply_header(300) + ascii_xyz(sphere_coordinates(300), 42, "1.0e+x"));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "bad.ply");
      }},
     {"cli_ply_corrupted_header", [] {
        Workspace w;
        const std::string in = w.write("bad.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty quadruple x\n"
                                                  "end_header\n" + std::string(100, '\x7f'));
-       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "bad.ply");
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "line 4: unknown property type 'quadruple'");
      }},
     {"cli_off_bad_counts", [] {
        Workspace w;
-       std::string off = "OFF\n500 0 0\n";
-       for(const auto& p : sphere_coordinates(300)) off += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
-       w.expect_failure("details -i " + w.write("bad.off", off) + " -o " + w.path("o.ply"), "announces 500 points");
+       const std::string in = w.write("bad.off", "OFF\n500 0 0\n" + ascii_xyz(sphere_coordinates(300)));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "announces 500 points");
      }},
     {"cli_file_too_large", [] {
        // The header asks for more memory than any machine here has: refused before reading.

@@ -292,7 +292,8 @@ TEST(Geometric_details, bad_input_throws_a_clear_error)
   expect_error([&] { compute_geometric_details(idx, 10, mean_shift, CGAL::make_property_map(out), np); }, "range_bandwidth");
   mean_shift.mean_shift.range_bandwidth = 0.5;
   const std::vector<std::size_t> five(idx.begin(), idx.begin() + 5);
-  expect_error([&] { compute_geometric_details(five, 3, mean_shift, CGAL::make_property_map(out), np); }, "at least 5");
+  const std::vector<Vector> up(pts.size(), Vector(0, 0, 1)); // given, as five points are too few to estimate them
+  expect_error([&] { compute_geometric_details(five, 3, mean_shift, CGAL::make_property_map(out), np.normal_map(CGAL::make_property_map(up))); }, "at least 5");
   pts[9] = Point(std::numeric_limits<double>::infinity(), 0, 0);
   expect_error([&] { compute_geometric_details(idx, 10, Detail_filter{}, CGAL::make_property_map(out), np); }, "point #9");
 }

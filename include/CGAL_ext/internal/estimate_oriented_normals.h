@@ -3,12 +3,13 @@
 #ifndef CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
 #define CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
 
+#include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/boost/graph/named_params_helper.h>
-#include <CGAL/jet_estimate_normals.h>
+#include <CGAL/Monge_via_jet_fitting.h>
 #include <CGAL/mst_orient_normals.h>
 #include <CGAL/property_map.h>
 
@@ -20,10 +21,14 @@
 namespace CGAL_ext {
 namespace internal {
 
-/// Normals of a cloud that came without any: `CGAL::jet_estimate_normals` then `CGAL::mst_orient_normals`,
-/// both on an internal copy, since the orientation reorders its range (and would read a caller's
-/// `point_is_constrained_map` as seeds). Points the MST could not reach keep their unoriented jet normal.
-/// Rows follow the cloud's order. Returns false when cancelled.
+/// Normals of a cloud that came without any: jet fitting then `CGAL::mst_orient_normals`, on an internal copy,
+/// since the orientation reorders its range (and would read a caller's `point_is_constrained_map` as seeds).
+/// Points the MST could not reach keep their unoriented jet normal. Rows follow the cloud's order. Returns
+/// false when cancelled.
+///
+/// The jet fit is `CGAL::jet_estimate_normals`' own (`CGAL::Monge_via_jet_fitting`, degree 2, Monge degree 1,
+/// on the point and its k - 1 nearest neighbours), run here on the project's neighbour graph: CGAL 5.5's
+/// function binds its callback to a reference to a temporary (AddressSanitizer: stack-use-after-scope).
 template <typename ConcurrencyTag>
 bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k, Progress& progress,
                                Matrix_n3& normals)
@@ -31,19 +36,29 @@ bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k,
   using SC = CGAL::Simple_cartesian<double>;
   using Item = std::tuple<SC::Point_3, SC::Vector_3, int>;
   const std::size_t n = cloud.size();
-  k = std::min<unsigned int>(k, unsigned(n - 1));
+  k = std::max<unsigned int>(6, std::min<unsigned int>(k, unsigned(n))); // a degree-2 jet has 6 coefficients
+  const Matrix_n3& P = cloud.positions;
   std::vector<Item> items(n);
   for(std::size_t s = 0; s < n; ++s)
-    items[s] = Item(SC::Point_3(cloud.positions(Eigen::Index(s), 0), cloud.positions(Eigen::Index(s), 1),
-                                cloud.positions(Eigen::Index(s), 2)),
+    items[s] = Item(SC::Point_3(P(Eigen::Index(s), 0), P(Eigen::Index(s), 1), P(Eigen::Index(s), 2)),
                     SC::Vector_3(0, 0, 0), int(s));
+  // The neighbour search and the fits are most of the cost; the orientation reports nothing.
+  const Progress::Range whole = progress.range();
+  progress.stage(whole.at(0), whole.at(0.2));
+  const Neighbor_graph graph = k_nearest_neighbor_graph<ConcurrencyTag>(P, k - 1, progress);
+  if(progress.cancelled()) return false;
+  progress.stage(whole.at(0.2), whole.at(0.8));
+  const bool fitted = for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
+    thread_local std::vector<SC::Point_3> fit_points;
+    fit_points.assign(1, std::get<0>(items[i]));
+    for(const int* j = graph.begin(i); j != graph.end(i); ++j) fit_points.push_back(std::get<0>(items[std::size_t(*j)]));
+    CGAL::Monge_via_jet_fitting<SC> fit;
+    std::get<1>(items[i]) = fit(fit_points.begin(), fit_points.end(), 2, 1).normal_direction();
+  });
+  progress.stage(whole.begin, whole.end);
+  if(!fitted) return false;
   const auto point_map = CGAL::Nth_of_tuple_property_map<0, Item>();
   const auto normal_map = CGAL::Nth_of_tuple_property_map<1, Item>();
-  // The jet fit is most of the cost; the orientation reports nothing, so it is given the last fifth.
-  const std::function<bool(double)> jet_callback = [&](double f) { return progress.report(0.8 * f); };
-  CGAL::jet_estimate_normals<ConcurrencyTag>(
-    items, k, CGAL::parameters::point_map(point_map).normal_map(normal_map).callback(jet_callback));
-  if(progress.cancelled()) return false;
   CGAL::mst_orient_normals(items, k, CGAL::parameters::point_map(point_map).normal_map(normal_map));
 
   normals.resize(Eigen::Index(n), 3);
@@ -67,8 +82,9 @@ bool given_or_estimated_normals(const PointRange& points, const NamedParameters&
     normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
     return progress.report(1.0);
   }
-  if(cloud.size() < 3)
-    throw Invalid_input(std::string(who) + ": estimating normals needs at least 3 points; pass a normal_map");
+  if(cloud.size() < 6)
+    throw Invalid_input(std::string(who) + ": estimating normals needs at least 6 points (a jet fit has 6 "
+                        "coefficients); pass a normal_map");
   return estimate_oriented_normals<ConcurrencyTag>(cloud, neighbors, progress, normals);
 }
 
