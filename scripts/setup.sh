@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libsuitesparse-dev libopenblas-dev
+  clang libclang-rt-14-dev time bc
 )
 
 missing=()
