@@ -79,6 +79,38 @@ std::vector<Vector> ply_face_normals(const fs::path& path, std::size_t expected_
   return face_normals(vertices, faces);
 }
 
+/// Available memory in bytes (MemAvailable of /proc/meminfo), or 0 when it cannot be read.
+std::uint64_t available_memory()
+{
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::uint64_t kib = 0;
+  std::string unit;
+  while(meminfo >> key >> kib >> unit)
+    if(key == "MemAvailable:") return kib * 1024;
+  return 0;
+}
+
+std::string gibibytes(double bytes)
+{
+  std::ostringstream os;
+  os.precision(bytes < 1024.0 * 1024 * 1024 * 10 ? 2 : 0);
+  os << std::fixed << bytes / (1024.0 * 1024 * 1024) << " GiB";
+  return os.str();
+}
+
+/// Fails early, before any reader allocates, for a file that announces more points than this machine's memory
+/// can process (about 1 KiB per point for the program's largest run, an edit).
+void check_memory_for(const fs::path& path, std::uint64_t points)
+{
+  const std::uint64_t bytes_per_point = 1024;
+  const std::uint64_t available = available_memory();
+  if(available > 0 && points > available / bytes_per_point)
+    throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(points) +
+                    " points, which need about " + gibibytes(double(points) * bytes_per_point) +
+                    " of memory; this machine has " + gibibytes(double(available)) + " available");
+}
+
 /// An ASCII OFF file ([ST][C][N]OFF): vertices, their normals (NOFF) and faces. Colours and texture
 /// coordinates are skipped. The project reads OFF itself: CGAL 5.5's scanner reads past its buffer on some
 /// malformed colour entries (found by fuzz/fuzz_point_reader).
@@ -141,6 +173,7 @@ Off_file read_off(const fs::path& path)
   if(tokens.empty() && !next_line()) throw Cli_error(name + ": the header has no vertex count");
   const std::uint64_t vertex_count = count(tokens[0], "vertex count");
   const std::uint64_t face_count = tokens.size() > 1 ? count(tokens[1], "face count") : 0;
+  check_memory_for(path, vertex_count);
 
   Off_file off;
   const std::size_t per_vertex = with_normals ? 6 : 3;
@@ -185,32 +218,11 @@ bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, 
   return true;
 }
 
-/// Available memory in bytes (MemAvailable of /proc/meminfo), or 0 when it cannot be read.
-std::uint64_t available_memory()
-{
-  std::ifstream meminfo("/proc/meminfo");
-  std::string key;
-  std::uint64_t kib = 0;
-  std::string unit;
-  while(meminfo >> key >> kib >> unit)
-    if(key == "MemAvailable:") return kib * 1024;
-  return 0;
-}
-
-std::string gibibytes(double bytes)
-{
-  std::ostringstream os;
-  os.precision(bytes < 1024.0 * 1024 * 1024 * 10 ? 2 : 0);
-  os << std::fixed << bytes / (1024.0 * 1024 * 1024) << " GiB";
-  return os.str();
-}
-
-/// What a PLY or OFF header announces, read without trusting it.
+/// What a PLY header announces, read without trusting it.
 struct Announced
 {
   std::uint64_t vertices = 0;
   std::uint64_t smallest_bytes = 0; ///< the fewest bytes of data after the header that can hold them
-  bool known = false;
 };
 
 std::uint64_t ply_scalar_size(const std::string& type)
@@ -292,7 +304,6 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
       if((vertex_types.count("nx") || vertex_types.count("ny") || vertex_types.count("nz")) && !same_float_type("nx", "ny", "nz"))
         fail("the normals need nx, ny and nz properties, all float or all double");
       header_bytes = std::uint64_t(in.tellg());
-      a.known = true;
       for(const Element& e : elements) {
         // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
         if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");
@@ -308,49 +319,18 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
   throw Cli_error("cannot read " + name + ": malformed ply header (no end_header line)");
 }
 
-/// The vertex count of an OFF header ([C][N]OFF, comments, then "vertices faces edges").
-Announced off_announced(std::istream& in, std::uint64_t& header_bytes)
-{
-  Announced a;
-  std::string word;
-  in >> word;
-  if(word.find("OFF") == std::string::npos) return a;
-  std::string token;
-  while(in >> token) {
-    if(token[0] == '#') { std::getline(in, token); continue; }
-    try {
-      std::size_t used = 0;
-      const long long count = std::stoll(token, &used);
-      if(used != token.size() || count < 0) return Announced();
-      a.vertices = std::uint64_t(count);
-    } catch(const std::exception&) { return Announced(); }
-    break;
-  }
-  header_bytes = std::uint64_t(in.tellg());
-  a.known = word.find("4") == std::string::npos && word.find("n") == std::string::npos; // not a higher-dimension OFF
-  a.smallest_bytes = a.vertices * 6; // "x y z\n", one digit each
-  return a;
-}
-
-/// Fails early, before CGAL's reader allocates, for a header that announces more points than the file holds
-/// or than this machine's memory can process (about 1 KiB per point for the program's largest run, an edit).
-std::uint64_t check_announced_points(const fs::path& path, const std::string& ext)
+/// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
+/// hold what it announces. Returns the announced vertex count.
+std::uint64_t check_ply_header(const fs::path& path)
 {
   std::ifstream in(path, std::ios::binary);
   std::uint64_t header_bytes = 0;
-  const Announced a = ext == "ply" ? ply_announced(in, header_bytes, path.string()) : ext == "off" ? off_announced(in, header_bytes)
-                                                                                    : Announced();
-  if(!a.known) return 0;
+  const Announced a = ply_announced(in, header_bytes, path.string());
+  check_memory_for(path, a.vertices);
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
-  const std::uint64_t bytes_per_point = 1024;
-  const std::uint64_t available = available_memory();
-  if(available > 0 && a.vertices > available / bytes_per_point)
-    throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(a.vertices) +
-                    " points, which need about " + gibibytes(double(a.vertices) * bytes_per_point) +
-                    " of memory; this machine has " + gibibytes(double(available)) + " available");
   if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
-    throw Cli_error("cannot read " + path.string() + ": truncated " + ext + " file (the header announces " +
+    throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
                     std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
                     " bytes, the file holds " + std::to_string(size - header_bytes) + " after its header)");
   return a.vertices;
@@ -365,7 +345,6 @@ Point_cloud read_point_cloud(const fs::path& path)
   if(ext != "ply" && ext != "off" && ext != "xyz" && ext != "pwn")
     throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
 
-  const std::uint64_t announced = check_announced_points(path, ext);
   if(ext == "off") {
     Off_file off = read_off(path);
     if(off.vertices.empty()) throw Cli_error(path.string() + " contains no points");
@@ -381,6 +360,7 @@ Point_cloud read_point_cloud(const fs::path& path)
     return cloud;
   }
 
+  const std::uint64_t announced = ext == "ply" ? check_ply_header(path) : 0;
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   try {

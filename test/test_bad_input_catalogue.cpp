@@ -469,6 +469,11 @@ const std::vector<Row>& catalogue()
        const std::string in = w.write("huge.ply", binary_ply_header(100000000000ull) + binary_xyz(sphere_coordinates(10)));
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + w.write("e.json", edit_json_sphere), "of memory");
      }},
+    {"cli_off_too_large", [] {
+       Workspace w;
+       const std::string in = w.write("huge.off", "OFF\n100000000000 0 0\n" + ascii_xyz(sphere_coordinates(10)));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "of memory");
+     }},
     {"cli_json_wrong_type", [] {
        Workspace w;
        const std::string in = w.sphere_ply();

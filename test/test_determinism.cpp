@@ -137,3 +137,24 @@ TEST_F(Determinism, upsample)
   check("upsample", "upsample -i " + path("stretched.ply") + " -o OUT");
 }
 TEST_F(Determinism, render) { check("render", "render -i " + scan + " -o OUT", ".png"); }
+
+TEST_F(Determinism, demo)
+{
+  // The demo has no scan input: it generates its tentacle, so this also checks the generator.
+  std::vector<fs::path> runs;
+  for(const char* threads : {"2", "2", "1"}) {
+    runs.push_back(dir / ("demo_" + std::to_string(runs.size())));
+    const Program_run r = run(std::string("--threads ") + threads + " demo --points 4000 -o " + runs.back().string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  std::size_t files = 0;
+  for(const auto& entry : fs::directory_iterator(runs[0])) {
+    const fs::path name = entry.path().filename();
+    ASSERT_TRUE(fs::exists(runs[1] / name) && fs::exists(runs[2] / name)) << name;
+    EXPECT_TRUE(contents(runs[0] / name) == contents(runs[1] / name)) << name << ": two runs with 2 threads differ";
+    if(name.extension() == ".ply") EXPECT_LE(relative_difference(runs[0] / name, runs[2] / name), 1e-12) << name;
+    else EXPECT_TRUE(contents(runs[0] / name) == contents(runs[2] / name)) << name << ": 1 and 2 threads differ";
+    ++files;
+  }
+  EXPECT_GE(files, 10u) << "the demo writes its PLY and PNG files";
+}

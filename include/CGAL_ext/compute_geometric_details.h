@@ -127,9 +127,9 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   `delta . n >= 0`, `-||delta||` otherwise (positive on bumps that stand out along the normal).
 
   Normals come from `normal_map` when given (for a `CGAL::Point_set_3`, from its normal property when it has
-  one, so `point_set.parameters()` works with and without normals); otherwise they are estimated on an internal copy with
-  `CGAL::jet_estimate_normals` (18 neighbours) and oriented with `CGAL::mst_orient_normals`. Only the
-  oriented magnitude uses them.
+  one, so `point_set.parameters()` works with and without normals); otherwise they are estimated on an internal
+  copy with a degree-2 jet fit (`CGAL::Monge_via_jet_fitting`, 18 neighbours) and oriented with
+  `CGAL::mst_orient_normals`. Only the oriented magnitude uses them.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
           both give the same result.

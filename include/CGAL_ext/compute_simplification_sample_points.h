@@ -347,7 +347,7 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   \param points the input points; not modified
   \param settings cluster size (or target count), mode spread threshold and mean-shift settings
   \param sample_index_map receives, for every point, the index of its sample point in the result
-  \param np `point_map`, `normal_map` (estimated with `CGAL::jet_estimate_normals` and
+  \param np `point_map`, `normal_map` (estimated by jet fitting and
          `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched) and
          `geom_traits`, as in `compute_geometric_details`
 

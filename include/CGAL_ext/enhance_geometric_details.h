@@ -113,7 +113,7 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   With a partial region, its border is anchored where it is as `settings.border_anchoring` says, unless
   `point_is_constrained_map` names the anchors (kept where they are).
 
-  Normals (for the flow) come from `normal_map` or are estimated (`CGAL::jet_estimate_normals` and
+  Normals (for the flow) come from `normal_map` or are estimated (jet fitting and
   `CGAL::mst_orient_normals`, 18 neighbours). The parameters are those of `scale_geometric_details`, plus
   `normal_map`; `settings` also holds the flow's settings.
 

@@ -36,7 +36,7 @@ namespace CGAL_ext {
   \param fitting `Curvature_fitting::monge_jet_fitting` (CGAL's, the reference) or `closed_form` (faster); the
                  overload without it uses the Monge fit
   \param curvature_map receives the mean curvature of each point
-  \param np `point_map`, `normal_map` (they orient the sign; estimated with `CGAL::jet_estimate_normals` and
+  \param np `point_map`, `normal_map` (they orient the sign; estimated by jet fitting and
          `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched),
          `geom_traits`, as in `compute_geometric_details`
 
