@@ -107,7 +107,7 @@ int main(int argc, char** argv)
   const int threads = tbb::info::default_concurrency();
   std::vector<Row> rows;
   std::vector<std::pair<std::string, Point_cloud>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant"}) {
+  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
     const fs::path file = data / "meshes" / (std::string(m) + ".off");
     if(!fs::exists(file)) { std::fprintf(stderr, "skipping %s (run scripts/fetch_data.sh)\n", file.string().c_str()); continue; }
     models.emplace_back(m, read_point_cloud(file));

@@ -191,6 +191,42 @@ double largest_stretch(const Point_cloud& cloud, const Edit_description& edit, c
 }
 
 
+/// Times of one edit: preprocess, editing the SSPs (assembly, factorisation, first solve), diffusion, and a
+/// drag of the first handle along its path (one deform() and diffuse() per step).
+struct Edit_times
+{
+  Stats preprocess, editing, diffusion, drag;
+  CGAL_ext::Detail_preserving_deformation_statistics last;
+};
+
+Edit_times time_edit(const Point_cloud& cloud, const Edit_description& edit, int reps, int drags)
+{
+  std::unique_ptr<Deformation> d;
+  std::vector<double> pre, editing, diffusion, drag;
+  for(int r = 0; r < reps; ++r) {
+    d = make_deformation(cloud, edit);
+    const auto start = std::chrono::steady_clock::now();
+    d->preprocess();
+    pre.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    d->deform();
+    d->diffuse();
+    const auto& st = d->statistics();
+    editing.push_back(st.least_squares.assembly_seconds + st.least_squares.factor_seconds + st.deform_seconds);
+    diffusion.push_back(st.diffuse_seconds);
+  }
+  const Handle_edit& h = edit.handles.front();
+  const Eigen::AngleAxisd turn(h.rotation);
+  for(int step = 1; step <= drags; ++step) {
+    const double t = double(step) / drags;
+    const auto start = std::chrono::steady_clock::now();
+    d->set_handle_transform(0, Eigen::AngleAxisd(t * turn.angle(), turn.axis()).toRotationMatrix(), t * h.translation);
+    d->deform();
+    d->diffuse();
+    drag.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return {summarize(pre), summarize(editing), summarize(diffusion), summarize(drag), d->statistics()};
+}
+
 /// Table 1 rows of one model: per order, preprocess, editing the SSPs, diffusion, and per-drag times.
 void table1(const std::string& name, const Point_cloud& cloud, const Edit_description& base_edit, int reps, int drags)
 {
@@ -204,55 +240,74 @@ void table1(const std::string& name, const Point_cloud& cloud, const Edit_descri
     Edit_description edit = base_edit;
     edit.settings.filter.order = v.order;
     edit.settings.rotations = v.rotations;
-    std::unique_ptr<Deformation> d;
-    std::vector<double> pre, editing, diffusion, drag;
-    for(int r = 0; r < reps; ++r) {
-      d = make_deformation(cloud, edit);
-      const auto start = std::chrono::steady_clock::now();
-      d->preprocess();
-      pre.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-      d->deform();
-      d->diffuse();
-      const auto& st = d->statistics();
-      editing.push_back(st.least_squares.assembly_seconds + st.least_squares.factor_seconds + st.deform_seconds);
-      diffusion.push_back(st.diffuse_seconds);
-    }
-    // Dragging: the handle moves along a path, one back-substitution and one diffusion per step.
-    const Handle_edit& h = edit.handles.front();
-    for(int step = 1; step <= drags; ++step) {
-      const double t = double(step) / drags;
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(t * Eigen::AngleAxisd(h.rotation).angle(), Eigen::AngleAxisd(h.rotation).axis()).toRotationMatrix();
-      const auto start = std::chrono::steady_clock::now();
-      d->set_handle_transform(0, R, t * h.translation);
-      d->deform();
-      d->diffuse();
-      drag.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    }
-    const auto& st = d->statistics();
-    const Stats p = summarize(pre), e = summarize(editing), f = summarize(diffusion), g = summarize(drag);
+    const Edit_times t = time_edit(cloud, edit, reps, drags);
+    const auto& st = t.last;
     std::printf("  [%s %s: clustering %.4f, assembly %.4f, factor %.4f, deform %.4f (solve %.4f, %d refinement steps), %s]\n",
                 name.c_str(), v.label, st.clustering_seconds, st.least_squares.assembly_seconds,
                 st.least_squares.factor_seconds, st.deform_seconds, st.least_squares.solve_seconds, st.least_squares.iterations,
                 st.least_squares.method.c_str());
-    say("| %s | %s | %zu | %zu | %zu | %.3f | **%.4f** | **%.4f** | %.1f (%.1f-%.1f) | %.0f |\n", name.c_str(), v.label,
-        st.points, st.samples, st.roi_samples, p.median, e.median, f.median, 1e3 * g.median, 1e3 * g.min, 1e3 * g.max, peak_rss_mib());
-    csv << "table1," << name << "," << v.label << "," << st.points << "," << st.samples << "," << st.roi_samples << ","
-        << p.median << "," << e.median << "," << f.median << "," << g.median << "," << g.max << "\n";
+    say("| %s | %s | %zu | %zu | %zu | %.3f | **%.4f** | **%.4f** | %.1f (%.1f-%.1f) |\n", name.c_str(), v.label,
+        st.points, st.samples, st.roi_samples, t.preprocess.median, t.editing.median, t.diffusion.median,
+        1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max);
+    csv << "table1,\"" << name << "\"," << v.label << "," << st.points << "," << st.samples << "," << st.roi_samples << ","
+        << t.preprocess.median << "," << t.editing.median << "," << t.diffusion.median << "," << t.drag.median << ","
+        << t.drag.max << "\n";
   }
+}
+
+/// Scaling rows of one size: per order, Cholesky (factored once, a back-substitution per drag) against
+/// conjugate gradients (no factorisation, an iterative solve per drag; one run, fewer drags).
+void scaling(const std::string& name, const Point_cloud& cloud, const Edit_description& base_edit, int reps, int drags)
+{
+  for(const CGAL_ext::Detail_order order : {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric, CGAL_ext::Detail_order::cubic})
+    for(const CGAL_ext::Linear_solver solver : {CGAL_ext::Linear_solver::cholesky, CGAL_ext::Linear_solver::conjugate_gradient}) {
+      Edit_description edit = base_edit;
+      edit.settings.filter.order = order;
+      edit.settings.least_squares.solver = solver;
+      const bool cg = solver == CGAL_ext::Linear_solver::conjugate_gradient;
+      const Edit_times t = time_edit(cloud, edit, cg ? 1 : reps, cg ? std::min(drags, 3) : drags);
+      const char* order_name = order == CGAL_ext::Detail_order::linear ? "linear" : order == CGAL_ext::Detail_order::quadric ? "quadric" : "cubic";
+      say("| %s | %zu | %s | %s | %zu | %zu | %.3f | %.4f | %.1f (%.1f-%.1f) | %d |\n", name.c_str(), t.last.points,
+          order_name, cg ? "CG" : "Cholesky", t.last.samples, t.last.roi_samples, t.preprocess.median, t.editing.median,
+          1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max, cg ? t.last.least_squares.iterations : 0);
+      csv << "scaling,\"" << name << "\"," << order_name << "," << (cg ? "cg" : "cholesky") << "," << t.last.points << ","
+          << t.last.samples << "," << t.last.roi_samples << "," << t.preprocess.median << "," << t.editing.median << ","
+          << t.drag.median << "," << t.drag.min << "," << t.drag.max << "," << (cg ? t.last.least_squares.iterations : 0) << "\n";
+    }
+}
+
+/// The largest distance of a handle point from its target (the handle's transform of where it was), relative
+/// to the bounding diagonal: how closely the soft handle constraints are met.
+double handle_error(const Point_cloud& cloud, const Edit_description& edit, const internal::Matrix_n3& deformed)
+{
+  double error = 0;
+  for(const Handle_edit& h : edit.handles)
+    for(std::size_t i : h.points) {
+      const Point& p = cloud.points[i];
+      const Eigen::Vector3d target = h.rotation * Eigen::Vector3d(p.x(), p.y(), p.z()) + h.translation;
+      error = std::max(error, (deformed.row(Eigen::Index(i)).transpose() - target).norm());
+    }
+  return error / diagonal_of(cloud.points);
 }
 
 void compare_with_arap(const std::string& name, const Point_cloud& cloud, const Mesh& mesh, const Edit_description& edit, int reps)
 {
   const double diagonal = diagonal_of(cloud.points);
+  auto row = [&](const std::string& what, double preprocess, double deform, const internal::Matrix_n3& result,
+                 const internal::Matrix_n3& sre) {
+    const double distance = &result == &sre ? 0 : hausdorff(result, sre) / diagonal;
+    const double change = point_detail_change(cloud, edit, result), handle = handle_error(cloud, edit, result);
+    char percent[32] = ""; // blank for the reference itself
+    if(&result != &sre) std::snprintf(percent, sizeof percent, "%.2f %%", 100 * distance);
+    say("| %s | %s | %.3f | %.3f | %s | %.3f | %.2e |\n", name.c_str(), what.c_str(), preprocess, deform, percent, change, handle);
+    csv << "arap,\"" << name << "\",\"" << what << "\"," << preprocess << "," << deform << "," << distance << "," << change << ","
+        << handle << "\n";
+  };
   Stats pre{}, def{};
   const internal::Matrix_n3 sre = mesh_arap<CGAL::SRE_ARAP>(mesh, edit, 5, pre, def, reps);
-  say("| %s | CGAL SRE_ARAP, 5 iterations | %.3f | %.3f | | %.3f |\n", name.c_str(), pre.median, def.median,
-      point_detail_change(cloud, edit, sre));
-  csv << "arap," << name << ",SRE_ARAP," << pre.median << "," << def.median << ",0\n";
+  row("CGAL SRE_ARAP, 5 iterations", pre.median, def.median, sre, sre);
   const internal::Matrix_n3 original = mesh_arap<CGAL::ORIGINAL_ARAP>(mesh, edit, 5, pre, def, reps);
-  say("| %s | CGAL ORIGINAL_ARAP, 5 iterations | %.3f | %.3f | %.2f %% | %.3f |\n", name.c_str(), pre.median, def.median,
-      100 * hausdorff(original, sre) / diagonal, point_detail_change(cloud, edit, original));
-  csv << "arap," << name << ",ORIGINAL_ARAP," << pre.median << "," << def.median << "," << hausdorff(original, sre) / diagonal << "\n";
+  row("CGAL ORIGINAL_ARAP, 5 iterations", pre.median, def.median, original, sre);
   using Rotation = CGAL_ext::Detail_rotation;
   using Distance = CGAL_ext::Strength_distance;
   struct Variant { const char* what; Rotation rotations; Distance distance; };
@@ -265,14 +320,8 @@ void compare_with_arap(const std::string& name, const Point_cloud& cloud, const 
     auto d = make_deformation(cloud, e);
     d->deform();
     d->diffuse();
-    const internal::Matrix_n3 deformed = deformed_points(*d);
-    const double distance = hausdorff(deformed, sre) / diagonal;
-    const char* what = v.what;
-    say("| %s | %s: preprocess, then deform + diffuse | %.3f | %.3f | %.2f %% | %.3f |\n", name.c_str(), what,
-        d->statistics().preprocess_seconds, d->statistics().deform_seconds + d->statistics().diffuse_seconds, 100 * distance,
-        point_detail_change(cloud, e, deformed));
-    csv << "arap," << name << ",\"" << what << "\"," << d->statistics().preprocess_seconds << ","
-        << d->statistics().deform_seconds + d->statistics().diffuse_seconds << "," << distance << "\n";
+    row(std::string(v.what) + ": preprocess, then deform + diffuse", d->statistics().preprocess_seconds,
+        d->statistics().deform_seconds + d->statistics().diffuse_seconds, deformed_points(*d), sre);
   }
 }
 
@@ -400,10 +449,10 @@ int main(int argc, char** argv)
   const fs::path data = options.data, out = options.out;
   fs::create_directories(out);
   csv.open(out / "editing_results.csv");
-  csv << "section,model,variant,...\n";
+  csv << "section,model,variant,... (columns per section: benchmark/make_results.py)\n";
 
   std::vector<std::tuple<std::string, Point_cloud, Mesh>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant"}) {
+  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
     const fs::path file = data / "meshes" / (std::string(m) + ".off");
     if(!fs::exists(file)) continue;
     Mesh mesh;
@@ -421,8 +470,8 @@ int main(int argc, char** argv)
       "diffusion: frames and every point's position and normal; per drag: new handle transform, deform(), diffuse()\n\n",
       tbb::info::default_concurrency(), malloc_pages().c_str(), options.reps, quick ? 5 : 20);
 
-  say("## Table 1\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) | peak MiB |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  say("## Table 1\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
   {
     // The paper's own global edit at its size: a 44,383-point tentacle, all but its base in the region, the tip
     // swung by 40 degrees about the base.
@@ -443,20 +492,24 @@ int main(int argc, char** argv)
     table1("tentacle (generated)", tentacle, edit, options.reps, quick ? 5 : 20);
   }
   for(const auto& [name, cloud, mesh] : models) table1(name, cloud, scan_edit(cloud, diagonal_of(cloud.points)), options.reps, quick ? 5 : 20);
-  {
-    const Point_cloud big = sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000);
-    table1(quick ? "armadillo_100k" : "armadillo_1M", big, scan_edit(big, diagonal_of(big.points)), options.reps, quick ? 5 : 20);
-  }
-  if(!quick) {
-    const Point_cloud huge = sample_mesh(data / "meshes/armadillo.off", 4000000);
-    table1("armadillo_4M", huge, scan_edit(huge, diagonal_of(huge.points)), options.reps, 20);
-  }
   say("\nThe paper (Pentium 4, 2.0 GHz): horse 48,484 points, 3,287 SSPs, 687 in the ROI: editing SSPs 0.10 / 0.19 / 1.17 s "
       "(linear / quadric / cubic), diffusion 0.32 s; tentacle 44,383 points, 3,339 SSPs, 3,122 in the ROI: 1.61 / 1.98 / 20.8 s, "
       "diffusion 0.83 s; dinosaur 56,194 points, 5,954 SSPs, 5,584 in the ROI: 2.58 / 4.90 s (cubic not given), diffusion 1.18 / 1.55 s.\n\n");
 
+  say("## Scaling: samplings of the armadillo surface, Cholesky against conjugate gradients\n\n"
+      "Conjugate gradients: one run, 3 drags (each drag is an iterative solve); iterations of the last solve.\n\n"
+      "| sampling | points | order | solver | SSPs | ROI SSPs | preprocess s | editing SSPs s | per drag ms (min-max) | CG iterations |\n"
+      "|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
+  for(const std::size_t n : quick ? std::vector<std::size_t>{100000} : std::vector<std::size_t>{100000, 1000000, 4000000}) {
+    const Point_cloud sampling = sample_mesh(data / "meshes/armadillo.off", n);
+    scaling("armadillo_" + (n >= 1000000 ? std::to_string(n / 1000000) + "M" : std::to_string(n / 1000) + "k"), sampling,
+            scan_edit(sampling, diagonal_of(sampling.points)), options.reps, quick ? 5 : 20);
+  }
+  say("\n");
+
   say("## Against CGAL's mesh ARAP (same mesh, region, control vertices and targets)\n\n"
-      "| model | method | preprocess s | deform s | Hausdorff to SRE_ARAP (of the diagonal) | detail change |\n|---|---|---:|---:|---:|---:|\n");
+      "| model | method | preprocess s | deform s | Hausdorff to SRE_ARAP (of the diagonal) | detail change | handle error (of the diagonal) |\n"
+      "|---|---|---:|---:|---:|---:|---:|\n");
   for(const auto& [name, cloud, mesh] : models) compare_with_arap(name, cloud, mesh, scan_edit(cloud, diagonal_of(cloud.points)), options.reps);
   // At scale: the armadillo split twice and three times at its edges' midpoints (the same surface with 416k and
   // 1.7M vertices), one run each.

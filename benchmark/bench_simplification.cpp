@@ -137,7 +137,7 @@ int main(int argc, char** argv)
   const bool quick = options.quick;
   const fs::path data = options.data, out = options.out;
   std::vector<std::pair<std::string, Point_cloud>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant"}) {
+  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
     const fs::path file = data / "meshes" / (std::string(m) + ".off");
     if(!fs::exists(file)) continue;
     models.emplace_back(m, read_point_cloud(file));

@@ -143,13 +143,14 @@ void bench(const std::string& name, const Point_cloud& input, const Mesh& mesh, 
       farthest = std::max(farthest, d);
       mean += d / double(added.size());
     }
+    const double h = settings.detection.spacing;
+    const double before = covering_radius(stretched.points, reference) / h, after = covering_radius(all_points, reference) / h;
     char buf[512];
-    std::snprintf(buf, sizeof buf, "| %s | %s | %zu | %zu | %.3f | %.2f | %.2f | %.4f | %.4f | %.4f |\n", name.c_str(), method, n, added.size(),
-                  time.median, covering_radius(stretched.points, reference) / settings.detection.spacing,
-                  covering_radius(all_points, reference) / settings.detection.spacing, mean / settings.detection.spacing,
-                  farthest / settings.detection.spacing, input_farthest / settings.detection.spacing);
+    std::snprintf(buf, sizeof buf, "| %s | %s | %zu | %zu | %.3f | %.2f | %.2f | %.4f | %.4f | %.4f |\n", name.c_str(), method, n,
+                  added.size(), time.median, before, after, mean / h, farthest / h, input_farthest / h);
     say(buf);
-    csv << name << "," << method << "," << n << "," << added.size() << "," << time.median << "\n";
+    csv << name << ",\"" << method << "\"," << n << "," << added.size() << "," << time.median << "," << before << "," << after
+        << "," << mean / h << "," << farthest / h << "," << input_farthest / h << "\n";
   };
   row("ours (upsample_point_set)", ours, ours_time);
   row("CGAL edge_aware_upsample_point_set, same output size", theirs, their_time);
@@ -191,7 +192,8 @@ int main(int argc, char** argv)
   if(!fs::exists(file)) { std::fprintf(stderr, "bench_upsampling: no %s (run scripts/fetch_data.sh)\n", file.string().c_str()); return 1; }
   fs::create_directories(options.out);
   csv.open(options.out / "upsampling_results.csv");
-  csv << "model,method,points,inserted,median_s\n";
+  csv << "model,method,points,inserted,median_s,covering_radius_before_h,covering_radius_after_h,mean_distance_of_new_h,"
+         "largest_distance_of_new_h,largest_distance_of_input_h\n";
   char head[1024];
   std::snprintf(head, sizeof head,
                 "# Up-sampling benchmark\n\n- %d threads; malloc: %s; ours: median of %d runs, CGAL's: one run\n"

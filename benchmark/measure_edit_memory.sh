@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Peak memory of whole `point-detail edit` runs (reading, preprocessing, one edit, diffusion, writing) on
-# samplings of the armadillo surface, measured by /usr/bin/time -v; writes benchmark/memory_results.md.
+# samplings of the armadillo surface, measured by /usr/bin/time -v; writes memory_results.md and .csv.
 # The target is at most 1 KiB per input point.
-# Usage: benchmark/measure_edit_memory.sh [SIZES...]   (default: 1000000 4000000; Release build in build/)
+# Usage: benchmark/measure_edit_memory.sh [--out DIR] [SIZES...]
+#        (default: benchmark/, 100000 1000000 4000000; Release build in build/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -10,8 +11,11 @@ bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j"$(nproc)" --target point-detail sample_scan
+out_dir=benchmark
+if [ "${1:-}" = "--out" ]; then out_dir=$2; shift 2; fi
+mkdir -p "$out_dir"
 sizes=("$@")
-[ ${#sizes[@]} -gt 0 ] || sizes=(1000000 4000000)
+[ ${#sizes[@]} -gt 0 ] || sizes=(100000 1000000 4000000)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # The edit of benchmark/bench_editing.cpp's scans: region within 0.4 diagonals of the vertex farthest along +x,
@@ -22,7 +26,6 @@ awk 'NR == 2 {n = $1} NR > 2 && NR <= n + 2 {
      END { d = sqrt((hi[1]-lo[1])^2 + (hi[2]-lo[2])^2 + (hi[3]-lo[3])^2)
            printf "{\"roi\": [\"sphere:%g,%g,%g,%g\"], \"handles\": [{\"select\": [\"sphere:%g,%g,%g,%g\"], \"translation\": [0, %g, 0]}]}\n",
                   ex, ey, ez, 0.4 * d, ex, ey, ez, 0.06 * d, 0.05 * d }' data/meshes/armadillo.off > "$work/edit.json"
-out=benchmark/memory_results.md
 {
   echo "# Peak memory of whole edit runs"
   echo
@@ -33,6 +36,7 @@ out=benchmark/memory_results.md
   echo "| points | wall time | peak RSS | per point |"
   echo "|---:|---:|---:|---:|"
 } > "$work/table.md"
+echo "points,wall_s,peak_rss_mib,bytes_per_point" > "$work/table.csv"
 for n in "${sizes[@]}"; do
   "$build/benchmark/sample_scan" data/meshes/armadillo.off "$n" "$work/in.ply"
   /usr/bin/time -v "$build/src/point-detail" -q edit -i "$work/in.ply" -o "$work/out.ply" --edit "$work/edit.json" \
@@ -40,7 +44,10 @@ for n in "${sizes[@]}"; do
   kib=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$work/time.txt")
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$work/time.txt")
   printf '| %s | %s | %.0f MiB | %.0f B |\n' "$n" "$wall" "$(echo "$kib / 1024" | bc -l)" "$(echo "$kib * 1024 / $n" | bc -l)" >> "$work/table.md"
+  seconds=$(echo "$wall" | awk -F: '{s = 0; for(i = 1; i <= NF; ++i) s = 60 * s + $i; print s}')
+  printf '%s,%s,%.1f,%.1f\n' "$n" "$seconds" "$(echo "$kib / 1024" | bc -l)" "$(echo "$kib * 1024 / $n" | bc -l)" >> "$work/table.csv"
   rm -f "$work/in.ply" "$work/out.ply"
 done
-mv "$work/table.md" "$out"
-cat "$out"
+mv "$work/table.md" "$out_dir/memory_results.md"
+mv "$work/table.csv" "$out_dir/memory_results.csv"
+cat "$out_dir/memory_results.md"

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up (Debian packages), builds, and runs every test: the test suite with ctest (Release), the
-# same suite built with AddressSanitizer and UndefinedBehaviorSanitizer, and each fuzz target for 30 seconds.
+# benchmark harness in its quick mode, the API reference (no Doxygen warning allowed), the same test suite built
+# with AddressSanitizer and UndefinedBehaviorSanitizer, and each fuzz target for 30 seconds.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,5 +10,7 @@ build=${BUILD_DIR:-build}
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j"$(nproc)"
 ctest --test-dir "$build" -j"$(nproc)" --output-on-failure
+BUILD_DIR="$build" bash scripts/run_benchmarks.sh --quick
+bash scripts/build_api_docs.sh
 bash scripts/run_sanitized_tests.sh
 bash scripts/run_fuzzers.sh 30

@@ -10,6 +10,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libstb-dev
   libsuitesparse-dev libopenblas-dev
   clang libclang-rt-14-dev time bc
+  doxygen python3 python3-matplotlib
 )
 
 missing=()

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Sets everything up, builds in Release and runs the whole benchmark harness on CGAL's real scans and on 100k, 1M
+# and 4M-point samplings of the armadillo surface; writes benchmark/RESULTS.md, benchmark/results.csv,
+# benchmark/scaling.png and each stage's *_results.{md,csv}. About 25 minutes on 2 cores.
+# Usage: scripts/run_benchmarks.sh [--quick]
+#   --quick: small sizes, one repetition, results under build/benchmark/quick (what CI runs so the harness
+#            cannot rot; the committed figures are never overwritten by it).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+quick=0
+case "${1:-}" in
+  --quick) quick=1 ;;
+  "") ;;
+  *) echo "usage: scripts/run_benchmarks.sh [--quick]" >&2; exit 2 ;;
+esac
+bash scripts/setup.sh
+bash scripts/fetch_data.sh
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+benches=(bench_editing bench_upsampling bench_simplification bench_curvature bench_scaling bench_details)
+cmake --build "$build" -j"$(nproc)" --target "${benches[@]}" sample_scan point-detail
+if [ "$quick" = 1 ]; then
+  out="$build/benchmark/quick"
+  flags=(--quick)
+  sizes=(100000)
+else
+  out=benchmark
+  flags=()
+  sizes=(100000 1000000 4000000)
+fi
+mkdir -p "$out"
+start=$SECONDS
+for bench in "${benches[@]}"; do
+  echo "== $bench" >&2
+  "$build/benchmark/$bench" "${flags[@]}" --data data --out "$out" >/dev/null
+done
+echo "== measure_edit_memory.sh" >&2
+BUILD_DIR="$build" bash benchmark/measure_edit_memory.sh --out "$out" "${sizes[@]}" >/dev/null
+BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"
+echo "run_benchmarks.sh: $((SECONDS - start)) s of benchmarks" >&2
