@@ -265,8 +265,22 @@ void scaling(const std::string& name, const Point_cloud& cloud, const Edit_descr
       edit.settings.filter.order = order;
       edit.settings.least_squares.solver = solver;
       const bool cg = solver == CGAL_ext::Linear_solver::conjugate_gradient;
-      const Edit_times t = time_edit(cloud, edit, cg ? 1 : reps, cg ? std::min(drags, 3) : drags);
       const char* order_name = order == CGAL_ext::Detail_order::linear ? "linear" : order == CGAL_ext::Detail_order::quadric ? "quadric" : "cubic";
+      Edit_times t;
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        t = time_edit(cloud, edit, cg ? 1 : reps, cg ? std::min(drags, 3) : drags);
+      } catch(const CGAL_ext::Numerical_failure&) {
+        // Conjugate gradients on the cubic order's ill-conditioned normal equations can exhaust the library's
+        // iteration cap: reported as such, with the time it took to give up (preprocess included).
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const int cap = edit.settings.least_squares.max_iterations;
+        say("| %s | %zu | %s | %s | | | | not converged in %d iterations (%.1f s) | | %d |\n", name.c_str(),
+            cloud.points.size(), order_name, "CG", cap, seconds, cap);
+        csv << "scaling,\"" << name << "\"," << order_name << ",cg_not_converged," << cloud.points.size() << ",0,0,0," << seconds
+            << ",0,0,0," << cap << "\n";
+        continue;
+      }
       say("| %s | %zu | %s | %s | %zu | %zu | %.3f | %.4f | %.1f (%.1f-%.1f) | %d |\n", name.c_str(), t.last.points,
           order_name, cg ? "CG" : "Cholesky", t.last.samples, t.last.roi_samples, t.preprocess.median, t.editing.median,
           1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max, cg ? t.last.least_squares.iterations : 0);

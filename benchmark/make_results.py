@@ -266,11 +266,19 @@ def solver_section(out, editing):
         by_key.setdefault((r["model"], r["order"]), {})[r["solver"]] = r
     rows = []
     for (model, order), s in by_key.items():
-        if "cholesky" in s and "cg" in s:
-            c, g = s["cholesky"], s["cg"]
+        c = s.get("cholesky")
+        if c is None:
+            continue
+        if "cg" in s:
+            g = s["cg"]
             rows.append([model, order, c["roi_ssps"], number(c["editing_ssps_s"], 4), number(g["editing_ssps_s"], 4),
                          ratio(g["editing_ssps_s"], c["editing_ssps_s"]), number(1e3 * float(c["drag_median_s"]), 1),
                          number(1e3 * float(g["drag_median_s"]), 1), g["cg_iterations"]])
+        elif "cg_not_converged" in s:
+            g = s["cg_not_converged"]
+            rows.append([model, order, c["roi_ssps"], number(c["editing_ssps_s"], 4),
+                         f"not converged ({number(g['preprocess_s'], 1)} s to give up)", "",
+                         number(1e3 * float(c["drag_median_s"]), 1), "", f">= {g['cg_iterations']}"])
     table(out, ["sampling", "order", "ROI SSPs", "Cholesky s", "CG s", "CG / Cholesky", "per drag ms, Cholesky",
                 "per drag ms, CG", "CG iterations"], rows)
 

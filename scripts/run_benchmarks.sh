@@ -28,11 +28,11 @@ else
   flags=()
   sizes=(100000 1000000 4000000)
 fi
-mkdir -p "$out"
+mkdir -p "$out" "$build/benchmark/logs"
 start=$SECONDS
 for bench in "${benches[@]}"; do
-  echo "== $bench" >&2
-  "$build/benchmark/$bench" "${flags[@]}" --data data --out "$out" >/dev/null
+  echo "== $bench (log: $build/benchmark/logs/$bench.log)" >&2
+  "$build/benchmark/$bench" "${flags[@]}" --data data --out "$out" > "$build/benchmark/logs/$bench.log"
 done
 echo "== measure_edit_memory.sh" >&2
 BUILD_DIR="$build" bash benchmark/measure_edit_memory.sh --out "$out" "${sizes[@]}" >/dev/null

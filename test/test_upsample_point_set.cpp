@@ -46,6 +46,29 @@ TEST(UpsamplePointSet, FillsAPlanarHoleOnThePlaneAndNotPastTheBorder)
   }
 }
 
+TEST(UpsamplePointSet, TheSameHoleIsFilledTheSameWayInAnyUnits)
+{
+  // The plane with its hole in units 100 times smaller and larger (a scan in metres or in millimetres): the
+  // same points are inserted, scaled. (The search across a gap once counted its reach in model units, so in
+  // small units no hole was ever found.)
+  const Oriented_points plane = plane_with_hole(2.6);
+  Inserted reference;
+  CGAL_ext::upsample_point_set(plane.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(reference), plane.np());
+  ASSERT_GT(reference.size(), 10u);
+  for(const double unit : {0.01, 100.0}) {
+    Oriented_points scaled = plane;
+    for(Point& p : scaled.points) p = Point(unit * p.x(), unit * p.y(), unit * p.z());
+    Inserted inserted;
+    CGAL_ext::upsample_point_set(scaled.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(inserted), scaled.np());
+    ASSERT_EQ(inserted.size(), reference.size()) << "unit " << unit;
+    for(std::size_t i = 0; i < inserted.size(); ++i)
+      EXPECT_LE(std::sqrt(CGAL::squared_distance(inserted[i].first, Point(unit * reference[i].first.x(), unit * reference[i].first.y(),
+                                                                          unit * reference[i].first.z()))),
+                1e-9 * unit)
+        << "unit " << unit;
+  }
+}
+
 TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
 {
   const double h = 0.1;

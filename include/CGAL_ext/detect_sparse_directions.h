@@ -96,8 +96,11 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
                                 std::vector<int>& sparse)
 {
   const std::size_t n = rows ? rows->size() : std::size_t(positions.rows());
-  // Enough candidates to see across a gap of max_gap spacings: about the samples of that disc.
-  const std::size_t reach = std::min<std::size_t>(std::size_t(positions.rows()), std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_gap * max_gap))));
+  // Enough candidates to see across a gap of max_gap: about the samples of that disc, counted in spacings (so
+  // the same sampling in other units finds the same holes).
+  const double gap_in_spacings = max_gap / spacing;
+  const std::size_t reach = std::min<std::size_t>(std::size_t(positions.rows()),
+                                                  std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * gap_in_spacings * gap_in_spacings))));
   const double empty_radius = 2 * spacing, cos_cone = std::cos(30 * 3.14159265358979323846 / 180);
   std::vector<std::array<int, 4>> across(n);
   std::vector<char> is_sparse(n, 0);
