@@ -433,8 +433,16 @@ void sample_point_quality(const std::string& name, const Point_cloud& cloud, con
     if(v.cap) edit.settings.simplification.max_cluster_size = v.cap;
     else edit.settings.simplification.target_count = v.target;
     edit.settings.simplification.mode_spread_threshold = v.threshold;
-    auto d = make_deformation(cloud, edit);
-    d->deform();
+    std::unique_ptr<Deformation> d;
+    try {
+      d = make_deformation(cloud, edit);
+      d->deform(); // preprocesses first
+    } catch(const CGAL_ext::Invalid_input& e) {
+      // A scan's loose fragment inside the region, joined to nothing outside it by these sample points'
+      // graph, leaves the system singular: the library refuses it, and so is it reported.
+      say("| %s | %s | refused: %s | | | | | |\n", name.c_str(), v.what, e.what());
+      continue;
+    }
     std::vector<double> drag;
     for(int step = 0; step < drags; ++step) {
       const auto start = std::chrono::steady_clock::now();

@@ -200,8 +200,10 @@ def peers_section(out, editing, simplification, upsampling, curvature):
             ours = [r for r in group if r["method"].startswith(method)]
             if sre and ours:
                 o, t = ours[0], sre[0]
+                vertices = re.search(r"\((\d+) vertices\)", model)
                 rows.append([f"editing: {method}, one drag (deform + diffuse) vs `CGAL::Surface_mesh_deformation` "
-                             "SRE_ARAP, 5 iterations (deform)", model, points_of.get(model, ""),
+                             "SRE_ARAP, 5 iterations (deform)", model,
+                             vertices.group(1) if vertices else points_of.get(model, ""),
                              f"{number(o['deform_s'], 4)} (preprocess {number(o['preprocess_s'])})",
                              f"{number(t['deform_s'], 4)} (preprocess {number(t['preprocess_s'])})",
                              ratio(o["deform_s"], t["deform_s"])])
@@ -277,7 +279,7 @@ def solver_section(out, editing):
         elif "cg_not_converged" in s:
             g = s["cg_not_converged"]
             rows.append([model, order, c["roi_ssps"], number(c["editing_ssps_s"], 4),
-                         f"not converged ({number(g['preprocess_s'], 1)} s to give up)", "",
+                         f"not converged ({number(g['editing_ssps_s'], 1)} s to give up)", "",
                          number(1e3 * float(c["drag_median_s"]), 1), "", f">= {g['cg_iterations']}"])
     table(out, ["sampling", "order", "ROI SSPs", "Cholesky s", "CG s", "CG / Cholesky", "per drag ms, Cholesky",
                 "per drag ms, CG", "CG iterations"], rows)
