@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates every picture of the manual (doc/images/*.png) with the program, from the demo's generated
 # tentacle and CGAL's real scans, and checks that each stays within 300 KiB.
-# Usage: scripts/make_doc_images.sh   (builds point-detail in Release first)
+# Usage: scripts/make_doc_images.sh   (builds point-detail in Release first; DOC_IMAGES_DIR=DIR writes them to
+#        DIR instead, as CI does to check that the script still runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -12,32 +13,33 @@ cmake --build "$build" -j"$(nproc)" --target point-detail
 pd() { "$build/src/point-detail" -q "$@"; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-img=doc/images
+img=${DOC_IMAGES_DIR:-doc/images}
+mkdir -p "$img"
 meshes=data/meshes
 
 # The demo's tentacle (40,000 samples of a bumpy tube): details, scaling, enhancement, editing, up-sampling.
 pd demo -o "$work/demo"
 size() { echo --width "$1" --height "$2"; }
-pd details -i "$work/demo/tentacle.ply" -o "$work/d.ply" --order quadric --png "$img/tentacle_quadric_details.png" --view iso $(size 480 480)
-pd render -i "$work/demo/scale_0.6.ply" -o "$img/tentacle_scale_0.6.png" --view iso $(size 560 400)
-pd render -i "$work/demo/enhance_3.0.ply" -o "$img/tentacle_enhance_3.0.png" --view iso $(size 560 400)
+pd render -i "$work/demo/details_quadric.ply" -o "$img/tentacle_quadric_details.png" --view iso $(size 480 480)
+pd render -i "$work/demo/scale_0.6.ply" -o "$img/tentacle_scale_0.6.png" --color-by displacement --view iso $(size 560 400)
+pd render -i "$work/demo/enhance_3.0.ply" -o "$img/tentacle_enhance_3.0.png" --color-by displacement --view iso $(size 560 400)
 pd render -i "$work/demo/tentacle.ply" -o "$img/tentacle_edit_before.png" --color-by none --view iso $(size 400 400)
 for order in linear quadric cubic; do
   pd render -i "$work/demo/edit_$order.ply" -o "$img/tentacle_edit_$order.png" --view iso $(size 400 400)
 done
-pd render -i "$work/demo/edit_stretch_upsampled.ply" -o "$img/tentacle_stretch_upsampled.png" --view iso $(size 400 400)
+pd render -i "$work/demo/edit_stretch_upsampled.ply" -o "$img/tentacle_stretch_upsampled.png" --color-by inserted $(size 400 400)
 
 # CGAL's scans (Debian's libcgal-demo), with the meshes' vertex normals.
 pd details -i "$meshes/bunny00.off" -o "$work/b.ply" --order quadric --lambda 0.8 --mu 1.6 \
   --png "$img/bunny00_quadric_details.png" $(size 520 520)
 pd curvature -i "$meshes/armadillo.off" -o "$work/c.ply" --png "$img/armadillo_curvature.png" $(size 420 500)
-pd simplify -i "$meshes/armadillo.off" -o "$work/s.ply" --max-cluster-size 50 --png "$img/armadillo_ssps.png" $(size 560 560)
-pd render -i "$meshes/armadillo.off" -o "$img/armadillo_edit_before.png" --color-by none --view back $(size 400 400)
+pd simplify -i "$meshes/armadillo.off" -o "$work/s.ply" --max-cluster-size 50 --png "$img/armadillo_ssps.png" --view back $(size 560 560)
+pd render -i "$meshes/armadillo.off" -o "$img/armadillo_edit_before.png" --color-by none $(size 400 400)
 pd edit -i "$meshes/armadillo.off" -o "$work/e.ply" --edit doc/edits/armadillo_raise_arm.json \
-  --png "$img/armadillo_edit_arm.png" --view back $(size 400 400)
+  --png "$img/armadillo_edit_arm.png" $(size 400 400)
 for strength in euclidean geodesic; do
   pd edit -i "$meshes/armadillo.off" -o "$work/w.ply" --edit doc/edits/armadillo_raise_arm_wide.json --strength "$strength" \
-    --png "$img/armadillo_wide_$strength.png" --view back $(size 800 800)
+    --png "$img/armadillo_wide_$strength.png" $(size 800 800)
 done
 
 too_large=0
