@@ -250,8 +250,9 @@ void table1(const std::string& name, const Point_cloud& cloud, const Edit_descri
         st.points, st.samples, st.roi_samples, t.preprocess.median, t.editing.median, t.diffusion.median,
         1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max);
     csv << "table1,\"" << name << "\"," << v.label << "," << st.points << "," << st.samples << "," << st.roi_samples << ","
-        << t.preprocess.median << "," << t.editing.median << "," << t.diffusion.median << "," << t.drag.median << ","
-        << t.drag.max << "\n";
+        << t.preprocess.median << "," << t.editing.median << "," << t.editing.min << "," << t.editing.max << ","
+        << t.diffusion.median << "," << t.diffusion.min << "," << t.diffusion.max << "," << t.drag.median << ","
+        << t.drag.min << "," << t.drag.max << "\n";
   }
 }
 

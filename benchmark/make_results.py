@@ -21,8 +21,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 # bench_editing writes one CSV with a section per table; these are each section's columns after the first.
 EDITING_COLUMNS = {
-    "table1": ["model", "order", "points", "ssps", "roi_ssps", "preprocess_s", "editing_ssps_s", "diffusion_s",
-               "drag_median_s", "drag_max_s"],
+    "table1": ["model", "order", "points", "ssps", "roi_ssps", "preprocess_s", "editing_ssps_s", "editing_ssps_min_s",
+               "editing_ssps_max_s", "diffusion_s", "diffusion_min_s", "diffusion_max_s", "drag_median_s", "drag_min_s",
+               "drag_max_s"],
     "scaling": ["model", "order", "solver", "points", "ssps", "roi_ssps", "preprocess_s", "editing_ssps_s",
                 "drag_median_s", "drag_min_s", "drag_max_s", "cg_iterations"],
     "arap": ["model", "method", "preprocess_s", "deform_s", "hausdorff_to_sre_arap", "detail_change",
@@ -138,13 +139,16 @@ def table1_section(out, editing):
             continue
         q = orders["quadric"]
         rows.append([model, q["points"], q["ssps"], q["roi_ssps"]] +
-                    [f"{number(orders[o]['editing_ssps_s'], 4)} / {number(orders[o]['diffusion_s'], 4)}"
-                     for o in ("linear", "quadric", "cubic")] + [number(1e3 * float(q["drag_median_s"]), 1)])
+                    [f"{number(orders[o]['editing_ssps_s'], 4)} ({number(orders[o]['editing_ssps_min_s'], 4)}-"
+                     f"{number(orders[o]['editing_ssps_max_s'], 4)}) / {number(orders[o]['diffusion_s'], 4)}"
+                     for o in ("linear", "quadric", "cubic")] +
+                    [f"{1e3 * float(q['drag_median_s']):.1f} ({1e3 * float(q['drag_min_s']):.1f}-"
+                     f"{1e3 * float(q['drag_max_s']):.1f})"])
     for model, (points, ssps, roi, times) in PAPER_TABLE1.items():
         cells = [f"{e} / {d}" if e is not None else "not given" for e, d in times]
         rows.append([f"*paper: {model}*", points, ssps, roi] + cells + [""])
-    table(out, ["model", "points", "SSPs", "ROI SSPs", "linear s (SSPs / diffusion)", "quadric s", "cubic s",
-                "per drag ms"], rows)
+    table(out, ["model", "points", "SSPs", "ROI SSPs", "linear s: SSPs (min-max) / diffusion", "quadric s", "cubic s",
+                "per drag ms (min-max)"], rows)
     tentacle = by_model.get("tentacle (generated)")
     if tentacle:
         speedups = [ratio(PAPER_TABLE1["tentacle"][3][i][0], tentacle[o]["editing_ssps_s"])
@@ -233,13 +237,14 @@ def scaling_section(out, editing, memory, plot_file):
             continue
         m = memory_by_points.get(r["points"])
         rows.append([r["model"], r["points"], r["ssps"], r["roi_ssps"], number(r["preprocess_s"]),
-                     number(1e3 * float(r["drag_median_s"]), 1),
+                     f"{1e3 * float(r['drag_median_s']):.1f} ({1e3 * float(r['drag_min_s']):.1f}-"
+                     f"{1e3 * float(r['drag_max_s']):.1f})",
                      f"{float(m['peak_rss_mib']):.0f} MiB" if m else "", f"{float(m['bytes_per_point']):.0f} B" if m else "",
                      ("met" if float(m["bytes_per_point"]) <= 1024 else "**missed**") if m else ""])
         sizes.append(int(r["points"]))
         preprocess.append(float(r["preprocess_s"]))
         drag.append(float(r["drag_median_s"]))
-    table(out, ["sampling", "points", "SSPs", "ROI SSPs", "preprocess s", "per drag ms", "peak memory (whole edit)",
+    table(out, ["sampling", "points", "SSPs", "ROI SSPs", "preprocess s", "per drag ms (min-max)", "peak memory (whole edit)",
                 "per point", "<= 1 KiB"], rows)
     if sizes:
         fig, ax = plt.subplots(figsize=(5.5, 3.8), dpi=100)
@@ -285,6 +290,23 @@ def solver_section(out, editing):
                 "per drag ms, CG", "CG iterations"], rows)
 
 
+def memory_section(out, details, simplification, curvature):
+    out.append("## 5. Peak memory per stage, on the largest sampling\n")
+    out.append("The benchmark process's peak resident memory (`getrusage`) after each stage of its parallel run; it only "
+               "grows, so a stage's figure covers the stages before it in the same program (the sampling itself included). "
+               "Whole `point-detail edit` runs are in section 3.\n")
+    rows = []
+    for program, source, stage_key in [("bench_details", details, "stage"), ("bench_simplification", simplification, "stage"),
+                                       ("bench_curvature", curvature, "method")]:
+        largest = max((int(r["points"]) for r in source), default=0)
+        for r in source:
+            if int(r["points"]) == largest and r["mode"] == "parallel" and not r[stage_key].startswith("threshold sweep"):
+                mib = float(r["peak_rss_mib"])
+                stage = r[stage_key] + (f" (k {r['k']})" if "k" in r else "")
+                rows.append([program, stage, r["points"], f"{mib:.0f} MiB", f"{mib * 1048576 / float(r['points']):.0f} B"])
+    table(out, ["program", "stage", "points", "peak so far", "per point"], rows)
+
+
 def write_long_csv(path, sources):
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
@@ -320,6 +342,7 @@ def main():
     peers_section(out, editing, simplification, upsampling, curvature)
     scaling_section(out, editing, memory, os.path.join(out_dir, "scaling.png"))
     solver_section(out, editing)
+    memory_section(out, read_csv(os.path.join(out_dir, "details_results.csv")), simplification, curvature)
     with open(os.path.join(out_dir, "RESULTS.md"), "w") as f:
         f.write("\n".join(out))
     sources = [("bench_editing", section, rows) for section, rows in editing.items()]
