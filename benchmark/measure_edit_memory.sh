@@ -6,11 +6,9 @@
 #        (default: benchmark/, 100000 1000000 4000000; Release build in build/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/release_build.sh point-detail sample_scan
 bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j"$(nproc)" --target point-detail sample_scan
 out_dir=benchmark
 if [ "${1:-}" = "--out" ]; then out_dir=$2; shift 2; fi
 mkdir -p "$out_dir"

@@ -5,11 +5,9 @@
 #        DIR instead, as CI does to check that the script still runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/release_build.sh point-detail
 bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j"$(nproc)" --target point-detail
 pd() { "$build/src/point-detail" -q "$@"; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -32,6 +30,10 @@ pd render -i "$work/demo/edit_stretch_upsampled.ply" -o "$img/tentacle_stretch_u
 # CGAL's scans (Debian's libcgal-demo), with the meshes' vertex normals.
 pd details -i "$meshes/bunny00.off" -o "$work/b.ply" --order quadric --lambda 0.8 --mu 1.6 \
   --png "$img/bunny00_quadric_details.png" $(size 520 520)
+pd enhance -i "$meshes/armadillo.off" -o "$work/leg.ply" -s 3 --roi sphere:-34,-32,10,25 --order quadric \
+  --png "$img/armadillo_enhance_leg.png" $(size 400 400)
+pd edit -i "$meshes/armadillo.off" -o "$work/pulled.ply" --edit doc/edits/armadillo_pull_arm.json --upsample
+pd render -i "$work/pulled.ply" -o "$img/armadillo_pull_arm_upsampled.png" --color-by inserted $(size 400 400)
 pd curvature -i "$meshes/armadillo.off" -o "$work/c.ply" --png "$img/armadillo_curvature.png" $(size 420 500)
 pd simplify -i "$meshes/armadillo.off" -o "$work/s.ply" --max-cluster-size 50 --png "$img/armadillo_ssps.png" --view back $(size 560 560)
 pd render -i "$meshes/armadillo.off" -o "$img/armadillo_edit_before.png" --color-by none $(size 400 400)

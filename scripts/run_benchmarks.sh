@@ -13,12 +13,10 @@ case "${1:-}" in
   "") ;;
   *) echo "usage: scripts/run_benchmarks.sh [--quick]" >&2; exit 2 ;;
 esac
-bash scripts/setup.sh
+benches=(bench_editing bench_upsampling bench_simplification bench_curvature bench_scaling bench_details)
+bash scripts/release_build.sh "${benches[@]}" sample_scan point-detail
 bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-benches=(bench_editing bench_upsampling bench_simplification bench_curvature bench_scaling bench_details)
-cmake --build "$build" -j"$(nproc)" --target "${benches[@]}" sample_scan point-detail
 if [ "$quick" = 1 ]; then
   out="$build/benchmark/quick"
   flags=(--quick)

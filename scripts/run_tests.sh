@@ -6,10 +6,8 @@
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/release_build.sh
 build=${BUILD_DIR:-build}
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j"$(nproc)"
 ctest --test-dir "$build" -j"$(nproc)" --output-on-failure
 BUILD_DIR="$build" bash scripts/run_benchmarks.sh --quick
 bash scripts/build_api_docs.sh
