@@ -69,6 +69,37 @@ TEST(UpsamplePointSet, TheSameHoleIsFilledTheSameWayInAnyUnits)
   }
 }
 
+TEST(UpsamplePointSet, AWideHoleInAWavySurfaceIsFilledOnTheSurface)
+{
+  // z = 2 sin(2 pi x / 20) sampled about 1 apart, with a hole of radius 5 (so wider than the default largest
+  // hole) around the inflection at the origin: new points deep in the hole must follow the wave across it.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.25, 0.25);
+  const double amplitude = 2, wavelength = 20, pi = 3.14159265358979323846;
+  auto height = [&](double x) { return amplitude * std::sin(2 * pi * x / wavelength); };
+  Oriented_points wave;
+  for(int i = -20; i <= 20; ++i)
+    for(int j = -20; j <= 20; ++j) {
+      const double x = i + jitter(rng), y = j + jitter(rng);
+      if(std::hypot(x, y) < 5) continue;
+      const double slope = amplitude * 2 * pi / wavelength * std::cos(2 * pi * x / wavelength);
+      wave.points.emplace_back(x, y, height(x));
+      const double norm = std::sqrt(1 + slope * slope);
+      wave.normals.emplace_back(-slope / norm, 0, 1 / norm);
+    }
+  CGAL_ext::Upsampling_settings settings;
+  settings.detection.spacing = 1;
+  settings.detection.max_hole_size = 12;
+  Inserted inserted;
+  CGAL_ext::upsample_point_set(wave.indices(), settings, std::back_inserter(inserted), wave.np());
+  EXPECT_GT(inserted.size(), 50u);
+  double farthest = 0;
+  for(const auto& [p, n] : inserted)
+    if(std::hypot(p.x(), p.y()) < 5) farthest = std::max(farthest, std::abs(p.z() - height(p.x())));
+  // A degree-2 fit to the nearest samples, from one side of the hole, strays 0.8 spacings.
+  EXPECT_LE(farthest, 0.25);
+}
+
 TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
 {
   const double h = 0.1;

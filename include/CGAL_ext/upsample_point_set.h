@@ -99,15 +99,40 @@ private:
   std::unordered_map<Key, std::vector<int>, Hash> m_members;
 };
 
-/// Projects `x` onto the surface fitted to the `k` input samples nearest to it, with a normal oriented like
-/// `normal`; updates both.
-inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, std::size_t k, Eigen::Vector3d& x,
+/// Projects `x` onto the surface fitted to the input samples around it, with a normal oriented like `normal`;
+/// updates both. Near the samples, a degree-2 fit to the `k` nearest. Inside a hole, where the nearest sample
+/// is `d` > 1.5 h away, the k nearest would lie on the hole's near side and the fit would extrapolate from there;
+/// so the fit takes the nearest k / 8 samples in each of 8 directions around `x` (among the about
+/// 3 pi (d / h)^2 samples of a disc of radius 2 d), which surround the hole, and a degree-3 surface through
+/// them interpolates the rim: a wave's inflection across a hole is then followed, not flattened.
+inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, std::size_t k, double h, Eigen::Vector3d& x,
                                  Eigen::Vector3d& normal)
 {
   thread_local std::vector<int> near;
   near.clear();
-  tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), k, [&](int j, double) { near.push_back(j); });
-  Height_fit fit(x, normal);
+  const Position_tree::Point query(x.x(), x.y(), x.z());
+  double nearest2 = 0;
+  tree.nearest(query, 1, [&](int, double d2) { nearest2 = d2; });
+  const bool inside_hole = nearest2 > 2.25 * h * h;
+  if(!inside_hole) {
+    tree.nearest(query, k, [&](int j, double) { near.push_back(j); });
+  } else {
+    const Eigen::Vector3d helper = std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d u = normal.cross(helper).normalized(), v = normal.cross(u);
+    constexpr double pi = 3.14159265358979323846;
+    const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
+    std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    tree.nearest(query, std::min<std::size_t>(candidates, std::size_t(samples.rows())), [&](int j, double) {
+      const Eigen::Vector3d d = samples.row(j).transpose() - x;
+      const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
+      std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
+      if(in_direction < per_direction) {
+        ++in_direction;
+        near.push_back(j);
+      }
+    });
+  }
+  Height_fit fit(x, normal, inside_hole ? 3 : 2);
   fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
   x = fit.project(x);
   const Eigen::Vector3d n = fit.normal(x);
@@ -232,7 +257,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
         }
-        project_onto_surface(cloud.positions, input_tree, 2 * k, x, normal);
+        project_onto_surface(cloud.positions, input_tree, 2 * k, h, x, normal);
         moved[m] = x;
         turned[m] = normal;
       });
@@ -280,7 +305,9 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   are placed at the target spacing on the segment to the sample that reappears beyond it, with interpolated
   normals, and kept only where no sample lies within half a spacing; then they are relaxed by repulsion
   (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
-  projected back onto a degree-2 height function fitted to the nearest input samples; a new point whose offset
+  projected back onto a height function fitted to the input samples: of degree 2 to the nearest ones, or, more
+  than 1.5 spacings inside a hole, of degree 3 to the nearest ones in 8 directions around it (so the fit spans
+  the hole's rim instead of extrapolating from its near side); a new point whose offset
   from one of its 3 nearest input samples leans more than 30 degrees out of that sample's tangent plane (a fit
   misled where the surface folds) is dropped. Detection, insertion
   and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
