@@ -234,6 +234,8 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
     const double radius = 1.5 * h;
     // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
     Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
+    std::vector<char> settled(round_points.size(), 1);
+    const double stable_squared_move = 0.0625 * h * h; // a quarter spacing
     for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
       for(std::size_t m = 0; m < round_points.size(); ++m) moving.row(Eigen::Index(m)) = round_points[m].transpose();
       const Position_tree moving_tree(moving, ConcurrencyTag());
@@ -258,6 +260,14 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
           x += push;
         }
         project_onto_surface(cloud.positions, input_tree, 2 * k, h, x, normal);
+        if(iteration == settings.relaxation_iterations) {
+          // A projection onto the surface should be a fixed point: projecting the result again must not move
+          // it. Where the fit is unstable (a cubic across a tear, in a frame that tilts with the normal) it
+          // does, and the point is dropped rather than written off the surface.
+          Eigen::Vector3d again = x, again_normal = normal;
+          project_onto_surface(cloud.positions, input_tree, 2 * k, h, again, again_normal);
+          settled[m] = (again - x).squaredNorm() <= stable_squared_move;
+        }
         moved[m] = x;
         turned[m] = normal;
       });
@@ -266,7 +276,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
     }
     std::vector<char> keep(round_points.size());
     for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
-      keep[m] = continues_surface(cloud.positions, input_normals, input_tree, round_points[m]);
+      keep[m] = settled[m] && continues_surface(cloud.positions, input_normals, input_tree, round_points[m]);
     });
     std::size_t kept_count = 0;
     for(std::size_t m = 0; m < round_points.size(); ++m)
@@ -307,10 +317,10 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   (Pauly et al. 2002): each moves in its tangent plane away from samples closer than 1.5 spacings, and is
   projected back onto a height function fitted to the input samples: of degree 2 to the nearest ones, or, more
   than 1.5 spacings inside a hole, of degree 3 to the nearest ones in 8 directions around it (so the fit spans
-  the hole's rim instead of extrapolating from its near side); a new point whose offset
-  from one of its 3 nearest input samples leans more than 30 degrees out of that sample's tangent plane (a fit
-  misled where the surface folds) is dropped. Detection, insertion
-  and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
+  the hole's rim instead of extrapolating from its near side); a new point that a second projection would
+  move by more than a quarter spacing (an unstable fit) is dropped, and so is one whose offset from one of its
+  3 nearest input samples leans more than 30 degrees out of that sample's tangent plane (a fit misled where
+  the surface folds). Detection, insertion and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
   within `max_hole_size` beyond them, never grow. Input points are not moved.
 
   \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
