@@ -3,6 +3,7 @@
 #include "upsampling_fixtures.h"
 
 #include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/internal/local_fit.h>
 #include <CGAL_ext/upsample_point_set.h>
 
 #include <gtest/gtest.h>
@@ -66,6 +67,40 @@ TEST(UpsamplePointSet, TheSameHoleIsFilledTheSameWayInAnyUnits)
                                                                           unit * reference[i].first.z()))),
                 1e-9 * unit)
         << "unit " << unit;
+  }
+}
+
+TEST(UpsamplePointSet, TheHeightFitReproducesPolynomialsOfItsDegree)
+{
+  // Samples of z = 0.3 + 0.2 x - 0.1 y + 0.05 x^2 - 0.02 xy + 0.04 y^2 (+ 0.01 x^3 - 0.03 x y^2) on a ring of
+  // radius 2 to 4 around the origin, as around a hole: inside the hole, the fit of the polynomial's degree
+  // reproduces it (within the light ridge's bias); the degree-2 fit to the cubic does not.
+  auto surface = [](double x, double y, bool cubic) {
+    return 0.3 + 0.2 * x - 0.1 * y + 0.05 * x * x - 0.02 * x * y + 0.04 * y * y + (cubic ? 0.01 * x * x * x - 0.03 * x * y * y : 0.0);
+  };
+  for(const bool cubic : {false, true}) {
+    std::vector<Eigen::Vector3d> ring;
+    for(int a = 0; a < 24; ++a)
+      for(const double r : {2.0, 3.0, 4.0}) {
+        const double x = r * std::cos(0.2618 * a + r), y = r * std::sin(0.2618 * a + r);
+        ring.emplace_back(x, y, surface(x, y, cubic));
+      }
+    // The largest height error over the hole, a disc of radius 1.5.
+    auto error_in_hole = [&](int degree) {
+      CGAL_ext::internal::Height_fit fit(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), degree);
+      fit.fit(int(ring.size()), [&](int m) { return ring[std::size_t(m)]; });
+      double error = 0;
+      for(double x = -1; x <= 1; x += 0.25)
+        for(double y = -1; y <= 1; y += 0.25) {
+          const Eigen::Vector3d p = fit.project(Eigen::Vector3d(x, y, 0));
+          error = std::max(error, std::abs(p.z() - surface(x, y, cubic)) + std::hypot(p.x() - x, p.y() - y));
+        }
+      return error;
+    };
+    EXPECT_LT(error_in_hole(cubic ? 3 : 2), 0.01) << (cubic ? "cubic" : "quadric");
+    if(cubic) {
+      EXPECT_GT(error_in_hole(2), 0.02);
+    }
   }
 }
 

@@ -320,8 +320,9 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   the hole's rim instead of extrapolating from its near side); a new point that a second projection would
   move by more than a quarter spacing (an unstable fit) is dropped, and so is one whose offset from one of its
   3 nearest input samples leans more than 30 degrees out of that sample's tangent plane (a fit misled where
-  the surface folds). Detection, insertion and relaxation repeat until no gap is left (at most `settings.max_rounds` times). Open borders, with nothing
-  within `max_hole_size` beyond them, never grow. Input points are not moved.
+  the surface folds). Detection, insertion and relaxation repeat until no gap is left (at most
+  `settings.max_rounds` times). Open borders, with nothing within `max_hole_size` beyond them, never grow.
+  Input points are not moved.
 
   \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
           unit normal (the input points are not repeated, so every output point is a new one).
