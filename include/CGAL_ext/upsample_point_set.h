@@ -112,11 +112,13 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
   near.clear();
   const Position_tree::Point query(x.x(), x.y(), x.z());
   double nearest2 = 0;
-  tree.nearest(query, 1, [&](int, double d2) { nearest2 = d2; });
+  tree.nearest(query, k, [&](int j, double d2) {
+    if(near.empty()) nearest2 = d2;
+    near.push_back(j);
+  });
   const bool inside_hole = nearest2 > 2.25 * h * h;
-  if(!inside_hole) {
-    tree.nearest(query, k, [&](int j, double) { near.push_back(j); });
-  } else {
+  if(inside_hole) {
+    near.clear();
     const Eigen::Vector3d helper = std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     const Eigen::Vector3d u = normal.cross(helper).normalized(), v = normal.cross(u);
     constexpr double pi = 3.14159265358979323846;
