@@ -117,10 +117,11 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     near.push_back(j);
   });
   const bool inside_hole = nearest2 > 2.25 * h * h;
+  Height_fit fit(x, normal, inside_hole ? 3 : 2);
   if(inside_hole) {
     near.clear();
-    const Eigen::Vector3d helper = std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    const Eigen::Vector3d u = normal.cross(helper).normalized(), v = normal.cross(u);
+    const Eigen::Vector3d& u = fit.tangent_u();
+    const Eigen::Vector3d& v = fit.tangent_v();
     constexpr double pi = 3.14159265358979323846;
     const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
     std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -134,7 +135,6 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
       }
     });
   }
-  Height_fit fit(x, normal, inside_hole ? 3 : 2);
   fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
   x = fit.project(x);
   const Eigen::Vector3d n = fit.normal(x);

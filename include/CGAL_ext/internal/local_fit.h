@@ -56,6 +56,10 @@ public:
     if(!m_c.allFinite()) m_c.setZero();
   }
 
+  /// The axes of the tangent plane the heights are measured over.
+  const Eigen::Vector3d& tangent_u() const { return m_u; }
+  const Eigen::Vector3d& tangent_v() const { return m_v; }
+
   /// The surface point above (or below) `p` along the fit's normal axis.
   Eigen::Vector3d project(const Eigen::Vector3d& p) const
   {
