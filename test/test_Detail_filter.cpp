@@ -1,12 +1,10 @@
+#include "test_support.h"
+
 #include <CGAL_ext/Detail_filter.h>
 
 #include <gtest/gtest.h>
 
 using namespace CGAL_ext;
-
-namespace {
-const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
-}
 
 TEST(Detail_filter, response_vanishes_at_zero_for_every_order)
 {

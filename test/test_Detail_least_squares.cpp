@@ -41,7 +41,6 @@ struct Small_problem
   }
 };
 
-const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
 
 Matrix_n3 random_block(Eigen::Index rows, unsigned seed)
 {

@@ -18,7 +18,6 @@ using CGAL_ext::Detail_order;
 using CGAL_ext::Detail_preserving_deformation;
 using Settings = CGAL_ext::Detail_preserving_deformation_settings;
 using Deformation = Detail_preserving_deformation<CGAL::Parallel_if_available_tag>;
-constexpr double pi = 3.14159265358979323846;
 
 /// The paper's tentacle: a quarter-circle tube from the origin (axis +z) to its tip near (-1, 0, 1).
 struct Tentacle
@@ -225,7 +224,7 @@ TEST(DetailPreservingDeformation, RotationPropagationKeepsTheDetailsOfABentTenta
   // rotations the details turn with the surface (measured: 0.20 / 0.19 / 0.20 against 0.33 / 0.32 / 0.36 without,
   // linear / quadric / cubic). A handle twisted in place is the method's known limit (doc/editing.md).
   const Tentacle t(3000);
-  const auto [R, shift] = turn_about(Eigen::Vector3d(0, 0, 0.25), Eigen::Vector3d(0, 1, 0), 40 * pi / 180);
+  const auto [R, shift] = turn_about(Eigen::Vector3d(0, 0, 0.25), Eigen::Vector3d(0, 1, 0), 40 * CGAL_PI / 180);
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
     double change[2];
     for(bool propagate : {false, true}) {
@@ -249,7 +248,7 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleKeepsTheDetailsOfATwistedTent
   // (the linear / quadric details measured; as rigid as possible solves for the graph's edges, whatever the
   // order, in 18 steps of 3 iterations).
   const Tentacle t(3000);
-  const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(1, 0, 0), pi);
+  const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(1, 0, 0), CGAL_PI);
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric}) {
     double change[2];
     for(int rigid : {0, 1}) {
@@ -300,20 +299,20 @@ namespace {
 CGAL_ext::shapes::Oriented_sample<Kernel> u_tube(double spread, double radius, double leg, double spacing)
 {
   CGAL_ext::shapes::Oriented_sample<Kernel> out;
-  const double bend = pi * spread, length = 2 * leg + bend;
-  const int rings = int(length / spacing), around = int(2 * pi * radius / spacing);
+  const double bend = CGAL_PI * spread, length = 2 * leg + bend;
+  const int rings = int(length / spacing), around = int(2 * CGAL_PI * radius / spacing);
   for(int i = 0; i < rings; ++i) {
     const double u = (i + 0.5) * length / rings;
     Eigen::Vector3d centre, axis;
     if(u < leg) { centre = {-spread, 0, leg - u}; axis = {0, 0, -1}; }
     else if(u < leg + bend) {
-      const double phi = pi - (u - leg) / spread; // from the -x leg under the bend to the +x leg
+      const double phi = CGAL_PI - (u - leg) / spread; // from the -x leg under the bend to the +x leg
       centre = {spread * std::cos(phi), 0, -spread * std::sin(phi)};
       axis = {std::sin(phi), 0, std::cos(phi)};
     } else { centre = {spread, 0, u - leg - bend}; axis = {0, 0, 1}; }
     const Eigen::Vector3d e1 = Eigen::Vector3d::UnitY().cross(axis).normalized(), e2 = Eigen::Vector3d::UnitY();
     for(int j = 0; j < around; ++j) {
-      const double a = 2 * pi * (j + 0.5 * (i % 2)) / around;
+      const double a = 2 * CGAL_PI * (j + 0.5 * (i % 2)) / around;
       const Eigen::Vector3d n = std::cos(a) * e1 + std::sin(a) * e2, p = centre + radius * n;
       out.points.emplace_back(p.x(), p.y(), p.z());
       out.normals.emplace_back(n.x(), n.y(), n.z());
@@ -343,7 +342,7 @@ TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
       handle_centre += Eigen::Vector3d(tube.points[i].x(), tube.points[i].y(), tube.points[i].z());
     }
   handle_centre /= double(handle.size());
-  const auto [R, shift] = turn_about(handle_centre, Eigen::Vector3d(0, 1, 0), 60 * pi / 180, Eigen::Vector3d(0.2, 0, 0.1));
+  const auto [R, shift] = turn_about(handle_centre, Eigen::Vector3d(0, 1, 0), 60 * CGAL_PI / 180, Eigen::Vector3d(0.2, 0, 0.1));
   double other_leg[2], handle_moved = 0;
   for(auto distance : {CGAL_ext::Strength_distance::euclidean, CGAL_ext::Strength_distance::geodesic}) {
     Settings settings;

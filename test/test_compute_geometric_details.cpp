@@ -19,7 +19,6 @@
 using namespace CGAL_ext;
 
 namespace {
-const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
 
 struct Details
 {

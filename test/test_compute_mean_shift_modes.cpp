@@ -37,14 +37,6 @@ Outcome modes_of(const shapes::Oriented_sample<Kernel>& s, const Mean_shift_sett
   return run;
 }
 
-/// Index of the cube face (0..5: axis * 2 + positive side) a normal points to.
-int face_of(const Vector& n)
-{
-  int axis = 0;
-  for(int a = 1; a < 3; ++a)
-    if(std::abs(n[a]) > std::abs(n[axis])) axis = a;
-  return 2 * axis + (n[axis] > 0 ? 1 : 0);
-}
 } // namespace
 
 TEST(MeanShift, CubeModesStayOnTheirFace)

@@ -19,19 +19,19 @@ using namespace CGAL_ext;
 namespace {
 using Samples = Simplification_sample_points<Kernel>;
 
-struct Outcome
+struct Simplification_outcome
 {
   Samples samples;
   std::vector<std::size_t> sample_of;
 };
 
 template <typename Tag = CGAL::Parallel_if_available_tag>
-Outcome cluster(const shapes::Oriented_sample<Kernel>& s, const Simplification_settings& settings,
+Simplification_outcome cluster(const shapes::Oriented_sample<Kernel>& s, const Simplification_settings& settings,
             const std::vector<int>* labels = nullptr)
 {
   std::vector<std::size_t> idx(s.points.size());
   std::iota(idx.begin(), idx.end(), std::size_t(0));
-  Outcome run;
+  Simplification_outcome run;
   run.sample_of.assign(s.points.size(), std::numeric_limits<std::size_t>::max());
   const auto np = CGAL::parameters::point_map(CGAL::make_property_map(s.points)).normal_map(CGAL::make_property_map(s.normals));
   if(labels)
@@ -50,7 +50,7 @@ Simplification_settings with_cluster_size(std::size_t size)
 }
 
 /// Every point is a member of exactly one sample point, the one the per-point map names.
-void expect_partition(const Outcome& run, std::size_t n, std::size_t max_size)
+void expect_partition(const Simplification_outcome& run, std::size_t n, std::size_t max_size)
 {
   ASSERT_TRUE(run.samples.completed);
   std::vector<int> seen(n, 0);
@@ -65,14 +65,6 @@ void expect_partition(const Outcome& run, std::size_t n, std::size_t max_size)
     }
   }
   for(std::size_t i = 0; i < n; ++i) EXPECT_EQ(seen[i], 1) << "point " << i;
-}
-
-int face_of(const Vector& n)
-{
-  int axis = 0;
-  for(int a = 1; a < 3; ++a)
-    if(std::abs(n[a]) > std::abs(n[axis])) axis = a;
-  return 2 * axis + (n[axis] > 0 ? 1 : 0);
 }
 
 /// A 120 x 60 grid of spacing 1 in z = 0, jittered, with bumps of wavelength 10 and height 2 on its x > 0 half only
@@ -101,7 +93,7 @@ TEST(SimplificationSamplePoints, EveryPointBelongsToOneSamplePointOfBoundedSize)
 {
   const auto tube = shapes::bumpy_tube<Kernel>(20000);
   for(std::size_t size : {1u, 7u, 50u, 400u}) {
-    const Outcome run = cluster(tube, with_cluster_size(size));
+    const Simplification_outcome run = cluster(tube, with_cluster_size(size));
     expect_partition(run, tube.points.size(), size);
     EXPECT_EQ(run.samples.max_cluster_size, size);
     // Cuts at the centroid leave clusters of at least a few points when only the size drives them.
@@ -113,7 +105,7 @@ TEST(SimplificationSamplePoints, EveryPointBelongsToOneSamplePointOfBoundedSize)
 TEST(SimplificationSamplePoints, CubeSamplePointsDoNotStraddleEdges)
 {
   const auto cube = shapes::cube<Kernel>(40); // 9600 points with exact face normals
-  const Outcome run = cluster(cube, with_cluster_size(50));
+  const Simplification_outcome run = cluster(cube, with_cluster_size(50));
   expect_partition(run, cube.points.size(), 50);
   std::size_t single_face = 0;
   for(const auto& sample : run.samples.samples) {
@@ -129,7 +121,7 @@ TEST(SimplificationSamplePoints, CubeSamplePointsDoNotStraddleEdges)
   // Size alone cuts across edges: the mode criterion is what keeps faces apart.
   Simplification_settings size_only = with_cluster_size(50);
   size_only.mode_spread_threshold = std::numeric_limits<double>::infinity();
-  const Outcome plain = cluster(cube, size_only);
+  const Simplification_outcome plain = cluster(cube, size_only);
   EXPECT_FALSE(plain.samples.mean_shift.completed);
   std::size_t mixed = 0;
   for(const auto& sample : plain.samples.samples) {
@@ -144,7 +136,7 @@ TEST(SimplificationSamplePoints, CubeSamplePointsDoNotStraddleEdges)
 TEST(SimplificationSamplePoints, DenserWhereTheSurfaceBends)
 {
   const auto plane = half_bumpy_plane();
-  const Outcome run = cluster(plane, with_cluster_size(50));
+  const Simplification_outcome run = cluster(plane, with_cluster_size(50));
   expect_partition(run, plane.points.size(), 50);
   double samples[2] = {0, 0}, points[2] = {0, 0};
   for(const Point& p : plane.points) points[p.x() > 0] += 1;
@@ -163,7 +155,7 @@ TEST(SimplificationSamplePoints, DenserWhereTheSurfaceBends)
 TEST(SimplificationSamplePoints, SurfelsFitTheirMembers)
 {
   const auto sphere = shapes::bumpy_sphere<Kernel>(8000, 1.0, 0.0);
-  const Outcome run = cluster(sphere, with_cluster_size(30));
+  const Simplification_outcome run = cluster(sphere, with_cluster_size(30));
   expect_partition(run, sphere.points.size(), 30);
   for(const auto& sample : run.samples.samples) {
     Vector mean_normal(0, 0, 0);
@@ -187,14 +179,14 @@ TEST(SimplificationSamplePoints, TargetCountSetsTheClusterSize)
   const auto sphere = shapes::bumpy_sphere<Kernel>(20000);
   Simplification_settings settings;
   settings.target_count = 1000;
-  const Outcome run = cluster(sphere, settings);
+  const Simplification_outcome run = cluster(sphere, settings);
   EXPECT_EQ(run.samples.max_cluster_size, 20u);
   expect_partition(run, sphere.points.size(), 20);
   EXPECT_GE(run.samples.size(), 1000u);
   EXPECT_LE(run.samples.size(), 3000u);
   // At most the target count of points: every point is its own sample point, with its own normal.
   const auto small = shapes::bumpy_sphere<Kernel>(800);
-  const Outcome own = cluster(small, Simplification_settings());
+  const Simplification_outcome own = cluster(small, Simplification_settings());
   EXPECT_EQ(own.samples.size(), 800u);
   for(std::size_t i = 0; i < 800; ++i) {
     const auto& sample = own.samples.samples[own.sample_of[i]];
@@ -212,7 +204,7 @@ TEST(SimplificationSamplePoints, SelectionsAreNeverMixed)
     const Point& p = tube.points[i];
     labels[i] = p.z() > 0.7 ? 2 : (p.z() > 0.3 ? 1 : 0); // handle, deformable, fixed: by height along the bend
   }
-  const Outcome run = cluster(tube, with_cluster_size(50), &labels);
+  const Simplification_outcome run = cluster(tube, with_cluster_size(50), &labels);
   expect_partition(run, tube.points.size(), 50);
   for(const auto& sample : run.samples.samples)
     for(std::size_t m = 1; m < sample.member_count; ++m)
@@ -222,8 +214,8 @@ TEST(SimplificationSamplePoints, SelectionsAreNeverMixed)
 TEST(SimplificationSamplePoints, SequentialAndParallelGiveTheSameSamplePoints)
 {
   const auto cube = shapes::cube<Kernel>(100); // 60,000 points: the parallel split hands out tasks
-  const Outcome seq = cluster<CGAL::Sequential_tag>(cube, with_cluster_size(50));
-  const Outcome par = cluster<CGAL::Parallel_if_available_tag>(cube, with_cluster_size(50));
+  const Simplification_outcome seq = cluster<CGAL::Sequential_tag>(cube, with_cluster_size(50));
+  const Simplification_outcome par = cluster<CGAL::Parallel_if_available_tag>(cube, with_cluster_size(50));
   ASSERT_EQ(seq.samples.size(), par.samples.size());
   EXPECT_EQ(seq.samples.members, par.samples.members);
   EXPECT_EQ(seq.sample_of, par.sample_of);

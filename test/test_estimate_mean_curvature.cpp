@@ -27,7 +27,7 @@ struct Sample
   std::vector<Vector> normals;
 };
 
-Sample sphere(double r, std::size_t n = 6000)
+Sample sphere_of_radius(double r, std::size_t n = 6000)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(n, r, 0.0);
   return {s.points, s.normals};
@@ -84,7 +84,7 @@ double cylinder_median(const Sample& s, const std::vector<double>& H)
 TEST(EstimateMeanCurvature, SphereIsPlusOneOverRAndTheSignFollowsTheNormals)
 {
   const double r = 2.0;
-  const Sample s = sphere(r);
+  const Sample s = sphere_of_radius(r);
   for(Curvature_fitting fitting : both_fittings) {
     EXPECT_NEAR(median(curvatures(s, 15, fitting)), 1 / r, 0.03 / r) << name(fitting);
     EXPECT_NEAR(median(curvatures(s, 15, fitting, true)), -1 / r, 0.03 / r) << name(fitting);
@@ -109,7 +109,7 @@ TEST(EstimateMeanCurvature, AccuracyAgainstNeighbourCount)
 {
   // The measurement behind default_curvature_neighbors: relative error of the median on the sphere and the
   // cylinder, and the closed form against CGAL's Monge fit on a bumpy sphere.
-  const Sample s = sphere(1.0), c = cylinder(1.0);
+  const Sample s = sphere_of_radius(1.0), c = cylinder(1.0);
   const auto bumpy = shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02, 6.0);
   const Sample b{bumpy.points, bumpy.normals};
   for(unsigned k : {8u, 10u, 15u, 24u}) {
@@ -148,7 +148,7 @@ TEST(EstimateMeanCurvature, SequentialAndParallelAgreeAndPointSet3Works)
 
 TEST(EstimateMeanCurvature, BadInputIsAClearError)
 {
-  Sample s = sphere(1.0, 500);
+  Sample s = sphere_of_radius(1.0, 500);
   std::vector<double> H(s.points.size());
   auto message = [&](auto&& call) {
     try { call(); } catch(const Invalid_input& e) { return std::string(e.what()); }

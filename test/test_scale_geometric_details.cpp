@@ -17,8 +17,6 @@
 using namespace CGAL_ext;
 
 namespace {
-const Detail_order all_orders[] = {Detail_order::linear, Detail_order::quadric, Detail_order::cubic};
-constexpr double pi = 3.14159265358979323846;
 
 /// A 48 x 48 grid of unit spacing, slightly jittered (a perfect lattice makes nearest neighbours tie), with
 /// bumps of amplitude `amplitude` and wavelength 8: `z = a b(x, y)`, `b = sin(2 pi x / 8) sin(2 pi y / 8)`.
@@ -35,7 +33,7 @@ struct Bumpy_patch
     for(int j = 0; j < 48; ++j)
       for(int i = 0; i < 48; ++i) {
         const double x = i - 23.5 + jitter(rng), y = j - 23.5 + jitter(rng);
-        const double b = std::sin(2 * pi * x / 8) * std::sin(2 * pi * y / 8);
+        const double b = std::sin(2 * CGAL_PI * x / 8) * std::sin(2 * CGAL_PI * y / 8);
         points.emplace_back(x, y, amplitude * b);
         bump.push_back(b);
       }

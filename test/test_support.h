@@ -2,6 +2,8 @@
 #ifndef CGAL_EXT_TEST_SUPPORT_H
 #define CGAL_EXT_TEST_SUPPORT_H
 
+#include <CGAL_ext/Detail_filter.h>
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
@@ -12,6 +14,18 @@
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Vector = Kernel::Vector_3;
+
+const CGAL_ext::Detail_order all_orders[] = {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric,
+                                             CGAL_ext::Detail_order::cubic};
+
+/// Index of the cube face (0..5: axis * 2 + positive side) a normal points to.
+inline int face_of(const Vector& n)
+{
+  int axis = 0;
+  for(int a = 1; a < 3; ++a)
+    if(std::abs(n[a]) > std::abs(n[axis])) axis = a;
+  return 2 * axis + (n[axis] > 0 ? 1 : 0);
+}
 
 inline double pearson(const std::vector<double>& a, const std::vector<double>& b)
 {

@@ -847,6 +847,10 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse(PointRange& points, 
   }
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_DEFORMATION_INSTANCES(EXTERN, Tag) EXTERN template class Detail_preserving_deformation<Tag>;
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DEFORMATION_INSTANCES)
+
 } // namespace CGAL_ext
 
 #endif // CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H

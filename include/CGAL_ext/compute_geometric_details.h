@@ -117,6 +117,14 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   return true;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES(EXTERN, Tag) \
+  EXTERN template bool detail_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Detail_settings&, \
+                                             const Matrix_n3&, Progress&, Sparse_row_matrix&, const char*); \
+  EXTERN template bool geometric_details<Tag>(const Spatial_point_cloud&, unsigned int, const Detail_settings&, \
+                                              const Matrix_n3&, Progress&, Matrix_n3&, const char*);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES)
+
 } // namespace internal
 
 /*!

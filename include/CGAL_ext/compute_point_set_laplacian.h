@@ -66,6 +66,12 @@ inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const Spatia
   return P;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_BUILD_LAPLACIAN_INSTANCES(EXTERN, Tag) \
+  EXTERN template bool build_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Laplacian_weights&, \
+                                            Progress&, Sparse_row_matrix&, Neighbor_graph*);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_BUILD_LAPLACIAN_INSTANCES)
+
 } // namespace internal
 
 /*!

@@ -328,6 +328,12 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   return result;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_CLUSTER_SPLIT_INSTANCES(EXTERN, Tag) \
+  EXTERN template std::vector<int> split_into_clusters<Tag>(const Matrix_n3&, const Cluster_split_rule&, \
+                                                            std::vector<int>&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_CLUSTER_SPLIT_INSTANCES)
+
 } // namespace internal
 
 /*!

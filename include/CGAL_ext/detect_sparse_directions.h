@@ -188,6 +188,14 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
   return gaps;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag) \
+  EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&); \
+  EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, \
+                                                       std::size_t, double, double, const std::vector<int>*, \
+                                                       std::vector<int>&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES)
+
 } // namespace internal
 
 /*!

@@ -111,133 +111,12 @@ public:
   /// Throws `Numerical_failure` when the normal matrix cannot be factored.
   template <typename ConcurrencyTag>
   void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
-              const Least_squares_settings& settings)
-  {
-    if(positions.rows() != A.cols())
-      throw Invalid_input("detail least squares: the operator needs one position per unknown");
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
-    m_settings = settings;
-    m_A = std::move(A);
-    m_At = m_A.transpose();
-    m_anchors = std::move(anchors);
-    m_statistics = Least_squares_statistics();
-    m_statistics.unknowns = std::size_t(m_A.cols());
-    m_statistics.anchors = m_anchors.size();
-    m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
-    m_main.reset();
-    m_fallback.reset();
-
-    const double alpha = settings.detail_weight;
-    const std::size_t n = std::size_t(m_A.cols());
-    if(settings.solver == Linear_solver::conjugate_gradient) {
-      // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
-      m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));
-      for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
-        m_diagonal(m_A.innerIndexPtr()[e]) += alpha * m_A.valuePtr()[e] * m_A.valuePtr()[e];
-      for(int a : m_anchors) m_diagonal(a) += 1.0;
-      for(Eigen::Index j = 0; j < m_diagonal.size(); ++j)
-        if(!(m_diagonal(j) > 0))
-          throw Numerical_failure("detail least squares: point " + std::to_string(j) +
-                                  " of the region appears in no equation; the normal matrix is singular");
-      m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
-      m_statistics.assembly_seconds = seconds_since(start);
-      return;
-    }
-
-    // Upper triangle of A^T A, row-major: read as column-major it is the lower triangle the factorisations want.
-    Sparse_row_matrix upper = sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
-    upper *= alpha;
-    double* diagonal_value = upper.valuePtr();
-    m_scale.resize(Eigen::Index(n));
-    std::vector<char> is_anchor(n, 0), lacks_diagonal(n, 0);
-    for(int a : m_anchors) is_anchor[std::size_t(a)] = 1;
-    bool any_lacking = false;
-    for(std::size_t j = 0; j < n; ++j) {
-      // A row's first stored entry is its diagonal (the product keeps the columns >= row), present wherever
-      // A has a non-zero column.
-      const int first = upper.outerIndexPtr()[j];
-      if(first < upper.outerIndexPtr()[j + 1] && upper.innerIndexPtr()[first] == int(j))
-        diagonal_value[first] += is_anchor[j] ? 1.0 : 0.0;
-      else if(is_anchor[j])
-        lacks_diagonal[j] = any_lacking = true;
-      else
-        throw Numerical_failure("detail least squares: point " + std::to_string(j) +
-                                " of the region appears in no equation; the normal matrix is singular");
-    }
-    if(any_lacking) upper = with_unit_diagonals(upper, lacks_diagonal);
-    for(std::size_t j = 0; j < n; ++j) m_scale(Eigen::Index(j)) = 1.0 / std::sqrt(upper.valuePtr()[upper.outerIndexPtr()[j]]);
-    for(std::size_t j = 0; j < n; ++j)
-      for(int e = upper.outerIndexPtr()[j]; e < upper.outerIndexPtr()[j + 1]; ++e)
-        upper.valuePtr()[e] *= m_scale(Eigen::Index(j)) * m_scale(upper.innerIndexPtr()[e]);
-    m_statistics.normal_nonzeros = 2 * std::size_t(upper.nonZeros()) - n;
-    m_statistics.assembly_seconds = seconds_since(start);
-
-    const auto factor_start = Clock::now();
-    // Factor P N P^T in the geometric nested-dissection order, which the factorisations keep as given.
-    const std::vector<int> order = geometric_nested_dissection(upper, positions);
-    m_new_of.indices().resize(Eigen::Index(n));
-    for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
-    Column_matrix normal{Eigen::Index(n), Eigen::Index(n)};
-    normal.template selfadjointView<Eigen::Lower>() =
-      Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
-                                      upper.innerIndexPtr(), upper.valuePtr())
-        .template selfadjointView<Eigen::Lower>()
-        .twistedBy(m_new_of);
-    upper = Sparse_row_matrix();
-#ifdef CGAL_EXT_USE_CHOLMOD
-    m_main = std::make_unique<Main_factor>();
-    cholmod_common& common = m_main->cholmod();
-    common.print = 0; // a rounding-negative pivot is handled below, not printed
-    // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL). That order wins on
-    // large regions (17 % fewer flops than AMD at 40k unknowns), AMD on the few thousand unknowns of an edit's
-    // sample points (2 to 4 times fewer flops on the benchmark's scans): small systems try both and keep the
-    // cheaper, at the price of one AMD analysis.
-    common.nmethods = n <= small_system ? 2 : 1;
-    common.method[0].ordering = CHOLMOD_NATURAL;
-    common.method[1].ordering = CHOLMOD_AMD;
-    m_main->compute(normal);
-    if(m_main->info() == Eigen::Success)
-      m_statistics.method = "CHOLMOD supernodal LL^T";
-    else
-      m_main.reset();
-#endif
-    if(!m_main) {
-      m_fallback = std::make_unique<Fallback_factor>(normal);
-      if(m_fallback->info() != Eigen::Success)
-        throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
-                                "some part of the region is not pinned by anchors or fixed points)");
-      m_statistics.method = "Eigen SimplicialLDLT";
-#ifdef CGAL_EXT_USE_CHOLMOD
-      m_statistics.method += " (CHOLMOD LL^T met a non-positive pivot)";
-#endif
-    }
-    m_statistics.method += ", geometric nested dissection";
-    m_statistics.factor_seconds = seconds_since(factor_start);
-  }
+              const Least_squares_settings& settings);
 
   /// Displacements of the region's points for the wanted detail change `detail_change` (|R| x 3) and anchor
   /// displacements `anchor_displacement` (one row per anchor, in the order given to `factor`).
   template <typename ConcurrencyTag>
-  Matrix_n3 solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement)
-  {
-    const auto start = std::chrono::steady_clock::now();
-    const Matrix_n3 b = right_hand_side<ConcurrencyTag>(detail_change, anchor_displacement);
-    const double b_norm = b.norm();
-    Matrix_n3 u = Matrix_n3::Zero(b.rows(), 3);
-    m_statistics.iterations = 0;
-    m_statistics.relative_residual = 0;
-    if(b_norm > 0) {
-      if(m_settings.solver == Linear_solver::conjugate_gradient)
-        conjugate_gradients<ConcurrencyTag>(b, b_norm, u);
-      else
-        refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
-    }
-    if(!u.allFinite())
-      throw Numerical_failure("detail least squares: the solve produced non-finite values");
-    m_statistics.solve_seconds = seconds_since(start);
-    return u;
-  }
+  Matrix_n3 solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement);
 
   const Least_squares_statistics& statistics() const { return m_statistics; }
   const Sparse_row_matrix& operator_rows() const { return m_A; }
@@ -367,6 +246,143 @@ private:
   std::unique_ptr<Fallback_factor> m_fallback;
   Least_squares_statistics m_statistics;
 };
+
+template <typename ConcurrencyTag>
+void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
+                                  const Least_squares_settings& settings)
+{
+  if(positions.rows() != A.cols())
+    throw Invalid_input("detail least squares: the operator needs one position per unknown");
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  m_settings = settings;
+  m_A = std::move(A);
+  m_At = m_A.transpose();
+  m_anchors = std::move(anchors);
+  m_statistics = Least_squares_statistics();
+  m_statistics.unknowns = std::size_t(m_A.cols());
+  m_statistics.anchors = m_anchors.size();
+  m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
+  m_main.reset();
+  m_fallback.reset();
+
+  const double alpha = settings.detail_weight;
+  const std::size_t n = std::size_t(m_A.cols());
+  if(settings.solver == Linear_solver::conjugate_gradient) {
+    // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
+    m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));
+    for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
+      m_diagonal(m_A.innerIndexPtr()[e]) += alpha * m_A.valuePtr()[e] * m_A.valuePtr()[e];
+    for(int a : m_anchors) m_diagonal(a) += 1.0;
+    for(Eigen::Index j = 0; j < m_diagonal.size(); ++j)
+      if(!(m_diagonal(j) > 0))
+        throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+                                " of the region appears in no equation; the normal matrix is singular");
+    m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
+    m_statistics.assembly_seconds = seconds_since(start);
+    return;
+  }
+
+  // Upper triangle of A^T A, row-major: read as column-major it is the lower triangle the factorisations want.
+  Sparse_row_matrix upper = sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
+  upper *= alpha;
+  double* diagonal_value = upper.valuePtr();
+  m_scale.resize(Eigen::Index(n));
+  std::vector<char> is_anchor(n, 0), lacks_diagonal(n, 0);
+  for(int a : m_anchors) is_anchor[std::size_t(a)] = 1;
+  bool any_lacking = false;
+  for(std::size_t j = 0; j < n; ++j) {
+    // A row's first stored entry is its diagonal (the product keeps the columns >= row), present wherever
+    // A has a non-zero column.
+    const int first = upper.outerIndexPtr()[j];
+    if(first < upper.outerIndexPtr()[j + 1] && upper.innerIndexPtr()[first] == int(j))
+      diagonal_value[first] += is_anchor[j] ? 1.0 : 0.0;
+    else if(is_anchor[j])
+      lacks_diagonal[j] = any_lacking = true;
+    else
+      throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+                              " of the region appears in no equation; the normal matrix is singular");
+  }
+  if(any_lacking) upper = with_unit_diagonals(upper, lacks_diagonal);
+  for(std::size_t j = 0; j < n; ++j) m_scale(Eigen::Index(j)) = 1.0 / std::sqrt(upper.valuePtr()[upper.outerIndexPtr()[j]]);
+  for(std::size_t j = 0; j < n; ++j)
+    for(int e = upper.outerIndexPtr()[j]; e < upper.outerIndexPtr()[j + 1]; ++e)
+      upper.valuePtr()[e] *= m_scale(Eigen::Index(j)) * m_scale(upper.innerIndexPtr()[e]);
+  m_statistics.normal_nonzeros = 2 * std::size_t(upper.nonZeros()) - n;
+  m_statistics.assembly_seconds = seconds_since(start);
+
+  const auto factor_start = Clock::now();
+  // Factor P N P^T in the geometric nested-dissection order, which the factorisations keep as given.
+  const std::vector<int> order = geometric_nested_dissection(upper, positions);
+  m_new_of.indices().resize(Eigen::Index(n));
+  for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
+  Column_matrix normal{Eigen::Index(n), Eigen::Index(n)};
+  normal.template selfadjointView<Eigen::Lower>() =
+    Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
+                                    upper.innerIndexPtr(), upper.valuePtr())
+      .template selfadjointView<Eigen::Lower>()
+      .twistedBy(m_new_of);
+  upper = Sparse_row_matrix();
+#ifdef CGAL_EXT_USE_CHOLMOD
+  m_main = std::make_unique<Main_factor>();
+  cholmod_common& common = m_main->cholmod();
+  common.print = 0; // a rounding-negative pivot is handled below, not printed
+  // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL). That order wins on
+  // large regions (17 % fewer flops than AMD at 40k unknowns), AMD on the few thousand unknowns of an edit's
+  // sample points (2 to 4 times fewer flops on the benchmark's scans): small systems try both and keep the
+  // cheaper, at the price of one AMD analysis.
+  common.nmethods = n <= small_system ? 2 : 1;
+  common.method[0].ordering = CHOLMOD_NATURAL;
+  common.method[1].ordering = CHOLMOD_AMD;
+  m_main->compute(normal);
+  if(m_main->info() == Eigen::Success)
+    m_statistics.method = "CHOLMOD supernodal LL^T";
+  else
+    m_main.reset();
+#endif
+  if(!m_main) {
+    m_fallback = std::make_unique<Fallback_factor>(normal);
+    if(m_fallback->info() != Eigen::Success)
+      throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
+                              "some part of the region is not pinned by anchors or fixed points)");
+    m_statistics.method = "Eigen SimplicialLDLT";
+#ifdef CGAL_EXT_USE_CHOLMOD
+    m_statistics.method += " (CHOLMOD LL^T met a non-positive pivot)";
+#endif
+  }
+  m_statistics.method += ", geometric nested dissection";
+  m_statistics.factor_seconds = seconds_since(factor_start);
+}
+
+template <typename ConcurrencyTag>
+Matrix_n3 Detail_least_squares::solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const Matrix_n3 b = right_hand_side<ConcurrencyTag>(detail_change, anchor_displacement);
+  const double b_norm = b.norm();
+  Matrix_n3 u = Matrix_n3::Zero(b.rows(), 3);
+  m_statistics.iterations = 0;
+  m_statistics.relative_residual = 0;
+  if(b_norm > 0) {
+    if(m_settings.solver == Linear_solver::conjugate_gradient)
+      conjugate_gradients<ConcurrencyTag>(b, b_norm, u);
+    else
+      refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
+  }
+  if(!u.allFinite())
+    throw Numerical_failure("detail least squares: the solve produced non-finite values");
+  m_statistics.solve_seconds = seconds_since(start);
+  return u;
+}
+
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_DETAIL_LEAST_SQUARES_INSTANCES(EXTERN, Tag) \
+  EXTERN template Sparse_row_matrix detail_operator_rows<Tag>(const Sparse_row_matrix&, const Detail_filter&, \
+                                                              const std::vector<int>&); \
+  EXTERN template void Detail_least_squares::factor<Tag>(Sparse_row_matrix, std::vector<int>, const Matrix_n3&, \
+                                                         const Least_squares_settings&); \
+  EXTERN template Matrix_n3 Detail_least_squares::solve<Tag>(const Matrix_n3&, const Matrix_n3&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DETAIL_LEAST_SQUARES_INSTANCES)
 
 } // namespace internal
 } // namespace CGAL_ext

@@ -104,6 +104,15 @@ Matrix_n3 apply_detail_filter(const Sparse_row_matrix& K, const Detail_filter& f
   return result;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_LAPLACIAN_INSTANCES(EXTERN, Tag) \
+  EXTERN template Sparse_row_matrix laplacian_matrix<Tag>(const Matrix_n3&, const Neighbor_graph&, \
+                                                          const Laplacian_weights&); \
+  EXTERN template void multiply<Tag>(const Sparse_row_matrix&, const Matrix_n3&, Matrix_n3&); \
+  EXTERN template Matrix_n3 apply_detail_filter<Tag>(const Sparse_row_matrix&, const Detail_filter&, \
+                                                     const Matrix_n3&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_LAPLACIAN_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -181,6 +181,13 @@ Neighbor_graph symmetrize(const Neighbor_graph& directed)
   return graph;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES(EXTERN, Tag) \
+  EXTERN template Neighbor_graph k_nearest_neighbor_graph<Tag>(const Matrix_n3&, std::size_t, Progress&); \
+  EXTERN template Neighbor_graph k_nearest_samples<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t); \
+  EXTERN template Neighbor_graph symmetrize<Tag>(const Neighbor_graph&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -114,6 +114,12 @@ Sparse_row_matrix sparse_product(const Sparse_row_matrix& A, const Sparse_row_ma
   return C;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_SPARSE_PRODUCTS_INSTANCES(EXTERN, Tag) \
+  EXTERN template Sparse_row_matrix sparse_product<Tag>(const Sparse_row_matrix&, const Sparse_row_matrix&, \
+                                                        const std::vector<int>&, Eigen::Index, bool);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_PRODUCTS_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

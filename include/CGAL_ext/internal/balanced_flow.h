@@ -78,6 +78,12 @@ Matrix_n3 balanced_flow_base_surface(const Sparse_row_matrix& K, const Matrix_n3
   return positions + (normals.array().colwise() * h.array()).matrix();
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_BALANCED_FLOW_INSTANCES(EXTERN, Tag) \
+  EXTERN template Matrix_n3 balanced_flow_base_surface<Tag>(const Sparse_row_matrix&, const Matrix_n3&, \
+                                                            const Matrix_n3&, const Balanced_flow_settings&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_BALANCED_FLOW_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -207,6 +207,15 @@ void write_region(PointRange& points, PointMap point_map, const Spatial_point_cl
   }
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_DETAIL_MANIPULATION_INSTANCES(EXTERN, Tag) \
+  EXTERN template Matrix_n3 solve_region_displacements<Tag>(const Sparse_row_matrix&, const Matrix_n3&, \
+                                                            const Detail_filter&, const std::vector<int>&, \
+                                                            const std::vector<int>&, const Matrix_n3&, \
+                                                            const Matrix_n3&, const Least_squares_settings&, \
+                                                            Least_squares_statistics&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DETAIL_MANIPULATION_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -88,6 +88,12 @@ bool given_or_estimated_normals(const PointRange& points, const NamedParameters&
   return estimate_oriented_normals<ConcurrencyTag>(cloud, neighbors, progress, normals);
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_ORIENTED_NORMALS_INSTANCES(EXTERN, Tag) \
+  EXTERN template bool estimate_oriented_normals<Tag>(const Spatial_point_cloud&, unsigned int, Progress&, \
+                                                      Matrix_n3&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_ORIENTED_NORMALS_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -94,6 +94,12 @@ bool mean_curvatures(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
   });
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_MEAN_CURVATURE_INSTANCES(EXTERN, Tag) \
+  EXTERN template bool mean_curvatures<Tag>(const Spatial_point_cloud&, const Matrix_n3&, const Neighbor_graph&, \
+                                            Curvature_fitting, Progress&, Eigen::VectorXd&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_MEAN_CURVATURE_INSTANCES)
+
 } // namespace internal
 
 } // namespace CGAL_ext

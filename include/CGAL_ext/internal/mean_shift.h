@@ -223,6 +223,15 @@ Neighbor_graph mean_shift_neighbor_graph(const Neighbor_graph& candidates, const
   return graph;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_MEAN_SHIFT_INSTANCES(EXTERN, Tag) \
+  EXTERN template bool mean_shift_modes<Tag>(const Matrix_n7&, const Neighbor_graph&, const Mean_shift_settings&, \
+                                             Progress&, Matrix_n7&, std::vector<int>&); \
+  EXTERN template bool analyse_mean_shift<Tag>(const Spatial_point_cloud&, const Matrix_n3&, std::size_t, \
+                                               const Mean_shift_settings&, Progress&, Mean_shift_analysis&); \
+  EXTERN template Neighbor_graph mean_shift_neighbor_graph<Tag>(const Neighbor_graph&, const Matrix_n7&, std::size_t);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_MEAN_SHIFT_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

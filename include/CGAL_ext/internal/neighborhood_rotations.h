@@ -86,6 +86,14 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
   return change;
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES(EXTERN, Tag) \
+  EXTERN template void fit_neighborhood_rotations<Tag>(const Matrix_n3&, const Matrix_n3&, const Neighbor_graph&, \
+                                                       const std::vector<int>&, std::vector<Eigen::Matrix3d>&); \
+  EXTERN template Matrix_n3 rigid_edge_change<Tag>(const std::vector<std::pair<int, int>>&, const Matrix_n3&, \
+                                                   const std::vector<Eigen::Matrix3d>&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -16,6 +16,25 @@
 #include <tbb/parallel_for.h>
 #endif
 
+/*
+  Compiled instances. The numerical cores below the public API are templates on the concurrency tag alone, so
+  the project's own programs, tests and benchmarks compile them once, in the `CGAL_ext_instances` library,
+  instead of once per translation unit (doc/design.md, "Build time"). Each header lists its cores in a macro
+  `LIST(EXTERN, Tag)` and passes it to `CGAL_EXT_DECLARE_COMPILED_INSTANCES`, which declares them `extern`
+  when `CGAL_EXT_COMPILED_INSTANCES` is defined (by linking `CGAL_ext::instances`). A user of the header-only
+  library defines nothing and sees no difference.
+*/
+#ifdef CGAL_LINKED_WITH_TBB
+#define CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, EXTERN) LIST(EXTERN, CGAL::Sequential_tag) LIST(EXTERN, CGAL::Parallel_tag)
+#else
+#define CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, EXTERN) LIST(EXTERN, CGAL::Sequential_tag)
+#endif
+#ifdef CGAL_EXT_COMPILED_INSTANCES
+#define CGAL_EXT_DECLARE_COMPILED_INSTANCES(LIST) CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, extern)
+#else
+#define CGAL_EXT_DECLARE_COMPILED_INSTANCES(LIST)
+#endif
+
 namespace CGAL_ext {
 namespace internal {
 

@@ -101,25 +101,7 @@ public:
   /// Weights `1 / (d^2 + h^2)`, normalised per point, with `h` the mean distance of a point to its nearest
   /// sample point: they fall off with distance and stay finite on a sample point.
   template <typename ConcurrencyTag>
-  void setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m)
-  {
-    samples = k_nearest_samples<ConcurrencyTag>(sample_positions, points, m);
-    const std::size_t n = samples.size();
-    double nearest = 0;
-    for(std::size_t i = 0; i < n; ++i)
-      nearest += (points.row(Eigen::Index(i)) - sample_positions.row(*samples.begin(i))).norm();
-    const double h2 = std::pow(nearest / double(std::max<std::size_t>(n, 1)), 2) + 1e-300;
-    weights.resize(samples.indices.size());
-    for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
-      double sum = 0;
-      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
-        const double d2 = (points.row(Eigen::Index(i)) - sample_positions.row(samples.indices[std::size_t(e)])).squaredNorm();
-        weights[std::size_t(e)] = 1.0 / (d2 + h2);
-        sum += weights[std::size_t(e)];
-      }
-      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) weights[std::size_t(e)] /= sum;
-    });
-  }
+  void setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m);
 
   /// Moves every point by its sample points' motions: sample point j moves from `s_j` to `s'_j` and turns by
   /// `rotation[j]` (its deformed frame times its original frame transposed), so the offset `p - o` seen from
@@ -132,55 +114,91 @@ public:
   template <typename ConcurrencyTag>
   void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
-             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr)
-  {
-    // Per sample point: D = R - I and, for offsets from the sample point itself, the constant part of its
-    // displacement `(s' - s) - D s`, so that a point's displacement is `(sum w D) p + sum w e`.
-    const std::size_t count = rotation.size();
-    m_turn.resize(count);
-    m_constant.resize(Eigen::Index(count), 3);
-    for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
-      m_turn[j] = rotation[j] - Eigen::Matrix3d::Identity();
-      const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
-      const Eigen::Vector3d moved = deformed_sample_positions.row(Eigen::Index(j)).transpose() - s;
-      m_constant.row(Eigen::Index(j)) = (moved - m_turn[j] * s).transpose();
-    });
-    for_range<ConcurrencyTag>(0, active ? active->size() : samples.size(), [&](std::size_t a) {
-      const std::size_t i = active ? std::size_t((*active)[a]) : a;
-      const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
-      const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
-      Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
-      double weight_sum = 0;
-      for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
-        const std::size_t j = std::size_t(samples.indices[std::size_t(e)]);
-        const double w = weights[std::size_t(e)];
-        turn.noalias() += w * m_turn[j];
-        displacement.noalias() += w * m_constant.row(Eigen::Index(j)).transpose();
-        weight_sum += w;
-      }
-      if(origin == Offset_origin::nearest_sample) {
-        // The paper's: every frame decodes p - s_0 from s'_0.
-        const Eigen::Index o = *samples.begin(i);
-        displacement = weight_sum * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
-                       turn * (p - sample_positions.row(o).transpose());
-      } else {
-        displacement.noalias() += turn * p;
-      }
-      if(turn.isZero(0) && displacement.isZero(0)) {
-        out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i));
-        out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
-        return;
-      }
-      out_points.row(Eigen::Index(i)) = (p + displacement).transpose();
-      out_normals.row(Eigen::Index(i)) = (n + turn * n).normalized().transpose();
-    });
-  }
+             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr);
 
 private:
   std::vector<Eigen::Matrix3d> m_turn; // per sample point, R - I
   Matrix_n3 m_constant;                // per sample point, (s' - s) - (R - I) s
 };
+
+template <typename ConcurrencyTag>
+void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m)
+{
+  samples = k_nearest_samples<ConcurrencyTag>(sample_positions, points, m);
+  const std::size_t n = samples.size();
+  double nearest = 0;
+  for(std::size_t i = 0; i < n; ++i)
+    nearest += (points.row(Eigen::Index(i)) - sample_positions.row(*samples.begin(i))).norm();
+  const double h2 = std::pow(nearest / double(std::max<std::size_t>(n, 1)), 2) + 1e-300;
+  weights.resize(samples.indices.size());
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    double sum = 0;
+    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
+      const double d2 = (points.row(Eigen::Index(i)) - sample_positions.row(samples.indices[std::size_t(e)])).squaredNorm();
+      weights[std::size_t(e)] = 1.0 / (d2 + h2);
+      sum += weights[std::size_t(e)];
+    }
+    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) weights[std::size_t(e)] /= sum;
+  });
+}
+
+template <typename ConcurrencyTag>
+void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
+                              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
+                              Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
+                              const std::vector<int>* active)
+{
+  // Per sample point: D = R - I and, for offsets from the sample point itself, the constant part of its
+  // displacement `(s' - s) - D s`, so that a point's displacement is `(sum w D) p + sum w e`.
+  const std::size_t count = rotation.size();
+  m_turn.resize(count);
+  m_constant.resize(Eigen::Index(count), 3);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
+    m_turn[j] = rotation[j] - Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
+    const Eigen::Vector3d moved = deformed_sample_positions.row(Eigen::Index(j)).transpose() - s;
+    m_constant.row(Eigen::Index(j)) = (moved - m_turn[j] * s).transpose();
+  });
+  for_range<ConcurrencyTag>(0, active ? active->size() : samples.size(), [&](std::size_t a) {
+    const std::size_t i = active ? std::size_t((*active)[a]) : a;
+    const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
+    const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
+    Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
+    double weight_sum = 0;
+    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
+      const std::size_t j = std::size_t(samples.indices[std::size_t(e)]);
+      const double w = weights[std::size_t(e)];
+      turn.noalias() += w * m_turn[j];
+      displacement.noalias() += w * m_constant.row(Eigen::Index(j)).transpose();
+      weight_sum += w;
+    }
+    if(origin == Offset_origin::nearest_sample) {
+      // The paper's: every frame decodes p - s_0 from s'_0.
+      const Eigen::Index o = *samples.begin(i);
+      displacement = weight_sum * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
+                     turn * (p - sample_positions.row(o).transpose());
+    } else {
+      displacement.noalias() += turn * p;
+    }
+    if(turn.isZero(0) && displacement.isZero(0)) {
+      out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i));
+      out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
+      return;
+    }
+    out_points.row(Eigen::Index(i)) = (p + displacement).transpose();
+    out_normals.row(Eigen::Index(i)) = (n + turn * n).normalized().transpose();
+  });
+}
+
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_SSP_DIFFUSION_INSTANCES(EXTERN, Tag) \
+  EXTERN template void Diffusion_stencil::setup<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t); \
+  EXTERN template void Diffusion_stencil::apply<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, \
+                                                     const Matrix_n3&, const std::vector<Eigen::Matrix3d>&, \
+                                                     Offset_origin, Matrix_n3&, Matrix_n3&, \
+                                                     const std::vector<int>*);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SSP_DIFFUSION_INSTANCES)
 
 } // namespace internal
 } // namespace CGAL_ext

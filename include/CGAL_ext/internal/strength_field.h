@@ -112,6 +112,11 @@ inline Eigen::Quaterniond propagated_rotation(const std::vector<Eigen::Quaternio
   return Eigen::Quaterniond(blend(3), blend(0), blend(1), blend(2)).normalized();
 }
 
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_STRENGTH_FIELD_INSTANCES(EXTERN, Tag) \
+  EXTERN template Eigen::VectorXd euclidean_distance_to<Tag>(const Matrix_n3&, const std::vector<int>&);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_STRENGTH_FIELD_INSTANCES)
+
 } // namespace internal
 } // namespace CGAL_ext
 
