@@ -23,7 +23,10 @@ fuzz_build() {
 fuzz_one() {
   local target=$1 scratch status=0
   scratch=$(mktemp -d)
-  "$build/fuzz/$target" "$scratch" "fuzz/corpus/$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
+  mkdir "$scratch/corpus" "$scratch/tmp"
+  # TMPDIR: the targets write each input to a file there (fuzz/fuzz_support.h); removed with the scratch folder.
+  TMPDIR="$scratch/tmp" "$build/fuzz/$target" "$scratch/corpus" "fuzz/corpus/$target" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=4096 \
     -artifact_prefix="$build/findings/$target-" -print_final_stats=1 >"$build/findings/$target.log" 2>&1 || status=$?
   echo "run_fuzzers.sh: $target for ${seconds} s"
   grep -E "^(#[0-9]+ +DONE|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==ERROR|SUMMARY)" \

@@ -67,11 +67,14 @@ Oriented_sample<Kernel> bumpy_sphere(std::size_t n, double radius = 1.0, double 
     const double z = 1 - (2 * double(i) + 1) / double(n);
     const double theta = std::acos(z), phi = golden * double(i);
     const Eigen::Vector3d u(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), z);
-    // Near the poles the angles degenerate: rotate the parametrisation so the point sits on its equator.
-    const Eigen::Quaterniond to_equator = Eigen::Quaterniond::FromTwoVectors(u, Eigen::Vector3d::UnitX());
+    // Near the poles the angles degenerate: rotate the parametrisation so the point sits on its equator, by
+    // the rotation [u a b] that takes the x axis to u (a frame, not Quaternion::FromTwoVectors, whose SVD
+    // costs every file that includes this one seconds of compilation).
+    const Eigen::Vector3d helper = std::abs(u.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d a = u.cross(helper).normalized();
+    const Eigen::Vector3d b = u.cross(a);
     auto rotated = [&](double t, double p) {
-      const Eigen::Vector3d v(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
-      const Eigen::Vector3d d = to_equator.inverse() * v;
+      const Eigen::Vector3d d = std::sin(t) * std::cos(p) * u + std::sin(t) * std::sin(p) * a + std::cos(t) * b;
       return Eigen::Vector3d((radius + height(d)) * d);
     };
     const double eps = 1e-5;

@@ -2,8 +2,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 //
 // The neighbourhood cores of CGAL_ext compiled once for the project's own programs, tests, examples and
-// benchmarks (doc/design.md, "Build time"): neighbour graphs, oriented normals, curvature, mean shift, hole
-// gaps, cluster splitting, rigid fits and the strength field, for each concurrency tag.
+// benchmarks (doc/design.md, "Build time"): the spatial sort, neighbour graphs, oriented normals, curvature,
+// mean shift, hole gaps, cluster splitting, rigid fits and the strength field, for each concurrency tag.
 #include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/detect_sparse_directions.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
@@ -15,6 +15,7 @@
 namespace CGAL_ext {
 namespace internal {
 
+CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(CGAL_EXT_POINT_ARRAYS_INSTANCES, )
 CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES, )
 CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(CGAL_EXT_ORIENTED_NORMALS_INSTANCES, )
 CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(CGAL_EXT_MEAN_CURVATURE_INSTANCES, )

@@ -9,12 +9,16 @@
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/Point_set_3.h>
 #include <CGAL/Simple_cartesian.h>
-#include <CGAL/Spatial_sort_traits_adapter_3.h>
-#include <CGAL/hilbert_sort.h>
 #include <CGAL/property_map.h>
 
 #include <Eigen/Core>
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
+#include <CGAL/Spatial_sort_traits_adapter_3.h>
+#include <CGAL/hilbert_sort.h>
+
 #include <Eigen/Eigenvalues>
+#endif
 
 #include <algorithm>
 #include <climits>
@@ -59,17 +63,22 @@ inline std::string describe_point(std::size_t i, double x, double y, double z)
   return os.str();
 }
 
+/// The validated copy of a cloud's points (in the caller's order) checked to span a surface and sorted along
+/// a Hilbert curve.
+template <typename ConcurrencyTag>
+Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who);
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 /// Throws when three or more points all coincide or lie on one line: they sample no surface, and every
 /// tangent plane, normal and curvature of them is undefined.
-template <typename SC_point>
-void check_spans_a_surface(const std::vector<SC_point>& points, const char* who)
+inline void check_spans_a_surface(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& points, const char* who)
 {
   if(points.size() < 3) return; // too few for any neighbourhood; the callers' k checks name that
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for(const SC_point& p : points) mean += Eigen::Vector3d(p.x(), p.y(), p.z());
+  for(const auto& p : points) mean += Eigen::Vector3d(p.x(), p.y(), p.z());
   mean /= double(points.size());
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for(const SC_point& p : points) {
+  for(const auto& p : points) {
     const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), p.z()) - mean;
     covariance += d * d.transpose();
   }
@@ -81,6 +90,30 @@ void check_spans_a_surface(const std::vector<SC_point>& points, const char* who)
     throw Invalid_input(std::string(who) + ": all " + std::to_string(points.size()) +
                         " points are collinear; they sample no surface");
 }
+
+template <typename ConcurrencyTag>
+Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who)
+{
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  check_spans_a_surface(copy, who);
+  const std::size_t n = copy.size();
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  using Traits = CGAL::Spatial_sort_traits_adapter_3<CGAL::Simple_cartesian<double>,
+                                                     typename CGAL::Pointer_property_map<SC_point>::const_type>;
+  // Median policy: deterministic (no random shuffle), balanced on uneven scans.
+  CGAL::hilbert_sort<ConcurrencyTag>(order.begin(), order.end(), Traits(CGAL::make_property_map(copy)),
+                                     CGAL::Hilbert_sort_median_policy());
+  Spatial_point_cloud cloud;
+  cloud.input_index.assign(order.begin(), order.end());
+  cloud.positions.resize(Eigen::Index(n), 3);
+  for(std::size_t s = 0; s < n; ++s) {
+    const SC_point& p = copy[std::size_t(cloud.input_index[s])];
+    cloud.positions.row(Eigen::Index(s)) << p.x(), p.y(), p.z();
+  }
+  return cloud;
+}
+#endif
 
 /// Copies and validates the points of `points` (in range order) and sorts them spatially.
 /// `who` names the calling algorithm in error messages.
@@ -106,24 +139,7 @@ Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap 
     copy.emplace_back(x, y, z);
     ++i;
   }
-  check_spans_a_surface(copy, who);
-
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  using Traits = CGAL::Spatial_sort_traits_adapter_3<CGAL::Simple_cartesian<double>,
-                                                     typename CGAL::Pointer_property_map<SC_point>::type>;
-  // Median policy: deterministic (no random shuffle), balanced on uneven scans.
-  CGAL::hilbert_sort<ConcurrencyTag>(order.begin(), order.end(),
-                                     Traits(CGAL::make_property_map(copy)),
-                                     CGAL::Hilbert_sort_median_policy());
-  Spatial_point_cloud cloud;
-  cloud.input_index.assign(order.begin(), order.end());
-  cloud.positions.resize(Eigen::Index(n), 3);
-  for(std::size_t s = 0; s < n; ++s) {
-    const SC_point& p = copy[std::size_t(cloud.input_index[s])];
-    cloud.positions.row(Eigen::Index(s)) << p.x(), p.y(), p.z();
-  }
-  return cloud;
+  return sort_spatially<ConcurrencyTag>(copy, who);
 }
 
 /// Reads the caller's normals in the cloud's order, normalised. Throws on a zero or non-finite normal.
@@ -193,6 +209,12 @@ bool has_given_normals(const PointRange& points)
     return named;
   }
 }
+
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+#define CGAL_EXT_POINT_ARRAYS_INSTANCES(EXTERN, Tag) \
+  EXTERN template Spatial_point_cloud sort_spatially<Tag>(const std::vector<CGAL::Simple_cartesian<double>::Point_3>&, \
+                                                          const char*);
+CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_POINT_ARRAYS_INSTANCES)
 
 } // namespace internal
 } // namespace CGAL_ext

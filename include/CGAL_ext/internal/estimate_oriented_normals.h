@@ -7,11 +7,14 @@
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
 
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/boost/graph/named_params_helper.h>
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 #include <CGAL/Monge_via_jet_fitting.h>
+#include <CGAL/Simple_cartesian.h>
 #include <CGAL/mst_orient_normals.h>
 #include <CGAL/property_map.h>
+#endif
 
 #include <algorithm>
 #include <string>
@@ -29,6 +32,11 @@ namespace internal {
 /// The jet fit is `CGAL::jet_estimate_normals`' own (`CGAL::Monge_via_jet_fitting`, degree 2, Monge degree 1,
 /// on the point and its k - 1 nearest neighbours), run here on the project's neighbour graph: CGAL 5.5's
 /// function binds its callback to a reference to a temporary (AddressSanitizer: stack-use-after-scope).
+template <typename ConcurrencyTag>
+bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k, Progress& progress,
+                               Matrix_n3& normals);
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 template <typename ConcurrencyTag>
 bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k, Progress& progress,
                                Matrix_n3& normals)
@@ -70,6 +78,7 @@ bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k,
   }
   return progress.report(1.0);
 }
+#endif
 
 /// The caller's normals when `np` (or a `Point_set_3` range) has them, otherwise estimated with
 /// `neighbors` neighbours. Rows follow the cloud's order. Returns false when cancelled.

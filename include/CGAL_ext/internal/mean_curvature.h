@@ -7,10 +7,15 @@
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
 
+#include <Eigen/Core>
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 #include <CGAL/Monge_via_jet_fitting.h>
 #include <CGAL/Simple_cartesian.h>
 
-#include <Eigen/Dense>
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#endif
 
 #include <cmath>
 #include <vector>
@@ -46,6 +51,11 @@ inline double graph_mean_curvature(double zx, double zy, double zxx, double zxy,
 
 /// Mean curvature of every point of the cloud (its order), from `graph` (k nearest neighbours of each point)
 /// and the oriented `normals`. Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool mean_curvatures(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Neighbor_graph& graph,
+                     Curvature_fitting fitting, Progress& progress, Eigen::VectorXd& curvature);
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 template <typename ConcurrencyTag>
 bool mean_curvatures(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Neighbor_graph& graph,
                      Curvature_fitting fitting, Progress& progress, Eigen::VectorXd& curvature)
@@ -93,6 +103,7 @@ bool mean_curvatures(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
     curvature(Eigen::Index(i)) = scale * graph_mean_curvature(c(1), c(2), 2 * c(3), c(4), 2 * c(5));
   });
 }
+#endif
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_MEAN_CURVATURE_INSTANCES(EXTERN, Tag) \

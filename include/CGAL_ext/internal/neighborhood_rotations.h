@@ -20,10 +20,12 @@ namespace internal {
 /// The rotation `R` that minimises `sum_j |R e_j - e'_j|^2` given `covariance = sum_j e_j e'_j^T`: `V U^T` for
 /// `covariance = U S V^T`, with the singular vector of the smallest singular value flipped where that product
 /// would be a reflection (Sorkine and Alexa 2007). A flat neighbourhood (rank 2) still gives one rotation.
-inline Eigen::Matrix3d best_rotation(const Eigen::Matrix3d& covariance)
+/// (A template, so that only the files that call it instantiate the SVD.)
+template <typename Matrix3>
+Matrix3 best_rotation(const Matrix3& covariance)
 {
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d v = svd.matrixV();
+  const Eigen::JacobiSVD<Matrix3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix3 v = svd.matrixV();
   if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
   return v * svd.matrixU().transpose();
 }

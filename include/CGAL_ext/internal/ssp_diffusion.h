@@ -41,48 +41,53 @@ public:
   }
 
   /// The frame of sample point `i` from `positions`, its normal oriented like `hint`.
-  Eigen::Matrix3d frame(const Matrix_n3& positions, std::size_t i, const Eigen::Vector3d& hint) const
-  {
-    const Eigen::Vector3d origin = positions.row(Eigen::Index(i)).transpose();
-    Eigen::Vector3d normal = hint.normalized();
-    const int degree = m_neighbors.degree(i);
-    if(degree >= 2) {
-      Eigen::Vector3d centroid = origin;
-      for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) centroid += positions.row(*j).transpose();
-      centroid /= double(degree + 1);
-      Eigen::Matrix3d covariance = (origin - centroid) * (origin - centroid).transpose();
-      for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) {
-        const Eigen::Vector3d d = positions.row(*j).transpose() - centroid;
-        covariance += d * d.transpose();
-      }
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-      // A plane needs two spread directions; a fit on collinear neighbours keeps the hint.
-      if(eigen.eigenvalues()(1) > 1e-12 * eigen.eigenvalues()(2)) normal = eigen.eigenvectors().col(0);
-      if(normal.dot(hint) < 0) normal = -normal;
-    }
-    Eigen::Vector3d e1;
-    if(m_reference[i] >= 0) {
-      const Eigen::Vector3d d = positions.row(m_reference[i]).transpose() - origin;
-      e1 = d - d.dot(normal) * normal;
-    }
-    if(m_reference[i] < 0 || !(e1.squaredNorm() > 0)) {
-      // No usable reference: any tangent direction, the same before and after only if the normal is.
-      Eigen::Index axis;
-      normal.cwiseAbs().minCoeff(&axis);
-      e1 = Eigen::Vector3d::Unit(axis) - normal(axis) * normal;
-    }
-    e1.normalize();
-    Eigen::Matrix3d F;
-    F.col(0) = e1;
-    F.col(1) = normal.cross(e1);
-    F.col(2) = normal;
-    return F;
-  }
+  Eigen::Matrix3d frame(const Matrix_n3& positions, std::size_t i, const Eigen::Vector3d& hint) const;
 
 private:
   Neighbor_graph m_neighbors;
   std::vector<int> m_reference;
 };
+
+#ifdef CGAL_EXT_CORE_DEFINITIONS
+// Defined where the editing class is compiled (internal/parallel.h): its eigen solver is costly to compile.
+inline Eigen::Matrix3d Ssp_frames::frame(const Matrix_n3& positions, std::size_t i, const Eigen::Vector3d& hint) const
+{
+  const Eigen::Vector3d origin = positions.row(Eigen::Index(i)).transpose();
+  Eigen::Vector3d normal = hint.normalized();
+  const int degree = m_neighbors.degree(i);
+  if(degree >= 2) {
+    Eigen::Vector3d centroid = origin;
+    for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) centroid += positions.row(*j).transpose();
+    centroid /= double(degree + 1);
+    Eigen::Matrix3d covariance = (origin - centroid) * (origin - centroid).transpose();
+    for(const int* j = m_neighbors.begin(i); j != m_neighbors.end(i); ++j) {
+      const Eigen::Vector3d d = positions.row(*j).transpose() - centroid;
+      covariance += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+    // A plane needs two spread directions; a fit on collinear neighbours keeps the hint.
+    if(eigen.eigenvalues()(1) > 1e-12 * eigen.eigenvalues()(2)) normal = eigen.eigenvectors().col(0);
+    if(normal.dot(hint) < 0) normal = -normal;
+  }
+  Eigen::Vector3d e1;
+  if(m_reference[i] >= 0) {
+    const Eigen::Vector3d d = positions.row(m_reference[i]).transpose() - origin;
+    e1 = d - d.dot(normal) * normal;
+  }
+  if(m_reference[i] < 0 || !(e1.squaredNorm() > 0)) {
+    // No usable reference: any tangent direction, the same before and after only if the normal is.
+    Eigen::Index axis;
+    normal.cwiseAbs().minCoeff(&axis);
+    e1 = Eigen::Vector3d::Unit(axis) - normal(axis) * normal;
+  }
+  e1.normalize();
+  Eigen::Matrix3d F;
+  F.col(0) = e1;
+  F.col(1) = normal.cross(e1);
+  F.col(2) = normal;
+  return F;
+}
+#endif
 
 /// How a point's offset is stored in the frames of its sample points (DESIGN.md 3.7).
 enum class Offset_origin
