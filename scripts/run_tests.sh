@@ -3,7 +3,7 @@
 # examples included), the benchmark harness in its quick mode, the API reference (no Doxygen warning allowed),
 # the manual's pictures (into the build folder), the same test suite built with AddressSanitizer and
 # UndefinedBehaviorSanitizer, and each fuzz target for 30 seconds. Ends with the time of each stage, checked to
-# add up to the whole run (scripts/check_stage_times.py); a fresh clone with the compiler cache off took 28
+# add up to the whole run (scripts/check_stage_times.py); a fresh clone with the compiler cache off took 22.5
 # minutes on 2 cores (doc/design.md, "Build time").
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
