@@ -15,11 +15,13 @@ option(CGAL_EXT_USE_CHOLMOD "Use SuiteSparse CHOLMOD for sparse Cholesky factori
 if(CGAL_EXT_USE_CHOLMOD AND NOT TARGET SuiteSparse::CHOLMOD)
   find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
   find_library(CHOLMOD_LIBRARY cholmod)
-  if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY)
+  # CHOLMOD's headers declare SuiteSparse_config (its allocator, which the tests replace), defined here.
+  find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig)
+  if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY AND SUITESPARSE_CONFIG_LIBRARY)
     add_library(SuiteSparse::CHOLMOD INTERFACE IMPORTED)
     set_target_properties(SuiteSparse::CHOLMOD PROPERTIES
       INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}"
-      INTERFACE_LINK_LIBRARIES "${CHOLMOD_LIBRARY}"
+      INTERFACE_LINK_LIBRARIES "${CHOLMOD_LIBRARY};${SUITESPARSE_CONFIG_LIBRARY}"
       INTERFACE_COMPILE_DEFINITIONS CGAL_EXT_USE_CHOLMOD)
   endif()
 endif()

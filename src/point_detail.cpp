@@ -851,8 +851,8 @@ int main(int argc, char** argv)
       "region of interest, repeatable (union): sphere:x,y,z,r | box:xmin,ymin,zmin,xmax,ymax,zmax | indices:FILE"
       + std::string(command->enhance ? " (default: the whole model)" : ""));
     if(!command->enhance) roi_option->required();
-    sub->add_option("--anchors", command->anchors, "anchored points, same syntax (default: the region's border, or for the "
-                                                    "whole model in enhance a uniform 1 % at the exact solution)");
+    sub->add_option("--anchors", command->anchors, "anchored points, same syntax (default: the region's border; enhance "
+                                                    "of the whole model needs none: its exact solution is written)");
     sub->add_option("--border", command->border, "default anchors of a partial region: its border (anchored), none (free: the "
                                                   "surroundings hold it), or auto (anchored except for the cubic order)")
       ->check(CLI::IsMember({"auto", "anchored", "free"}))->capture_default_str();
@@ -980,6 +980,13 @@ int main(int argc, char** argv)
   } catch(const CGAL_ext::Invalid_input& e) {
     std::fprintf(stderr, "point-detail: invalid input: %s\n", e.what());
     return 1;
+  } catch(const CGAL_ext::Numerical_failure& e) {
+    std::fprintf(stderr, "point-detail: error: %s\n", e.what());
+    return 3;
+  } catch(const std::bad_alloc&) {
+    std::fprintf(stderr, "point-detail: error: out of memory; free memory, raise the process's memory limit or "
+                         "work on a smaller region\n");
+    return 3;
   } catch(const std::exception& e) {
     std::fprintf(stderr, "point-detail: failed: %s\n", e.what());
     return 3;

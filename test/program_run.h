@@ -12,10 +12,11 @@ struct Program_run
   std::string output; ///< stdout and stderr
 };
 
-/// Runs `point-detail --quiet <arguments>` through the shell and collects what it prints.
-inline Program_run run(const std::string& arguments)
+/// Runs `point-detail --quiet <arguments>` through the shell and collects what it prints. `shell_prefix`
+/// runs first in the same shell (for instance `ulimit -v N;`).
+inline Program_run run(const std::string& arguments, const std::string& shell_prefix = "")
 {
-  const std::string command = std::string(POINT_DETAIL_EXE) + " --quiet " + arguments + " 2>&1";
+  const std::string command = shell_prefix + std::string(POINT_DETAIL_EXE) + " --quiet " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   Program_run r{-1, {}};
   if(pipe == nullptr) return r;

@@ -14,6 +14,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <functional>
 #include <random>
 
 using namespace CGAL_ext;
@@ -56,11 +58,12 @@ Matrix_n3 random_block(Eigen::Index rows, unsigned seed)
 TEST(DetailLeastSquares, OperatorRowsAreTheRestrictionOfTheFilterPolynomial)
 {
   const Small_problem p;
-  const Eigen::MatrixXd K = Eigen::MatrixXd(p.K);
+  // The reference forms K's powers whole, with Eigen's sparse products.
+  const Sparse_row_matrix K2 = p.K * p.K, K3 = K2 * p.K;
   for(Detail_order order : all_orders) {
     const Detail_filter filter{order, 0.8, 1.6};
     const auto c = filter.coefficients();
-    const Eigen::MatrixXd F = c.c1 * K + c.c2 * K * K + c.c3 * K * K * K;
+    const Eigen::MatrixXd F = Eigen::MatrixXd(Sparse_row_matrix(c.c1 * p.K + c.c2 * K2 + c.c3 * K3));
     Eigen::MatrixXd expected(p.roi.size(), p.roi.size());
     for(std::size_t a = 0; a < p.roi.size(); ++a)
       for(std::size_t b = 0; b < p.roi.size(); ++b) expected(Eigen::Index(a), Eigen::Index(b)) = F(p.roi[a], p.roi[b]);
@@ -115,6 +118,29 @@ TEST(DetailLeastSquares, SolvesMatchADenseQRReferenceForBothSolvers)
   }
 }
 
+TEST(DetailLeastSquares, ConsistentSystemsAreSolvedExactly)
+{
+  // Detail changes and anchor targets taken from one displacement field u*: every equation holds at u*, so the
+  // least-squares solution is u* (whole-model enhancement writes p~ + s (p - p~) on this ground).
+  const Small_problem p;
+  const Matrix_n3 exact = random_block(Eigen::Index(p.roi.size()), 3);
+  Matrix_n3 anchor_targets(Eigen::Index(p.anchors.size()), 3);
+  for(std::size_t a = 0; a < p.anchors.size(); ++a) anchor_targets.row(Eigen::Index(a)) = exact.row(p.anchors[a]);
+  for(Detail_order order : all_orders) {
+    const Sparse_row_matrix A = detail_operator_rows<CGAL::Sequential_tag>(p.K, Detail_filter{order, 0.8, 1.6}, p.roi);
+    const Matrix_n3 change = A * exact;
+    for(Linear_solver solver : {Linear_solver::cholesky, Linear_solver::conjugate_gradient}) {
+      Least_squares_settings settings;
+      settings.solver = solver;
+      settings.tolerance = 1e-13;
+      Detail_least_squares system;
+      system.factor<CGAL::Sequential_tag>(A, p.anchors, p.roi_positions, settings);
+      const Matrix_n3 u = system.solve<CGAL::Sequential_tag>(change, anchor_targets);
+      EXPECT_LT((u - exact).norm(), 1e-8 * exact.norm()) << Detail_filter::order_name(order) << " " << system.statistics().method;
+    }
+  }
+}
+
 TEST(DetailLeastSquares, SparseProductsDoNotDependOnTheThreadCount)
 {
   const Small_problem p;
@@ -162,3 +188,115 @@ TEST(DetailLeastSquares, UnpinnedPartsAreFoundWithTheirSize)
   EXPECT_GE(cloud.input_index[std::size_t(parts[0].first)], 400);
   EXPECT_TRUE(unpinned_parts(K, roi, in_roi, {anchor, parts[0].first}).empty());
 }
+
+TEST(DetailLeastSquares, AFailedSolveIsANumericalFailureNeverAResult)
+{
+  // An accepted residual that no solve in floating point reaches: the check must refuse the result.
+  const Small_problem p;
+  const Sparse_row_matrix A = detail_operator_rows<CGAL::Sequential_tag>(p.K, Detail_filter{}, p.roi);
+  Least_squares_settings settings;
+  settings.accepted_residual = 1e-300;
+  Detail_least_squares system;
+  system.factor<CGAL::Sequential_tag>(A, p.anchors, p.roi_positions, settings);
+  const Matrix_n3 r = random_block(A.rows(), 1), t = random_block(Eigen::Index(p.anchors.size()), 2);
+  try {
+    system.solve<CGAL::Sequential_tag>(r, t);
+    ADD_FAILURE() << "a solve above the accepted residual was returned";
+  } catch(const Numerical_failure& e) {
+    EXPECT_NE(std::string(e.what()).find("relative residual"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(std::to_string(p.roi.size()) + " unknowns"), std::string::npos) << e.what();
+  }
+  // Nothing to solve is exact, whatever the threshold.
+  EXPECT_EQ(system.solve<CGAL::Sequential_tag>(Matrix_n3::Zero(r.rows(), 3), Matrix_n3::Zero(t.rows(), 3)).norm(), 0.0);
+  settings.accepted_residual = 0;
+  EXPECT_THROW(settings.validate(), Invalid_input);
+}
+
+#ifdef CGAL_EXT_USE_CHOLMOD
+namespace {
+/// CHOLMOD allocates through SuiteSparse_config: while one of these lives, its allocations come out of a
+/// budget of bytes, and fail as a real shortage would once the budget is spent.
+class Cholmod_allocation_budget
+{
+public:
+  explicit Cholmod_allocation_budget(std::size_t bytes) : m_saved(SuiteSparse_config)
+  {
+    remaining = bytes;
+    taken = 0;
+    SuiteSparse_config.malloc_func = [](std::size_t size) { return take(size) ? std::malloc(size) : nullptr; };
+    SuiteSparse_config.calloc_func = [](std::size_t n, std::size_t size) { return take(n * size) ? std::calloc(n, size) : nullptr; };
+    SuiteSparse_config.realloc_func = [](void* p, std::size_t size) { return take(size) ? std::realloc(p, size) : nullptr; };
+  }
+  ~Cholmod_allocation_budget() { SuiteSparse_config = m_saved; }
+
+  static inline std::size_t remaining = 0, taken = 0;
+
+private:
+  static bool take(std::size_t bytes)
+  {
+    if(bytes > remaining) return false;
+    remaining -= bytes;
+    taken += bytes;
+    return true;
+  }
+
+  SuiteSparse_config_struct m_saved;
+};
+
+std::string numerical_failure_message(const std::function<void()>& f)
+{
+  try {
+    f();
+  } catch(const Numerical_failure& e) {
+    return e.what();
+  } catch(const std::exception& e) {
+    ADD_FAILURE() << "threw another exception: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "threw nothing";
+  return "";
+}
+} // namespace
+
+TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheStep)
+{
+  const Small_problem p;
+  const Sparse_row_matrix A = detail_operator_rows<CGAL::Sequential_tag>(p.K, Detail_filter{Detail_order::quadric, 0.8, 1.6}, p.roi);
+  const Matrix_n3 r = random_block(A.rows(), 1), t = random_block(Eigen::Index(p.anchors.size()), 2);
+  auto factor = [&](Detail_least_squares& system) {
+    system.factor<CGAL::Sequential_tag>(A, p.anchors, p.roi_positions, Least_squares_settings{});
+  };
+  // What the analysis and factorisation take from CHOLMOD's allocator (the same on every run).
+  std::size_t factor_bytes = 0;
+  Matrix_n3 expected;
+  {
+    const Cholmod_allocation_budget unlimited(std::size_t(1) << 40);
+    Detail_least_squares system;
+    factor(system);
+    factor_bytes = Cholmod_allocation_budget::taken;
+    expected = system.solve<CGAL::Sequential_tag>(r, t);
+  }
+  ASSERT_GT(factor_bytes, 0u);
+  // Budgets that run out during the analysis or the factorisation.
+  for(double fraction : {0.0, 0.05, 0.3, 0.6, 0.9, 0.99}) {
+    const Cholmod_allocation_budget budget(std::size_t(fraction * double(factor_bytes)));
+    Detail_least_squares system;
+    const std::string message = numerical_failure_message([&] { factor(system); });
+    EXPECT_NE(message.find("out of memory while"), std::string::npos) << fraction << ": " << message;
+    EXPECT_NE(message.find(std::to_string(p.roi.size()) + " unknowns"), std::string::npos) << message;
+    EXPECT_THROW(system.solve<CGAL::Sequential_tag>(r, t), Invalid_input); // no half-made factor is used
+  }
+  // Exactly enough to factor: the solve's own allocation fails, and says so.
+  {
+    const Cholmod_allocation_budget budget(factor_bytes);
+    Detail_least_squares system;
+    factor(system);
+    const std::string message = numerical_failure_message([&] { system.solve<CGAL::Sequential_tag>(r, t); });
+    EXPECT_NE(message.find("out of memory while solving"), std::string::npos) << message;
+  }
+  // Memory again: the same system solves as before.
+  Detail_least_squares system;
+  factor(system);
+  EXPECT_EQ((system.solve<CGAL::Sequential_tag>(r, t) - expected).norm(), 0.0);
+}
+#endif

@@ -159,6 +159,14 @@ private:
   fs::path m_dir;
 };
 
+std::string file_bytes(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
 std::string binary_ply_header(std::size_t vertices)
 {
   return "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertices) +
@@ -473,6 +481,37 @@ const std::vector<Row>& catalogue()
        Workspace w;
        const std::string in = w.write("huge.off", "OFF\n100000000000 0 0\n" + ascii_xyz(sphere_coordinates(10)));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "of memory");
+     }},
+    {"cli_out_of_memory", [] {
+       // Under an address-space limit (ulimit -v, as batch systems impose) a run either writes what it writes
+       // without one, byte for byte, or fails with one line naming the shortage, exit status 3 and no output.
+#ifdef __SANITIZE_ADDRESS__
+       GTEST_SKIP() << "AddressSanitizer reserves more address space than these limits allow";
+#else
+       // Three quarters of a 30,000-point sphere, cubic order: its factorisation peaks near 540 MB.
+       Workspace w;
+       const std::string enhance = "enhance -s 2 --order cubic --roi box:-2,-2,-2,2,2,0.5 -i " + w.sphere_ply("in.ply", 30000);
+       const std::string unlimited = w.path("unlimited.ply");
+       const Program_run free_run = run(enhance + " -o " + unlimited);
+       ASSERT_EQ(free_run.exit_code, 0) << free_run.output;
+       int failures = 0;
+       for(int megabytes : {2000, 1000, 700, 500, 400, 300}) {
+         const std::string out = w.path("limited.ply");
+         const Program_run r = run(enhance + " -o " + out, "ulimit -v " + std::to_string(megabytes * 1024) + "; ");
+         if(r.exit_code == 0) {
+           EXPECT_EQ(file_bytes(out), file_bytes(unlimited)) << megabytes << " MB: a different result";
+           fs::remove(out);
+           continue;
+         }
+         ++failures;
+         EXPECT_EQ(r.exit_code, 3) << megabytes << " MB\n" << r.output;
+         EXPECT_EQ(r.output.find("point-detail: error: "), 0u) << megabytes << " MB\n" << r.output;
+         EXPECT_NE(r.output.find("out of memory"), std::string::npos) << megabytes << " MB\n" << r.output;
+         EXPECT_LE(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+         EXPECT_FALSE(fs::exists(out)) << megabytes << " MB";
+       }
+       EXPECT_GT(failures, 0) << "no limit was low enough to make the run fail";
+#endif
      }},
     {"cli_json_wrong_type", [] {
        Workspace w;

@@ -39,6 +39,10 @@ struct Least_squares_settings
   /// Cholesky: iterative refinement stops once the relative residual of the normal equations is below this
   /// (or when a step no longer halves it, or after 5 steps). Each step costs one more back-substitution.
   double refinement_tolerance = 1e-14;
+  /// A solve whose final relative residual of the normal equations is above this (for conjugate gradients:
+  /// above twice `tolerance`, if that is larger) is a `Numerical_failure`, never a result. Healthy Cholesky
+  /// solves end near 1e-14; a larger residual means the factorisation or the solve went wrong.
+  double accepted_residual = 1e-8;
 
   void validate() const
   {
@@ -48,6 +52,8 @@ struct Least_squares_settings
       throw Invalid_input("least squares: tolerance must be in (0, 1)");
     if(!(refinement_tolerance > 0 && refinement_tolerance < 1))
       throw Invalid_input("least squares: refinement_tolerance must be in (0, 1)");
+    if(!(accepted_residual > 0 && accepted_residual < 1))
+      throw Invalid_input("least squares: accepted_residual must be in (0, 1)");
     if(max_iterations < 1)
       throw Invalid_input("least squares: max_iterations must be at least 1");
   }

@@ -19,8 +19,6 @@ namespace CGAL_ext {
 struct Detail_enhancement_settings : Detail_scaling_settings
 {
   Balanced_flow_settings flow;
-  /// Fraction of the points anchored by default when the region is the whole model.
-  double default_anchor_fraction = 0.01;
 
   Detail_enhancement_settings(const Detail_filter& filter = {}) : Detail_scaling_settings(filter) {}
   Detail_enhancement_settings(const Detail_scaling_settings& s, const Balanced_flow_settings& f = {})
@@ -30,8 +28,6 @@ struct Detail_enhancement_settings : Detail_scaling_settings
   {
     Detail_scaling_settings::validate();
     flow.validate();
-    if(!(default_anchor_fraction > 0 && default_anchor_fraction <= 1))
-      throw Invalid_input("detail enhancement: default_anchor_fraction must be in (0, 1]");
   }
 };
 
@@ -70,29 +66,28 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   // sigma = delta - delta~ with delta~ = f(K) p~, so delta' - delta = (s - 1) f(K) (p - p~).
   const Matrix_n3 base = balanced_flow_base_surface<ConcurrencyTag>(K, cloud.positions, normals, settings.flow);
   const Matrix_n3 detail_offset = cloud.positions - base;
-  const Matrix_n3 change = (s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, detail_offset);
   progress.stage(0.5, 1.0);
   if(!progress.report(0.0)) return {};
 
   Detail_manipulation_result result;
   std::vector<int> anchors_local =
     region_anchors(points, static_cast<const std::vector<int>*>(nullptr), np, region, result.default_anchors, who);
-  Matrix_n3 anchor_displacement = Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3);
-  if(result.default_anchors) {
-    if(roi.size() == cloud.size()) {
-      // No outside to hold the region: anchor a uniform subset at the exact solution p~ + s (p - p~), plus one
-      // point of every separate piece (a scan's stray cluster) that the subset missed.
-      anchors_local = uniform_subset(K, cloud.positions, roi, settings.default_anchor_fraction);
-      for(const Unpinned_part& part : unpinned_parts(K, roi, in_roi, anchors_local)) anchors_local.push_back(part.first);
-      std::sort(anchors_local.begin(), anchors_local.end());
-      anchor_displacement.resize(Eigen::Index(anchors_local.size()), 3);
-      for(std::size_t a = 0; a < anchors_local.size(); ++a)
-        anchor_displacement.row(Eigen::Index(a)) = (s - 1.0) * detail_offset.row(roi[std::size_t(anchors_local[a])]);
-    } else {
-      if(settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
-      anchor_displacement.setZero(Eigen::Index(anchors_local.size()), 3);
-    }
+  if(result.default_anchors && roi.size() == cloud.size()) {
+    // Nothing outside holds the model, and nothing needs to: the displacement (s - 1) (p - p~) meets every
+    // detail equation exactly, so p~ + s (p - p~) is the least-squares solution for any anchors placed on it,
+    // with zero residual. It is written directly; no system is assembled or factored (doc/design.md,
+    // "Whole-model enhancement").
+    if(!progress.report(1.0)) return {};
+    write_region(points, point_map, cloud, roi, Matrix_n3((s - 1.0) * detail_offset));
+    result.completed = true;
+    result.region_size = roi.size();
+    result.least_squares.unknowns = roi.size();
+    result.least_squares.method = "exact: p~ + s (p - p~), nothing to solve (whole model, default anchors)";
+    return result;
   }
+  if(result.default_anchors && settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
+  const Matrix_n3 change = (s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, detail_offset);
+  const Matrix_n3 anchor_displacement = Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3);
   return solve_and_write_region<ConcurrencyTag>(points, point_map, K, region, anchors_local, change, anchor_displacement,
                                                 settings, progress, result, who);
 }
@@ -107,9 +102,9 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   points move so that their details become `delta~ + s sigma`, in the least-squares sense of
   `scale_geometric_details`.
 
-  With the whole model as region (the overload without `roi`), nothing outside holds the shape, so a
-  spatially uniform subset of about `default_anchor_fraction` of the points (and one point of every separate
-  piece the subset misses) is anchored at the exact solution's value there, `p~ + s (p - p~)`; the result is then that exact solution, to solver precision.
+  With the whole model as region (the overload without `roi`) and no anchors named, the result is the exact
+  solution `p~ + s (p - p~)`: it meets every detail equation, so no system is solved, and the cost is that
+  of the normals, the Laplacian and the flow.
   With a partial region, its border is anchored where it is as `settings.border_anchoring` says, unless
   `point_is_constrained_map` names the anchors (kept where they are).
 

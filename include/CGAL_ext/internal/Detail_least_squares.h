@@ -16,9 +16,12 @@
 #include <Eigen/CholmodSupport>
 #endif
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <new>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -88,6 +91,11 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
   CHOLMOD's supernodal LL^T when available or Eigen's SimplicialLDLT, and each solve is followed by iterative
   refinement against the residual computed from A itself (not from the rounded N).
   Conjugate gradients: matrix-free products with A and A^T, Jacobi preconditioner, three columns in lockstep.
+
+  Nothing fails silently: CHOLMOD's status is checked after its analysis, factorisation and every solve (it
+  reports running out of memory there, where Eigen's wrapper does not), an allocation that fails anywhere
+  becomes a `Numerical_failure` naming the step, and a solve is accepted only when its final relative
+  residual is at most `Least_squares_settings::accepted_residual` and its values are finite.
 */
 class Detail_least_squares
 {
@@ -126,6 +134,34 @@ private:
   {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   }
+
+  /// The system's size, for error messages.
+  std::string system_size() const
+  {
+    std::string size = std::to_string(m_statistics.unknowns) + " unknowns";
+    if(m_statistics.normal_nonzeros > 0)
+      size += ", " + std::to_string(m_statistics.normal_nonzeros) + " non-zeros in the normal matrix";
+    return size;
+  }
+
+  [[noreturn]] void out_of_memory(const char* step) const
+  {
+    throw Numerical_failure(std::string("detail least squares: out of memory while ") + step + " (" + system_size() +
+                            "); free memory, raise the process's memory limit or use a smaller region");
+  }
+
+#ifdef CGAL_EXT_USE_CHOLMOD
+  /// Throws when CHOLMOD's last call failed (its status is negative: out of memory, integer overflow, ...).
+  void check_cholmod(const char* step) const
+  {
+    const int status = m_main->cholmod().status;
+    if(status >= CHOLMOD_OK) return;
+    if(status == CHOLMOD_OUT_OF_MEMORY) out_of_memory(step);
+    throw Numerical_failure(std::string("detail least squares: CHOLMOD failed while ") + step + " (" + system_size() +
+                            "; " + (status == CHOLMOD_TOO_LARGE ? "the factor is too large for its integer type"
+                                                                : "status " + std::to_string(status)) + ")");
+  }
+#endif
 
   /// Adds a diagonal 1 where `where` says (anchors whose column of A is empty: a polynomial with a zero there).
   static Sparse_row_matrix with_unit_diagonals(const Sparse_row_matrix& upper, const std::vector<char>& where)
@@ -169,7 +205,12 @@ private:
     const Eigen::MatrixXd scaled = m_new_of * (m_scale.asDiagonal() * b);
     Eigen::MatrixXd x;
 #ifdef CGAL_EXT_USE_CHOLMOD
-    if(m_main) x = m_main->solve(scaled);
+    if(m_main) {
+      x = m_main->solve(scaled);
+      check_cholmod("solving with the factor");
+      if(m_main->info() != Eigen::Success)
+        throw Numerical_failure("detail least squares: CHOLMOD's solve failed (" + system_size() + ")");
+    }
 #endif
     if(m_fallback) x = m_fallback->solve(scaled);
     return m_scale.asDiagonal() * (m_new_of.transpose() * x);
@@ -244,13 +285,14 @@ private:
   std::unique_ptr<int> m_main;     // never set without CHOLMOD
 #endif
   std::unique_ptr<Fallback_factor> m_fallback;
+  bool m_factored = false;
   Least_squares_statistics m_statistics;
 };
 
 template <typename ConcurrencyTag>
 void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
                                   const Least_squares_settings& settings)
-{
+try {
   if(positions.rows() != A.cols())
     throw Invalid_input("detail least squares: the operator needs one position per unknown");
   using Clock = std::chrono::steady_clock;
@@ -265,6 +307,7 @@ void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors,
   m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
   m_main.reset();
   m_fallback.reset();
+  m_factored = false;
 
   const double alpha = settings.detail_weight;
   const std::size_t n = std::size_t(m_A.cols());
@@ -280,6 +323,7 @@ void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors,
                                 " of the region appears in no equation; the normal matrix is singular");
     m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
     m_statistics.assembly_seconds = seconds_since(start);
+    m_factored = true;
     return;
   }
 
@@ -334,7 +378,11 @@ void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors,
   common.nmethods = n <= small_system ? 2 : 1;
   common.method[0].ordering = CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
-  m_main->compute(normal);
+  // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
+  m_main->analyzePattern(normal);
+  check_cholmod("analysing the normal matrix");
+  m_main->factorize(normal);
+  check_cholmod("factoring the normal matrix");
   if(m_main->info() == Eigen::Success)
     m_statistics.method = "CHOLMOD supernodal LL^T";
   else
@@ -352,11 +400,15 @@ void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors,
   }
   m_statistics.method += ", geometric nested dissection";
   m_statistics.factor_seconds = seconds_since(factor_start);
+  m_factored = true;
+} catch(const std::bad_alloc&) {
+  out_of_memory("assembling and factoring the normal matrix");
 }
 
 template <typename ConcurrencyTag>
 Matrix_n3 Detail_least_squares::solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement)
-{
+try {
+  if(!m_factored) throw Invalid_input("detail least squares: solve() needs a factor() that succeeded");
   const auto start = std::chrono::steady_clock::now();
   const Matrix_n3 b = right_hand_side<ConcurrencyTag>(detail_change, anchor_displacement);
   const double b_norm = b.norm();
@@ -370,9 +422,19 @@ Matrix_n3 Detail_least_squares::solve(const Matrix_n3& detail_change, const Matr
       refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
   }
   if(!u.allFinite())
-    throw Numerical_failure("detail least squares: the solve produced non-finite values");
+    throw Numerical_failure("detail least squares: the solve produced non-finite values (" + system_size() + ")");
+  const double accepted = std::max(m_settings.accepted_residual, m_settings.solver == Linear_solver::conjugate_gradient
+                                                                    ? 2 * m_settings.tolerance : 0.0);
+  if(!(m_statistics.relative_residual <= accepted)) {
+    std::ostringstream os;
+    os << "detail least squares: the solve's relative residual " << m_statistics.relative_residual
+       << " is above the accepted " << accepted << " (" << system_size() << ", " << m_statistics.method << ")";
+    throw Numerical_failure(os.str());
+  }
   m_statistics.solve_seconds = seconds_since(start);
   return u;
+} catch(const std::bad_alloc&) {
+  out_of_memory("solving");
 }
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).

@@ -84,35 +84,6 @@ inline std::vector<int> region_border(const Sparse_row_matrix& K, const std::vec
   return local;
 }
 
-/// A spatially uniform subset of about `fraction` of the region (grid simplification: in every occupied cube
-/// of a grid, the point closest to the cube's centre). The cube's side follows from the mean neighbour distance.
-inline std::vector<int> uniform_subset(const Sparse_row_matrix& K, const Matrix_n3& positions, const std::vector<int>& roi,
-                                       double fraction)
-{
-  double sum = 0;
-  std::size_t count = 0;
-  for(int i : roi)
-    for(int e = K.outerIndexPtr()[i]; e < K.outerIndexPtr()[i + 1]; ++e)
-      if(K.innerIndexPtr()[e] != i) { sum += (positions.row(K.innerIndexPtr()[e]) - positions.row(i)).norm(); ++count; }
-  // A sample of spacing s has a mean k-neighbour distance of about 1.4 s; one point per cell of side
-  // s / sqrt(fraction) keeps the wanted fraction of a surface.
-  const double side = count == 0 || sum == 0 ? 1.0 : (sum / double(count)) / 1.4 / std::sqrt(fraction);
-  std::map<std::tuple<long long, long long, long long>, std::pair<double, int>> best; // cell -> (distance, local)
-  for(std::size_t r = 0; r < roi.size(); ++r) {
-    const Eigen::RowVector3d p = positions.row(roi[r]) / side;
-    const std::tuple<long long, long long, long long> cell((long long)std::floor(p(0)), (long long)std::floor(p(1)),
-                                                           (long long)std::floor(p(2)));
-    const Eigen::RowVector3d centre(std::get<0>(cell) + 0.5, std::get<1>(cell) + 0.5, std::get<2>(cell) + 0.5);
-    const double d = (p - centre).squaredNorm();
-    auto [it, inserted] = best.emplace(cell, std::make_pair(d, int(r)));
-    if(!inserted && d < it->second.first) it->second = {d, int(r)};
-  }
-  std::vector<int> local;
-  for(const auto& entry : best) local.push_back(entry.second.second);
-  std::sort(local.begin(), local.end());
-  return local;
-}
-
 /// A connected part of the region (in the neighbour graph) with no anchor and no neighbour outside the region:
 /// nothing pins it, it could translate freely. `first` is its first point (local index).
 struct Unpinned_part
