@@ -1,4 +1,4 @@
-// Tests of Detail_preserving_deformation (paper Sect. 6.1-6.2; DESIGN.md 3.6, 3.7, 5).
+// Tests of Detail_preserving_deformation (paper Sect. 6.1-6.2; doc/editing.md).
 #include "test_support.h"
 
 #include <CGAL_ext/Detail_preserving_deformation.h>

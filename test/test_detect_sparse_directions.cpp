@@ -1,4 +1,4 @@
-// Tests of detect_sparse_directions (paper Sect. 6.3, Fig. 9a; DESIGN.md 3.8).
+// Tests of detect_sparse_directions (paper Sect. 6.3, Fig. 9a; doc/upsampling.md).
 #include "upsampling_fixtures.h"
 
 #include <CGAL_ext/detect_sparse_directions.h>

@@ -1,4 +1,4 @@
-// Tests of upsample_point_set (paper Sect. 6.3; DESIGN.md 3.8, 5): coverage restored, new points on the
+// Tests of upsample_point_set (paper Sect. 6.3; doc/upsampling.md): coverage restored, new points on the
 // surface, nothing grown past open borders, nothing added where nothing is missing.
 #include "upsampling_fixtures.h"
 

@@ -796,7 +796,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   const auto start = std::chrono::steady_clock::now();
   // Each region sample point turns by its deformed frame against its original one. A sample point whose
   // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts
-  // stay bit for bit; fixed sample points keep their frames (DESIGN.md 3.7).
+  // stay bit for bit; fixed sample points keep their frames (doc/editing.md, "The paper's encoding and ours").
   for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(m_roi[r]);
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));

@@ -22,7 +22,7 @@
 
 namespace CGAL_ext {
 
-/// Default neighbour count of the Laplacian (DESIGN.md 2).
+/// Default neighbour count of the Laplacian (doc/geometric_details.md, "Defaults").
 constexpr unsigned int default_laplacian_neighbors = 10;
 /// Default neighbour count of jet normal estimation when a point set comes without normals.
 constexpr unsigned int default_normal_neighbors = 18;

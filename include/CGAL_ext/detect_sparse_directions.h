@@ -25,7 +25,7 @@ namespace CGAL_ext {
 
 /*!
   \ingroup PkgCGALExtRef
-  Settings of hole detection (Miao et al. 2007, Sect. 6.3; DESIGN.md 3.8).
+  Settings of hole detection (Miao et al. 2007, Sect. 6.3; doc/upsampling.md).
 
   Around each point, the neighbours are projected onto its tangent plane; the principal axes `e1`, `e2` of
   their covariance split the plane into four quarters around `+e1`, `-e1`, `+e2`, `-e2`. A quarter with no
@@ -86,10 +86,10 @@ double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
   return mean[mean.size() / 2];
 }
 
-/// The hole gaps of the points `rows` (all when null; DESIGN.md 3.8): for each sparse quarter of a point's
-/// tangent plane, the first sample that reappears along it within `max_gap`, if any. `sparse` receives the
-/// examined points with a sparse quarter, increasing. Gaps come out ordered by point, then quarter, so any
-/// thread count gives the same list.
+/// The hole gaps of the points `rows` (all when null; doc/upsampling.md, "Finding holes"): for each sparse
+/// quarter of a point's tangent plane, the first sample that reappears along it within `max_gap`, if any.
+/// `sparse` receives the examined points with a sparse quarter, increasing. Gaps come out ordered by point,
+/// then quarter, so any thread count gives the same list.
 template <typename ConcurrencyTag>
 std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
                                 std::size_t k, double spacing, double max_gap, const std::vector<int>* rows,

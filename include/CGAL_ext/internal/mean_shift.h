@@ -176,10 +176,11 @@ bool analyse_mean_shift(const Spatial_point_cloud& cloud, const Matrix_n3& norma
                                           out.candidates, settings, progress, out.modes, out.iterations);
 }
 
-/// Mean-shift neighbours (DESIGN.md 3.4): the candidates of each row (nearest first) whose modes' range
-/// parts lie within one range bandwidth of the row's mode. Rows that keep fewer than `min_neighbors` are
-/// filled up with the remaining candidates of closest mode (joint distance), so every row stays valid.
-/// Rows keep the candidates' order; symmetrise the result for a Laplacian.
+/// Mean-shift neighbours (doc/simplification.md, "Mean-shift neighbourhoods for the Laplacian"): the
+/// candidates of each row (nearest first) whose modes' range parts lie within one range bandwidth of the
+/// row's mode. Rows that keep fewer than `min_neighbors` are filled up with the remaining candidates of
+/// closest mode (joint distance), so every row stays valid. Rows keep the candidates' order; symmetrise the
+/// result for a Laplacian.
 template <typename ConcurrencyTag>
 Neighbor_graph mean_shift_neighbor_graph(const Neighbor_graph& candidates, const Matrix_n7& modes,
                                          std::size_t min_neighbors)

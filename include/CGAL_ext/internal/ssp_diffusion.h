@@ -16,10 +16,10 @@
 namespace CGAL_ext {
 namespace internal {
 
-/// Local frames of the simplification sample points (DESIGN.md 3.7), built the same way before and after an
-/// edit: the third axis is the normal of a plane fitted to the sample point and its frame neighbours
-/// (oriented like a given hint), the first axis the tangent part of the direction to a fixed reference
-/// neighbour. Columns of a frame: e1, e2, n.
+/// Local frames of the simplification sample points (doc/editing.md, "The paper's encoding and ours"), built
+/// the same way before and after an edit: the third axis is the normal of a plane fitted to the sample point
+/// and its frame neighbours (oriented like a given hint), the first axis the tangent part of the direction to
+/// a fixed reference neighbour. Columns of a frame: e1, e2, n.
 class Ssp_frames
 {
 public:
@@ -89,7 +89,8 @@ inline Eigen::Matrix3d Ssp_frames::frame(const Matrix_n3& positions, std::size_t
 }
 #endif
 
-/// How a point's offset is stored in the frames of its sample points (DESIGN.md 3.7).
+/// How a point's offset is stored in the frames of its sample points (doc/editing.md, "The paper's encoding
+/// and ours").
 enum class Offset_origin
 {
   nearest_sample, ///< the paper's: `p - s_0` (the nearest sample point) in every frame
