@@ -15,7 +15,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <functional>
 #include <random>
 
 using namespace CGAL_ext;
@@ -243,19 +242,6 @@ private:
   SuiteSparse_config_struct m_saved;
 };
 
-std::string numerical_failure_message(const std::function<void()>& f)
-{
-  try {
-    f();
-  } catch(const Numerical_failure& e) {
-    return e.what();
-  } catch(const std::exception& e) {
-    ADD_FAILURE() << "threw another exception: " << e.what();
-    return "";
-  }
-  ADD_FAILURE() << "threw nothing";
-  return "";
-}
 } // namespace
 
 TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheStep)
@@ -281,7 +267,7 @@ TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheSt
   for(double fraction : {0.0, 0.05, 0.3, 0.6, 0.9, 0.99}) {
     const Cholmod_allocation_budget budget(std::size_t(fraction * double(factor_bytes)));
     Detail_least_squares system;
-    const std::string message = numerical_failure_message([&] { factor(system); });
+    const std::string message = thrown_message<Numerical_failure>([&] { factor(system); });
     EXPECT_NE(message.find("out of memory while"), std::string::npos) << fraction << ": " << message;
     EXPECT_NE(message.find(std::to_string(p.roi.size()) + " unknowns"), std::string::npos) << message;
     EXPECT_THROW(system.solve<CGAL::Sequential_tag>(r, t), Invalid_input); // no half-made factor is used
@@ -291,7 +277,7 @@ TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheSt
     const Cholmod_allocation_budget budget(factor_bytes);
     Detail_least_squares system;
     factor(system);
-    const std::string message = numerical_failure_message([&] { system.solve<CGAL::Sequential_tag>(r, t); });
+    const std::string message = thrown_message<Numerical_failure>([&] { system.solve<CGAL::Sequential_tag>(r, t); });
     EXPECT_NE(message.find("out of memory while solving"), std::string::npos) << message;
   }
   // Memory again: the same system solves as before.

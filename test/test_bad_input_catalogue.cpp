@@ -66,24 +66,9 @@ std::vector<std::size_t> indices_where(const Point_set& set, const std::function
   return out;
 }
 
-/// The message of the `Invalid_input` that `f` throws ("" and a failure if it throws nothing or another type).
-std::string invalid_input_message(const std::function<void()>& f)
-{
-  try {
-    f();
-  } catch(const Invalid_input& e) {
-    return e.what();
-  } catch(const std::exception& e) {
-    ADD_FAILURE() << "threw another exception: " << e.what();
-    return "";
-  }
-  ADD_FAILURE() << "threw nothing";
-  return "";
-}
-
 #define EXPECT_INVALID_INPUT(call, needle)                                                                       \
   do {                                                                                                           \
-    const std::string message_ = invalid_input_message([&] { call; });                                           \
+    const std::string message_ = thrown_message<Invalid_input>([&] { call; });                                      \
     EXPECT_NE(message_.find(needle), std::string::npos) << "message: " << message_;                              \
   } while(false)
 

@@ -6,9 +6,13 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
+#include <string>
 #include <vector>
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -17,6 +21,22 @@ using Vector = Kernel::Vector_3;
 
 const CGAL_ext::Detail_order all_orders[] = {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric,
                                              CGAL_ext::Detail_order::cubic};
+
+/// The message of the `Exception` that `f` throws ("" and a test failure if it throws nothing or another type).
+template <typename Exception>
+std::string thrown_message(const std::function<void()>& f)
+{
+  try {
+    f();
+  } catch(const Exception& e) {
+    return e.what();
+  } catch(const std::exception& e) {
+    ADD_FAILURE() << "threw another exception: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "threw nothing";
+  return "";
+}
 
 /// Index of the cube face (0..5: axis * 2 + positive side) a normal points to.
 inline int face_of(const Vector& n)
