@@ -75,8 +75,8 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   if(result.default_anchors && roi.size() == cloud.size()) {
     // Nothing outside holds the model, and nothing needs to: the displacement (s - 1) (p - p~) meets every
     // detail equation exactly, so p~ + s (p - p~) is the least-squares solution for any anchors placed on it,
-    // with zero residual. It is written directly; no system is assembled or factored (doc/design.md,
-    // "Whole-model enhancement").
+    // with zero residual. It is written directly; no system is assembled or factored (doc/detail_scaling.md,
+    // "Anchors").
     if(!progress.report(1.0)) return {};
     write_region(points, point_map, cloud, roi, Matrix_n3((s - 1.0) * detail_offset));
     result.completed = true;

@@ -63,8 +63,8 @@ inline std::string describe_point(std::size_t i, double x, double y, double z)
   return os.str();
 }
 
-/// The validated copy of a cloud's points (in the caller's order) checked to span a surface and sorted along
-/// a Hilbert curve.
+/// The cloud of the copied points `copy` (in the caller's order, validated): checked to span a surface, then
+/// sorted along a Hilbert curve.
 template <typename ConcurrencyTag>
 Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who);
 
