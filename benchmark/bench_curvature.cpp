@@ -1,21 +1,28 @@
 // Benchmark of mean-curvature estimation (issue: curvature, mean shift and SSPs): CGAL's Monge jet fitting and
 // the closed-form fit, on CGAL's scans and a 1M-point sampling of the armadillo, sequentially and in parallel,
-// beside CGAL's jet_estimate_normals in the same run.
+// beside CGAL's jet_estimate_normals in the same run. Then normal estimation for scans without normals
+// (issue: raw million-point scans): CGAL_ext::estimate_oriented_normals against CGAL's jet_estimate_normals +
+// mst_orient_normals, time and the fraction of normals pointing away from the mesh's, on every model under
+// DATA/meshes (vertices, and 100k samples of the surface) and on 1M samples of the armadillo.
 // Usage: bench_curvature [--quick] [--data DIR] [--out DIR] [--reps N]
-// Writes DIR/curvature_results.csv and DIR/curvature_results.md.
+// Writes DIR/curvature_results.{csv,md} and DIR/normals_results.{csv,md}.
 #include "bench_support.h"
 #include "cli_support.h"
 #include "point_io.h"
 
 #include <CGAL_ext/estimate_mean_curvature.h>
+#include <CGAL_ext/estimate_oriented_normals.h>
 
 #include <CGAL/jet_estimate_normals.h>
+#include <CGAL/mst_orient_normals.h>
 
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <numeric>
+#include <tuple>
 
 namespace fs = std::filesystem;
 using namespace point_detail;
@@ -69,6 +76,79 @@ void bench_model(const std::string& name, const Point_cloud& cloud, int reps, st
   add("CGAL jet_estimate_normals", 18, jet, 0.0);
 }
 
+struct Normals_row
+{
+  std::string model, method;
+  std::size_t points;
+  Stats time;
+  double flipped; // fraction of normals at more than 90 degrees from the mesh's
+};
+
+/// Fraction of `normals` pointing away from the reference `truth`.
+double flipped_fraction(const std::vector<Vector>& normals, const std::vector<Vector>& truth)
+{
+  std::size_t flipped = 0;
+  for(std::size_t i = 0; i < normals.size(); ++i)
+    if(normals[i] * truth[i] < 0) ++flipped;
+  return double(flipped) / double(normals.size());
+}
+
+void bench_normals(const std::string& name, const Point_cloud& cloud, int reps, std::vector<Normals_row>& rows)
+{
+  const std::size_t n = cloud.points.size();
+  if(n < CGAL_ext::default_normal_neighbors) return;
+  std::vector<std::size_t> idx(n);
+  std::iota(idx.begin(), idx.end(), std::size_t(0));
+  auto add = [&](const std::string& method, Stats s, double flipped) {
+    rows.push_back({name, method, n, s, flipped});
+    std::printf("%-28s %-40s %8zu pts  %8.3f s (min %.3f, max %.3f)  flipped %.4f %%\n", name.c_str(), method.c_str(), n,
+                s.median, s.min, s.max, 100 * flipped);
+  };
+  std::vector<Vector> ours(n);
+  const Stats time = measure(reps, [&] {
+    CGAL_ext::estimate_oriented_normals<CGAL::Parallel_tag>(
+      idx, CGAL_ext::default_normal_neighbors,
+      CGAL::parameters::point_map(CGAL::make_property_map(cloud.points)).normal_map(CGAL::make_property_map(ours)));
+  });
+  add("CGAL_ext estimate_oriented_normals", time, flipped_fraction(ours, cloud.normals));
+
+  // CGAL's orientation reorders its range: the items carry their index.
+  using Item = std::tuple<Point, Vector, std::size_t>;
+  std::vector<Item> items;
+  const Stats cgal = measure(reps, [&] {
+    items.clear();
+    for(std::size_t i = 0; i < n; ++i) items.emplace_back(cloud.points[i], Vector(0, 0, 0), i);
+    const auto np = CGAL::parameters::point_map(CGAL::Nth_of_tuple_property_map<0, Item>())
+                      .normal_map(CGAL::Nth_of_tuple_property_map<1, Item>());
+    CGAL::jet_estimate_normals<CGAL::Parallel_tag>(items, CGAL_ext::default_normal_neighbors, np);
+    CGAL::mst_orient_normals(items, CGAL_ext::default_normal_neighbors, np);
+  });
+  std::vector<Vector> theirs(n);
+  for(const Item& item : items) theirs[std::get<2>(item)] = std::get<1>(item);
+  add("CGAL jet_estimate_normals + mst_orient_normals", cgal, flipped_fraction(theirs, cloud.normals));
+}
+
+void write_normals_results(const fs::path& out, const std::vector<Normals_row>& rows, int reps)
+{
+  std::ofstream csv(out / "normals_results.csv");
+  csv << "model,points,method,median_s,min_s,max_s,flipped_fraction\n";
+  for(const Normals_row& r : rows)
+    csv << r.model << "," << r.points << ",\"" << r.method << "\"," << r.time.median << "," << r.time.min << ","
+        << r.time.max << "," << r.flipped << "\n";
+  std::ofstream md(out / "normals_results.md");
+  md << "# Normal estimation for scans without normals\n\n- " << tbb::info::default_concurrency()
+     << " threads; medians of " << reps << " runs; 18 neighbours; malloc: " << malloc_pages() << "\n"
+     << "- flipped: normals more than 90 degrees from the mesh's (its area-weighted vertex normals for the "
+        "vertices, the sampled face's normal for the samples)\n\n"
+     << "| model | points | CGAL_ext s | CGAL s | CGAL_ext flipped | CGAL flipped |\n|---|---:|---:|---:|---:|---:|\n";
+  char buf[320];
+  for(std::size_t i = 0; i + 1 < rows.size(); i += 2) {
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %.3f | %.3f | %.3f %% | %.3f %% |\n", rows[i].model.c_str(), rows[i].points,
+                  rows[i].time.median, rows[i + 1].time.median, 100 * rows[i].flipped, 100 * rows[i + 1].flipped);
+    md << buf;
+  }
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -111,5 +191,20 @@ int main(int argc, char** argv)
     md << buf;
   }
   std::printf("wrote %s and %s\n", (out / "curvature_results.md").string().c_str(), (out / "curvature_results.csv").string().c_str());
+
+  std::vector<Normals_row> normal_rows;
+  std::vector<fs::path> meshes;
+  for(const auto& entry : fs::directory_iterator(data / "meshes"))
+    if(entry.path().extension() == ".off") meshes.push_back(entry.path());
+  std::sort(meshes.begin(), meshes.end());
+  for(const fs::path& mesh : meshes) {
+    const std::string name = mesh.stem().string();
+    bench_normals(name + " (vertices)", read_point_cloud(mesh), reps, normal_rows);
+    bench_normals(name + " (100k samples)", sample_mesh(mesh, 100000), reps, normal_rows);
+    if(quick) break;
+  }
+  if(!quick) bench_normals("armadillo (1M samples)", sample_mesh(data / "meshes/armadillo.off", 1000000), reps, normal_rows);
+  write_normals_results(out, normal_rows, reps);
+  std::printf("wrote %s\n", (out / "normals_results.md").string().c_str());
   return 0;
 }

@@ -13,9 +13,9 @@
 #include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
+#include <CGAL_ext/estimate_oriented_normals.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
@@ -119,23 +119,22 @@ Point_cloud read_for_neighbors(const std::string& input, unsigned int k, Report&
   return cloud;
 }
 
-/// Gives the cloud normals when it has none: jet fitting and MST orientation.
+/// Gives the cloud normals when it has none (CGAL_ext::estimate_oriented_normals).
 void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& report)
 {
   report.data()["normal_source"] = cloud.normals.empty() ? "estimated" : cloud.normal_source;
   if(!cloud.normals.empty()) return;
+  if(cloud.points.size() < 6) throw Cli_error("normal estimation needs at least 6 points (a jet fit has 6 coefficients)");
   report.time("normals", [&] {
-    const auto spatial = CGAL_ext::internal::make_spatial_point_cloud<CGAL::Parallel_if_available_tag>(
-      cloud.points, CGAL::Identity_property_map<const Point>(), "normal estimation");
-    if(spatial.size() < 6) throw Cli_error("normal estimation needs at least 6 points (a jet fit has 6 coefficients)");
-    CGAL_ext::internal::Progress p(progress.stage("normals"));
-    CGAL_ext::internal::Matrix_n3 normals;
-    if(!CGAL_ext::internal::estimate_oriented_normals<CGAL::Parallel_if_available_tag>(
-         spatial, CGAL_ext::default_normal_neighbors, p, normals))
+    std::vector<Vector> normals(cloud.points.size());
+    if(!CGAL_ext::estimate_oriented_normals(
+         index_range(cloud.points.size()),
+         std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(cloud.points.size())),
+         CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
+           .normal_map(CGAL::make_property_map(normals))
+           .callback(progress.stage("normals"))))
       throw Cancelled();
-    cloud.normals.resize(cloud.points.size());
-    for(std::size_t s = 0; s < spatial.size(); ++s)
-      cloud.normals[std::size_t(spatial.input_index[s])] = Vector(normals(Eigen::Index(s), 0), normals(Eigen::Index(s), 1), normals(Eigen::Index(s), 2));
+    cloud.normals = std::move(normals);
     cloud.normal_source = "estimated";
   });
 }

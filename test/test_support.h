@@ -38,6 +38,15 @@ std::string thrown_message(const std::function<void()>& f)
   return "";
 }
 
+/// 0, 1, ..., v.size() - 1: the keys of index-keyed property maps over v (`CGAL::make_property_map(v)`).
+template <typename T>
+std::vector<std::size_t> index_range_of(const std::vector<T>& v)
+{
+  std::vector<std::size_t> keys(v.size());
+  std::iota(keys.begin(), keys.end(), std::size_t(0));
+  return keys;
+}
+
 /// Index of the cube face (0..5: axis * 2 + positive side) a normal points to.
 inline int face_of(const Vector& n)
 {

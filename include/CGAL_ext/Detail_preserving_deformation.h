@@ -206,8 +206,8 @@ public:
 
     \param points the points (any range; its order defines the point indices used below)
     \param settings details, clustering, solver, strength field and diffusion settings
-    \param np `point_map`, `normal_map` (estimated by jet fitting and
-           `CGAL::mst_orient_normals` when absent) and `callback` (progress of `preprocess()`; false cancels it)
+    \param np `point_map`, `normal_map` (estimated by `estimate_oriented_normals`
+           when absent) and `callback` (progress of `preprocess()`; false cancels it)
     \throws Invalid_input for an empty range, non-finite coordinates, zero or non-finite normals, fewer than
             two points, or invalid settings.
   */

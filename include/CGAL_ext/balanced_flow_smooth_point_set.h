@@ -23,8 +23,8 @@ namespace CGAL_ext {
   \param points the points, moved in place through `point_map`
   \param k number of nearest neighbours of the Laplacian, `1 <= k < points.size()`
   \param settings the flow's fidelity and the extent of its mean curvature
-  \param np `point_map` (readable and writable), `normal_map` (estimated by jet fitting
-         and `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the points are then
+  \param np `point_map` (readable and writable), `normal_map` (estimated by
+         `estimate_oriented_normals` when absent), `callback` (false cancels; the points are then
          untouched), `geom_traits`, as in `compute_geometric_details`
 
   \return false if the callback cancelled, true otherwise.

@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/compute_point_set_laplacian.h>
+#include <CGAL_ext/estimate_oriented_normals.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
@@ -24,8 +25,6 @@ namespace CGAL_ext {
 
 /// Default neighbour count of the Laplacian (doc/geometric_details.md, "Defaults").
 constexpr unsigned int default_laplacian_neighbors = 10;
-/// Default neighbour count of jet normal estimation when a point set comes without normals.
-constexpr unsigned int default_normal_neighbors = 18;
 
 namespace internal {
 
@@ -136,8 +135,7 @@ CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES)
 
   Normals come from `normal_map` when given (for a `CGAL::Point_set_3`, from its normal property when it has
   one, so `point_set.parameters()` works with and without normals); otherwise they are estimated on an internal
-  copy with a degree-2 jet fit (`CGAL::Monge_via_jet_fitting`, 18 neighbours) and oriented with
-  `CGAL::mst_orient_normals`. Only the oriented magnitude uses them.
+  copy by `estimate_oriented_normals` (18 neighbours). Only the oriented magnitude uses them.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
           both give the same result.

@@ -98,8 +98,8 @@ inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Me
            (default in the program: `default_mean_shift_neighbors` = 15)
   \param settings kernel, bandwidths (0: automatic), curvature scale, tolerance and iteration cap
   \param mode_map receives the mode of each point
-  \param np `point_map`, `normal_map` (estimated by jet fitting and
-         `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched) and
+  \param np `point_map`, `normal_map` (estimated by `estimate_oriented_normals`
+         when absent), `callback` (false cancels; the map is then untouched) and
          `geom_traits`, as in `compute_geometric_details`
 
   \return the scales and iteration counts; `completed` is false if the callback cancelled.

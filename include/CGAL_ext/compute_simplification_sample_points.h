@@ -353,8 +353,8 @@ CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_CLUSTER_SPLIT_INSTANCES)
   \param points the input points; not modified
   \param settings cluster size (or target count), mode spread threshold and mean-shift settings
   \param sample_index_map receives, for every point, the index of its sample point in the result
-  \param np `point_map`, `normal_map` (estimated by jet fitting and
-         `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched) and
+  \param np `point_map`, `normal_map` (estimated by `estimate_oriented_normals`
+         when absent), `callback` (false cancels; the map is then untouched) and
          `geom_traits`, as in `compute_geometric_details`
 
   \return the sample points; `completed` is false if the callback cancelled.

@@ -108,8 +108,8 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   With a partial region, its border is anchored where it is as `settings.border_anchoring` says, unless
   `point_is_constrained_map` names the anchors (kept where they are).
 
-  Normals (for the flow) come from `normal_map` or are estimated (jet fitting and
-  `CGAL::mst_orient_normals`, 18 neighbours). The parameters are those of `scale_geometric_details`, plus
+  Normals (for the flow) come from `normal_map` or are estimated (`estimate_oriented_normals`,
+  18 neighbours). The parameters are those of `scale_geometric_details`, plus
   `normal_map`; `settings` also holds the flow's settings.
 
   \return the region and solver statistics; converts to `false` if the callback cancelled.

@@ -36,8 +36,8 @@ namespace CGAL_ext {
   \param fitting `Curvature_fitting::monge_jet_fitting` (CGAL's, the reference) or `closed_form` (faster); the
                  overload without it uses the Monge fit
   \param curvature_map receives the mean curvature of each point
-  \param np `point_map`, `normal_map` (they orient the sign; estimated by jet fitting and
-         `CGAL::mst_orient_normals` when absent), `callback` (false cancels; the map is then untouched),
+  \param np `point_map`, `normal_map` (they orient the sign; estimated by
+         `estimate_oriented_normals` when absent), `callback` (false cancels; the map is then untouched),
          `geom_traits`, as in `compute_geometric_details`
 
   \return false if the callback cancelled, true otherwise.
