@@ -1,6 +1,6 @@
-// Writes N points sampled uniformly on a mesh's surface, with their faces' normals, as a binary PLY: the
-// large inputs of the memory measurement (benchmark/measure_edit_memory.sh).
-// Usage: sample_scan MESH.off N OUT.ply
+// Writes N points sampled uniformly on a mesh's surface, with their faces' normals (or none: a raw scan), as a
+// binary PLY: the large inputs of benchmark/measure_edit_memory.sh and benchmark/measure_raw_scan.sh.
+// Usage: sample_scan MESH.off N OUT.ply [--without-normals]
 #include "bench_support.h"
 #include "cli_support.h"
 
@@ -8,13 +8,16 @@
 
 int main(int argc, char** argv)
 {
-  if(argc != 4) {
-    std::cerr << "usage: sample_scan MESH.off N OUT.ply\n";
+  const bool without_normals = argc == 5 && std::string(argv[4]) == "--without-normals";
+  if(argc != 4 && !without_normals) {
+    std::cerr << "usage: sample_scan MESH.off N OUT.ply [--without-normals]\n";
     return 2;
   }
   try {
     const std::size_t n = std::stoull(argv[2]);
-    point_detail::write_file(argv[3], point_detail::ply_bytes(point_detail::sample_mesh(argv[1], n)));
+    point_detail::Point_cloud cloud = point_detail::sample_mesh(argv[1], n);
+    if(without_normals) cloud.normals.clear();
+    point_detail::write_file(argv[3], point_detail::ply_bytes(cloud));
   } catch(const std::exception& e) {
     std::cerr << "sample_scan: " << e.what() << "\n";
     return 1;

@@ -34,5 +34,8 @@ for bench in "${benches[@]}"; do
 done
 echo "== measure_edit_memory.sh" >&2
 BUILD_DIR="$build" bash benchmark/measure_edit_memory.sh --out "$out" "${sizes[@]}" >/dev/null
+echo "== measure_raw_scan.sh" >&2
+if [ "$quick" = 1 ]; then raw_scan=(--reps 1 100000); else raw_scan=(--reps 3 1000000); fi
+BUILD_DIR="$build" bash benchmark/measure_raw_scan.sh --out "$out" "${raw_scan[@]}" >/dev/null
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"
 echo "run_benchmarks.sh: $((SECONDS - start)) s of benchmarks" >&2

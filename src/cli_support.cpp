@@ -2,7 +2,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cli_support.h"
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -10,7 +12,9 @@
 #include <cstring>
 #include <fstream>
 #include <random>
+#include <mutex>
 #include <system_error>
+#include <thread>
 #include <unistd.h>
 
 namespace point_detail {
@@ -41,9 +45,46 @@ namespace fs = std::filesystem;
 namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
+
+/// The temporaries of every Output_files, for the watchdog. Never destroyed: the watchdog may outlive main().
+struct Pending_outputs
+{
+  std::mutex mutex;
+  std::vector<fs::path> temporaries;
+  bool committing = false;
+};
+
+Pending_outputs& pending_outputs()
+{
+  static Pending_outputs* pending = new Pending_outputs;
+  return *pending;
+}
+
+/// Ctrl-C cancels at the next progress report; a step that reports none (a sparse factorisation of a large
+/// region) would keep the user waiting for it. A second after the interrupt, if the run has not ended, the
+/// watchdog removes the temporaries and ends the process with the cancellation's status, unless the outputs
+/// are being renamed into place (then the run ends on its own, whole).
+void watch_for_interrupt()
+{
+  using namespace std::chrono_literals;
+  while(!g_interrupted) std::this_thread::sleep_for(50ms);
+  std::this_thread::sleep_for(cancel_grace_period);
+  Pending_outputs& pending = pending_outputs();
+  std::lock_guard<std::mutex> lock(pending.mutex);
+  if(pending.committing) return;
+  std::error_code ec;
+  for(const fs::path& temporary : pending.temporaries) fs::remove(temporary, ec);
+  std::fputs("\npoint-detail: cancelled; nothing written\n", stderr);
+  std::_Exit(130);
+}
 } // namespace
 
-void install_interrupt_handler() { std::signal(SIGINT, on_sigint); }
+void install_interrupt_handler()
+{
+  std::signal(SIGINT, on_sigint);
+  std::thread(watch_for_interrupt).detach();
+}
+
 bool interrupted() { return g_interrupted; }
 
 std::function<bool(double)> Progress_printer::stage(const std::string& name)
@@ -80,7 +121,13 @@ void Progress_printer::finish()
 Output_files::~Output_files()
 {
   std::error_code ec;
-  for(const auto& f : m_files) fs::remove(f.first, ec); // left over only when commit() was not reached
+  Pending_outputs& pending = pending_outputs();
+  std::lock_guard<std::mutex> lock(pending.mutex);
+  for(const auto& f : m_files) { // left over only when commit() was not reached
+    fs::remove(f.first, ec);
+    pending.temporaries.erase(std::remove(pending.temporaries.begin(), pending.temporaries.end(), f.first),
+                              pending.temporaries.end());
+  }
 }
 
 fs::path Output_files::add(const fs::path& destination)
@@ -106,16 +153,24 @@ fs::path Output_files::add(const fs::path& destination)
     throw Cli_error("cannot write " + destination.string() + ": directory " + dir.string() + " is not writable (" +
                     std::strerror(errno) + ")");
   m_files.emplace_back(temporary, destination);
+  Pending_outputs& pending = pending_outputs();
+  std::lock_guard<std::mutex> lock(pending.mutex);
+  pending.temporaries.push_back(temporary);
   return temporary;
 }
 
 void Output_files::commit()
 {
+  Pending_outputs& pending = pending_outputs();
+  std::lock_guard<std::mutex> lock(pending.mutex);
   if(interrupted()) throw Cancelled();
+  pending.committing = true;
   for(const auto& f : m_files) {
     std::error_code ec;
     fs::rename(f.first, f.second, ec);
     if(ec) throw Cli_error("cannot write " + f.second.string() + ": " + ec.message());
+    pending.temporaries.erase(std::remove(pending.temporaries.begin(), pending.temporaries.end(), f.first),
+                              pending.temporaries.end());
   }
   m_files.clear();
 }

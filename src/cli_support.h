@@ -37,7 +37,12 @@ void use_huge_pages(char** argv);
 /// "transparent huge pages" or "4 KiB pages", as the running process's malloc was set up (for reports).
 std::string malloc_pages();
 
-/// Installs the SIGINT handler that turns Ctrl-C into a cancellation at the next progress report.
+/// How long after Ctrl-C a run that has not reached a progress report is ended anyway (its temporaries removed,
+/// exit status 130).
+constexpr std::chrono::milliseconds cancel_grace_period{1000};
+
+/// Installs the SIGINT handler that turns Ctrl-C into a cancellation at the next progress report, and the
+/// watchdog that ends the run `cancel_grace_period` later if it is still computing.
 void install_interrupt_handler();
 bool interrupted();
 

@@ -109,10 +109,25 @@ struct Point_outputs
   {}
 };
 
-/// Reads `input` (timed in the report) and checks that it has more than `k` points.
-Point_cloud read_for_neighbors(const std::string& input, unsigned int k, Report& rep)
+/// What each subcommand needs per input point, reading and writing included: its peak memory on a raw scan of
+/// 1M points (normals estimated; benchmark/raw_scan_results.md, upsample and render on the same points with
+/// normals) plus a quarter. The check before reading asks the machine for this much. A region's factorisation
+/// needs more, by the region's size; CHOLMOD running out of memory then is an error of its own.
+namespace bytes_per_point {
+constexpr std::uint64_t details = 704;   // measured 550
+constexpr std::uint64_t curvature = 416; // 327
+constexpr std::uint64_t simplify = 448;  // 355
+constexpr std::uint64_t manipulate = 800; // 632 (whole-model enhancement)
+constexpr std::uint64_t edit = 640;      // 492
+constexpr std::uint64_t upsample = 512;  // 400
+constexpr std::uint64_t render = 256;    // 185
+} // namespace bytes_per_point
+
+/// Reads `input` (timed in the report), asking the machine for `bytes` per point, and checks that it has more
+/// than `k` points.
+Point_cloud read_for_neighbors(const std::string& input, unsigned int k, std::uint64_t bytes, Report& rep)
 {
-  Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+  Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes); });
   if(cloud.points.size() <= k)
     throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(k) +
                     " needs more than k points");
@@ -213,7 +228,7 @@ struct Details_command
     Progress_printer progress(common.quiet);
     Report rep("details");
     rep.data()["input"] = input;
-    Point_cloud cloud = read_for_neighbors(input, detail.k, rep);
+    Point_cloud cloud = read_for_neighbors(input, detail.k, bytes_per_point::details, rep);
     ensure_normals(cloud, progress, rep);
     add_details(cloud, detail, progress, rep);
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
@@ -289,7 +304,7 @@ struct Manipulate_command
     Progress_printer progress(common.quiet);
     Report rep(name);
     rep.data()["input"] = input;
-    Point_cloud cloud = read_for_neighbors(input, detail.k, rep);
+    Point_cloud cloud = read_for_neighbors(input, detail.k, bytes_per_point::manipulate, rep);
     const std::vector<std::size_t> region = roi_specs.empty() ? index_range(cloud.points.size()) : select_points(cloud.points, roi_specs);
     if(region.empty()) throw Cli_error("the region of interest (--roi) contains none of the " + std::to_string(cloud.points.size()) + " points");
     std::vector<std::size_t> anchor_indices;
@@ -342,7 +357,7 @@ struct Curvature_command
     Progress_printer progress(common.quiet);
     Report rep("curvature");
     rep.data()["input"] = input;
-    Point_cloud cloud = read_for_neighbors(input, k, rep);
+    Point_cloud cloud = read_for_neighbors(input, k, bytes_per_point::curvature, rep);
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
     std::vector<double> H(n);
@@ -393,7 +408,7 @@ struct Simplify_command
     Progress_printer progress(common.quiet);
     Report rep("simplify");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::simplify); });
     if(cloud.points.empty()) throw Cli_error(input + " has no points");
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
@@ -583,7 +598,7 @@ struct Edit_command
     Progress_printer progress(common.quiet);
     Report rep("edit");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::edit); });
     if(cloud.points.size() < 2) throw Cli_error(input + " has fewer than 2 points");
     Edit_description description = edit.empty() ? read_botsch_sorkine(sel, def, cloud.points.size())
                                                  : read_edit_json(edit, cloud.points);
@@ -646,7 +661,7 @@ struct Upsample_command
     Progress_printer progress(common.quiet);
     Report rep("upsample");
     rep.data()["input"] = input;
-    Point_cloud cloud = read_for_neighbors(input, settings.neighbors, rep);
+    Point_cloud cloud = read_for_neighbors(input, settings.neighbors, bytes_per_point::upsample, rep);
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
     upsample_cloud(cloud, settings, spacing, nullptr, progress, rep);
@@ -677,7 +692,7 @@ struct Render_command
     render.view = parse_view(view);
     Report rep("render");
     rep.data()["input"] = input;
-    const Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input); });
+    const Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::render); });
     rep.data()["points"] = cloud.points.size();
     std::vector<Color> colors;
     std::string by = color_by;

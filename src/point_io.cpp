@@ -100,10 +100,9 @@ std::string gibibytes(double bytes)
 }
 
 /// Fails early, before any reader allocates, for a file that announces more points than this machine's memory
-/// can process (about 1 KiB per point for the program's largest run, an edit).
-void check_memory_for(const fs::path& path, std::uint64_t points)
+/// can process at `bytes_per_point`.
+void check_memory_for(const fs::path& path, std::uint64_t points, std::uint64_t bytes_per_point)
 {
-  const std::uint64_t bytes_per_point = 1024;
   const std::uint64_t available = available_memory();
   if(available > 0 && points > available / bytes_per_point)
     throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(points) +
@@ -121,7 +120,7 @@ struct Off_file
   std::vector<std::vector<std::size_t>> faces;
 };
 
-Off_file read_off(const fs::path& path)
+Off_file read_off(const fs::path& path, std::uint64_t bytes_per_point)
 {
   std::ifstream in = open_input(path);
   const std::string name = path.string();
@@ -173,7 +172,7 @@ Off_file read_off(const fs::path& path)
   if(tokens.empty() && !next_line()) throw Cli_error(name + ": the header has no vertex count");
   const std::uint64_t vertex_count = count(tokens[0], "vertex count");
   const std::uint64_t face_count = tokens.size() > 1 ? count(tokens[1], "face count") : 0;
-  check_memory_for(path, vertex_count);
+  check_memory_for(path, vertex_count, bytes_per_point);
 
   Off_file off;
   const std::size_t per_vertex = with_normals ? 6 : 3;
@@ -321,12 +320,12 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
 /// hold what it announces. Returns the announced vertex count.
-std::uint64_t check_ply_header(const fs::path& path)
+std::uint64_t check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
 {
   std::ifstream in(path, std::ios::binary);
   std::uint64_t header_bytes = 0;
   const Announced a = ply_announced(in, header_bytes, path.string());
-  check_memory_for(path, a.vertices);
+  check_memory_for(path, a.vertices, bytes_per_point);
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
   if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
@@ -338,7 +337,7 @@ std::uint64_t check_ply_header(const fs::path& path)
 
 } // namespace
 
-Point_cloud read_point_cloud(const fs::path& path)
+Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point)
 {
   open_input(path, std::ios::binary);
   const std::string ext = lower_extension(path);
@@ -346,7 +345,7 @@ Point_cloud read_point_cloud(const fs::path& path)
     throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
 
   if(ext == "off") {
-    Off_file off = read_off(path);
+    Off_file off = read_off(path, bytes_per_point);
     if(off.vertices.empty()) throw Cli_error(path.string() + " contains no points");
     Point_cloud cloud;
     cloud.points = std::move(off.vertices);
@@ -360,7 +359,7 @@ Point_cloud read_point_cloud(const fs::path& path)
     return cloud;
   }
 
-  const std::uint64_t announced = ext == "ply" ? check_ply_header(path) : 0;
+  const std::uint64_t announced = ext == "ply" ? check_ply_header(path, bytes_per_point) : 0;
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   try {

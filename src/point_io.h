@@ -6,6 +6,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -31,8 +32,10 @@ struct Point_cloud
   void set_scalar(const std::string& name, std::vector<double> values);
 };
 
-/// Reads PLY, OFF, XYZ or PWN through CGAL's readers. Throws Cli_error naming the file and the problem.
-Point_cloud read_point_cloud(const std::filesystem::path& path);
+/// Reads PLY, OFF, XYZ or PWN through CGAL's readers. Throws Cli_error naming the file and the problem, and,
+/// before reading, when a PLY or OFF header announces more points than the available memory holds at
+/// `bytes_per_point` (what the caller's processing needs per point, reading included).
+Point_cloud read_point_cloud(const std::filesystem::path& path, std::uint64_t bytes_per_point = 1024);
 
 /// The cloud as a binary little-endian PLY: x y z (double), nx ny nz, the scalars (double), red green blue (uchar).
 std::string ply_bytes(const Point_cloud& cloud);

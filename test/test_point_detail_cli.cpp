@@ -591,3 +591,22 @@ TEST_F(Cli, upsample_fills_a_hole_and_edit_upsample_fills_a_stretch)
   EXPECT_GT(edit_report["upsampling"]["inserted"].get<std::size_t>(), 50u);
   EXPECT_NEAR(edit_report["upsampling"]["spacing"].get<double>(), 1.2, 0.25); // the grid's, before the edit
 }
+
+TEST_F(Cli, ctrl_c_ends_a_run_within_about_a_second_even_inside_a_factorisation_and_writes_nothing)
+{
+  // The cubic order on most of a 40k-point sphere, no anchors: the factorisation, which reports no progress,
+  // takes seconds. The interrupt comes 2.5 s in (in the factorisation in a Release build, earlier stages in a
+  // sanitized one); the run must end within the grace period of the watchdog plus a margin.
+  const std::string in = write_sphere_ply("in.ply", 40000);
+  const std::string command = "enhance -i " + in + " -o " + path("out.ply") + " --order cubic -s 2 --roi box:-2,-2,-0.9,2,2,2";
+  const Program_run r = run(command + " 2>&1 & pid=$!; sleep 2.5; kill -INT $pid; start=$(date +%s%N); wait $pid; "
+                                      "echo \"status=$? ms=$(( ($(date +%s%N) - start) / 1000000 ))\"; : ");
+  EXPECT_NE(r.output.find("cancelled; nothing written"), std::string::npos) << r.output;
+  const std::size_t at = r.output.find("status=");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  int status = -1, ms = -1;
+  ASSERT_EQ(std::sscanf(r.output.c_str() + at, "status=%d ms=%d", &status, &ms), 2) << r.output;
+  EXPECT_EQ(status, 130);
+  EXPECT_LT(ms, 2500) << "the run went on for " << ms << " ms after Ctrl-C";
+  expect_only({"in.ply"});
+}
