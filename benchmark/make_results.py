@@ -341,7 +341,8 @@ def main():
                + ": times are medians over repeated runs (min-max in the per-stage files). Details of every stage: "
                "[editing](editing_results.md), [up-sampling](upsampling_results.md), "
                "[SSPs](simplification_results.md), [curvature](curvature_results.md), [normals](normals_results.md), "
-               "[detail scaling](scaling_results.md), [details](details_results.md), [memory](memory_results.md).\n")
+               "[detail scaling](scaling_results.md), [details](details_results.md), [memory](memory_results.md), "
+               "[raw scans](raw_scan_results.md).\n")
     table(out, ["machine", ""], machine_facts(build_dir, threads))
     table1_section(out, editing)
     peers_section(out, editing, simplification, upsampling, curvature)
