@@ -144,7 +144,7 @@ private:
   fs::path m_dir;
 };
 
-std::string file_bytes(const std::string& path)
+[[maybe_unused]] std::string file_bytes(const std::string& path)
 {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream bytes;

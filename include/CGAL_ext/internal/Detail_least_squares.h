@@ -109,7 +109,7 @@ public:
   /// Up to this many unknowns, CHOLMOD also tries its AMD order and keeps whichever factors cheaper.
   static constexpr std::size_t small_system = 8000;
   /// Diagonal shift of a normal matrix that is singular to rounding (its diagonal is scaled to 1).
-  static constexpr double singular_shift = 1e-10;
+  static constexpr double singular_shift = 1e-12;
 
   Detail_least_squares() = default;
   Detail_least_squares(const Detail_least_squares&) = delete;
@@ -385,14 +385,14 @@ try {
   check_cholmod("analysing the normal matrix");
   // N + shift I, not N (N has a unit diagonal here): with the cubic order and no anchors, the region's smoothest
   // modes are almost free and N is singular to rounding, so LL^T of N itself can meet a non-positive pivot (and
-  // Eigen's simplicial LDL^T, the other way, took 450 s against 25 s on 100k unknowns). The refinement solves
+  // Eigen's simplicial LDL^T, the other way, took 452 s against 16 s on 97k unknowns). The refinement solves
   // against N: the modes N pins converge in a step or two, the free ones, which change N u by less than the
   // rounding, stay where the shifted factor puts them, and the final residual is checked as always.
   m_main->setShift(singular_shift);
   m_main->factorize(normal);
   check_cholmod("factoring the normal matrix");
   if(m_main->info() == Eigen::Success)
-    m_statistics.method = "CHOLMOD supernodal LL^T of N + 1e-10 I, refined against N";
+    m_statistics.method = "CHOLMOD supernodal LL^T of N + 1e-12 I, refined against N";
   else
     m_main.reset();
 #endif
@@ -403,7 +403,7 @@ try {
                               "some part of the region is not pinned by anchors or fixed points)");
     m_statistics.method = "Eigen SimplicialLDLT";
 #ifdef CGAL_EXT_USE_CHOLMOD
-    m_statistics.method += " (CHOLMOD LL^T of N + 1e-10 I met a non-positive pivot)";
+    m_statistics.method += " (CHOLMOD LL^T of N + 1e-12 I met a non-positive pivot)";
 #endif
   }
   m_statistics.method += ", geometric nested dissection";

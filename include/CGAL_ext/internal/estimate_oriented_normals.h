@@ -39,8 +39,8 @@ bool estimate_jet_normals(const Matrix_n3& positions, const Neighbor_graph& grap
 /// walk from the highest point of each connected component, whose normal is turned upwards (+z), flipping every
 /// normal that disagrees with its parent's. The weight of an edge e = (i, j) is Hoppe et al.'s 1 - |n_i . n_j|
 /// (that of `CGAL::mst_orient_normals`) plus (|n_i . e| + |n_j . e|) / 2 for unit e: an edge across a thin part
-/// or a crease joins nearly parallel normals, which the first term alone prefers, but runs along them, where an
-/// edge within the surface runs across them. Unlike CGAL's function, every component is oriented, not only the
+/// or a crease joins normals that are parallel up to their sign, which the first term alone rates best, but it
+/// runs along them, where an edge within the surface runs across them. Unlike CGAL's function, every component is oriented, not only the
 /// one holding the highest point. Returns the number of components, or 0 when cancelled.
 template <typename ConcurrencyTag>
 std::size_t orient_normals_by_spanning_forest(const Matrix_n3& positions, const Neighbor_graph& graph,
