@@ -54,6 +54,16 @@ std::vector<Vector> estimated(const std::vector<Point>& points, unsigned int k =
   return normals;
 }
 
+/// How many estimated normals of `cloud` point away from its exact ones.
+std::size_t estimated_pointing_inwards(const Cloud& cloud)
+{
+  const std::vector<Vector> normals = estimated(cloud.points);
+  std::size_t inward = 0;
+  for(std::size_t i = 0; i < normals.size(); ++i)
+    if(normals[i] * cloud.normals[i] <= 0) ++inward;
+  return inward;
+}
+
 double angle_degrees(const Vector& a, const Vector& b)
 {
   const double c = a * b / std::sqrt(a.squared_length() * b.squared_length());
@@ -100,11 +110,7 @@ TEST(Estimate_oriented_normals, every_component_is_oriented_outwards_even_a_cube
   append(cloud, shapes::bumpy_sphere<Kernel>(3000, 0.5, 0.0), Vector(3, 0, 0));
   append(cloud, shapes::cube<Kernel>(30, 1.0), Vector(-3, 0, -1));
   shuffle(cloud);
-  const std::vector<Vector> normals = estimated(cloud.points);
-  std::size_t inward = 0;
-  for(std::size_t i = 0; i < normals.size(); ++i)
-    if(normals[i] * cloud.normals[i] <= 0) ++inward;
-  EXPECT_EQ(inward, 0u);
+  EXPECT_EQ(estimated_pointing_inwards(cloud), 0u);
 }
 
 TEST(Estimate_oriented_normals, a_plate_thinner_than_the_neighbourhoods_is_oriented_outwards_on_both_faces)
@@ -117,11 +123,7 @@ TEST(Estimate_oriented_normals, a_plate_thinner_than_the_neighbourhoods_is_orien
   for(Point& p : box.points) p = Point(p.x(), p.y(), 0.04 * p.z());
   append(plate, box);
   shuffle(plate);
-  const std::vector<Vector> normals = estimated(plate.points);
-  std::size_t inward = 0;
-  for(std::size_t i = 0; i < normals.size(); ++i)
-    if(normals[i] * plate.normals[i] <= 0) ++inward;
-  EXPECT_EQ(inward, 0u);
+  EXPECT_EQ(estimated_pointing_inwards(plate), 0u);
 }
 
 TEST(Estimate_oriented_normals, an_open_surface_faces_the_side_of_its_highest_point)
