@@ -448,6 +448,8 @@ struct Simplify_command
     r["ssps"] = ssps.size();
     r["points_per_ssp"] = double(n) / double(ssps.size());
     r["max_cluster_size"] = ssps.max_cluster_size;
+    r["size_split_ssps"] = ssps.size_split_count;
+    r["requested_ssps"] = ssps.requested_count;
     r["mode_threshold"] = std::isfinite(settings.mode_spread_threshold) ? nlohmann::json(settings.mode_spread_threshold)
                                                                         : nlohmann::json("inf");
     const CGAL_ext::Mean_shift_result& ms = ssps.mean_shift;
@@ -544,17 +546,17 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   out.set_scalar("status", std::move(status));
   out.set_scalar("ssp_index", std::move(sample));
 
-  // Handle sample points against their targets (soft constraints).
+  // Handle points against their targets (zero to rounding with exact handles).
   double handle_error = 0;
-  for(std::size_t s = 0; s < deformation.number_of_sample_points(); ++s)
-    if(deformation.is_handle_sample_point(s))
-      handle_error = std::max(handle_error, (deformation.deformed_sample_position(s) -
-                                             deformation.handle_target(deformation.handle_group_of(s), deformation.sample_position(s))).norm());
+  for(std::size_t g = 0; g < edit.handles.size(); ++g)
+    for(std::size_t i : edit.handles[g].points)
+      handle_error = std::max(handle_error, (deformation.deformed_point(i) - deformation.handle_target(g, deformation.point(i))).norm());
   const CGAL_ext::Detail_preserving_deformation_statistics& st = deformation.statistics();
   const CGAL_ext::Least_squares_statistics& ls = st.least_squares;
   auto& r = rep.data();
   r["points"] = st.points;
   r["ssps"] = st.samples;
+  r["requested_ssps"] = st.requested_samples;
   r["roi_ssps"] = st.roi_samples;
   r["handle_ssps"] = st.handle_samples;
   r["handle_groups"] = edit.handles.size();
@@ -568,8 +570,13 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["solver"] = {{"method", ls.method}, {"normal_nonzeros", ls.normal_nonzeros}, {"assembly_s", ls.assembly_seconds},
                  {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds}, {"refinement_steps", ls.iterations},
                  {"relative_residual", ls.relative_residual}};
-  r["max_handle_ssp_error"] = handle_error;
+  r["handle_constraints"] = std::isinf(edit.settings.handle_weight) ? nlohmann::json("exact") : nlohmann::json(edit.settings.handle_weight);
+  r["max_handle_point_error"] = handle_error;
+  r["displacement_ratio"] = st.displacement_ratio;
 }
+
+/// Above this ratio of the largest sample-point displacement to the handles' largest, `edit` warns.
+constexpr double swing_warning_ratio = 2.0;
 
 /// `edit`: detail-preserving editing of a region by handles (paper Sect. 6).
 struct Edit_command
@@ -640,7 +647,14 @@ struct Edit_command
       std::fprintf(stderr, "edit: %zu points, %zu SSPs (%zu in the region): editing the SSPs %.3f s, diffusion %.3f s\n",
                    r["points"].get<std::size_t>(), r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(),
                    r["table1"]["editing_ssps_s"].get<double>(), r["table1"]["diffusion_s"].get<double>());
+      if(r["requested_ssps"].get<std::size_t>() > r["ssps"].get<std::size_t>())
+        std::fprintf(stderr, "edit: the mode-spread rule asked for %zu SSPs; the budget kept %zu\n",
+                     r["requested_ssps"].get<std::size_t>(), r["ssps"].get<std::size_t>());
     }
+    // Printed even with --quiet: the result is probably not what the user wanted.
+    if(rep.data()["displacement_ratio"].get<double>() > swing_warning_ratio)
+      std::fprintf(stderr, "point-detail: warning: parts of the region moved %.1f times as far as any handle (the solve "
+                   "swings them; try --order quadric or --rotations arap)\n", rep.data()["displacement_ratio"].get<double>());
   }
 };
 
@@ -930,7 +944,7 @@ int main(int argc, char** argv)
                                ->check(CLI::IsMember({"euclidean", "geodesic"}));
   edit.given["--diffusion-origin"] = edit_app->add_option("--diffusion-origin", edit.origin, "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)")
                                        ->check(CLI::IsMember({"own", "nearest"}));
-  edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of the handle constraints (default 1)");
+  edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles");
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
   edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
   edit.given["--rotations"] = edit_app->add_option("--rotations", edit.rotations, "how the details turn: none, propagate (the paper's), arap (as rigid as possible)")

@@ -339,7 +339,8 @@ TEST_F(Cli, simplify_writes_surfels_that_cover_every_point_once_and_match_the_li
   EXPECT_EQ(total, double(input.size()));
   const auto report = nlohmann::json::parse(contents(path("ssp.json")));
   EXPECT_EQ(report["ssps"], library.size());
-  EXPECT_EQ(report["max_cluster_size"], 20);
+  EXPECT_LE(report["max_cluster_size"].get<int>(), 20);
+  EXPECT_EQ(report["requested_ssps"], library.requested_count);
   EXPECT_GT(report["mean_shift"]["mean_iterations"].get<double>(), 1.0);
   EXPECT_EQ(contents(path("ssp.png")).substr(1, 3), "PNG");
 
@@ -434,6 +435,10 @@ TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
   EXPECT_EQ(report["ssps"], ssps);
   EXPECT_EQ(report["roi_ssps"], roi_ssps);
   EXPECT_EQ(report["order"], "cubic");
+  EXPECT_EQ(report["handle_constraints"], "exact");
+  EXPECT_LT(report["max_handle_point_error"].get<double>(), 1e-12);
+  EXPECT_GE(report["requested_ssps"].get<std::size_t>(), ssps);
+  EXPECT_GE(report["displacement_ratio"].get<double>(), 1.0);
   EXPECT_GT(report["table1"]["editing_ssps_s"].get<double>(), 0.0);
   EXPECT_GE(report["table1"]["diffusion_s"].get<double>(), 0.0);
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");

@@ -87,16 +87,18 @@ struct Detail_preserving_deformation_settings
   unsigned int sample_neighbors = default_laplacian_neighbors;
   /// How the points are clustered into sample points; every point is its own sample point when the input
   /// has at most `simplification.target_count` points and no `max_cluster_size` is set. Editing's defaults
-  /// (target 3,000, mode-spread threshold 2) give a few thousand sample points on a scan of any size, as in
-  /// the paper's Table 1, so that a drag stays interactive (doc/editing.md measures the quality cost).
+  /// (target 3,000, mode-spread threshold 2) give 3,000 to 4,500 sample points on any input, as in the
+  /// paper's Table 1, so that a drag stays interactive (doc/editing.md measures the quality cost).
   Simplification_settings simplification = editing_simplification();
-  /// alpha (`least_squares.detail_weight`) and the solver; handles are soft constraints of weight `handle_weight`.
+  /// alpha (`least_squares.detail_weight`) and the solver.
   /// Editing refines each drag's solve to a relative residual of 1e-10 (positions to about 1e-10 of their
   /// displacement), which saves back-substitutions on every drag.
   Least_squares_settings least_squares = editing_least_squares();
-  /// Weight of the handle constraints relative to the detail equations (the paper: 1). Larger values pull
-  /// the handles closer to their targets.
-  double handle_weight = 1.0;
+  /// Weight of the handle constraints relative to the detail equations. Infinity (the default) makes them hard
+  /// constraints: the handle sample points leave the unknowns and every handle point ends exactly where its
+  /// group's transform puts it (as in `CGAL::Surface_mesh_deformation`). A finite weight is the paper's soft
+  /// constraint (the paper: 1): the handles land near their targets, closer for larger weights.
+  double handle_weight = std::numeric_limits<double>::infinity();
   /// Distances of the strength field.
   Strength_distance strength_distance = Strength_distance::euclidean;
   /// How the details turn.
@@ -133,8 +135,8 @@ struct Detail_preserving_deformation_settings
     least_squares.validate();
     if(sample_neighbors < 1)
       throw Invalid_input("detail-preserving deformation: sample_neighbors must be at least 1");
-    if(!(std::isfinite(handle_weight) && handle_weight > 0))
-      throw Invalid_input("detail-preserving deformation: handle_weight must be a finite number > 0");
+    if(!(handle_weight > 0))
+      throw Invalid_input("detail-preserving deformation: handle_weight must be > 0 (infinity: exact handles)");
     if(diffusion_samples < 1)
       throw Invalid_input("detail-preserving deformation: diffusion_samples must be at least 1");
     if(rigid_iterations < 1)
@@ -150,12 +152,19 @@ struct Detail_preserving_deformation_statistics
 {
   std::size_t points = 0;      ///< input points
   std::size_t samples = 0;     ///< simplification sample points
+  /// Sample points the mode-spread rule asked for (above `samples` when the budget of
+  /// `Simplification_settings::variation_budget` capped it).
+  std::size_t requested_samples = 0;
   std::size_t roi_samples = 0; ///< sample points of the region of interest (the unknowns)
   std::size_t handle_samples = 0;
   double clustering_seconds = 0; ///< mean shift and clustering (the mean shift runs once per deformation object)
   double preprocess_seconds = 0; ///< all of `preprocess()`, clustering and factorisation included
   Least_squares_statistics least_squares; ///< assembly, factorisation and last solve of the sample points' system
   double deform_seconds = 0;  ///< last `deform()`: propagated rotations, right-hand side, back-substitution
+  /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
+  /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
+  /// anything (the cubic order on a long region can; doc/editing.md, "Orders").
+  double displacement_ratio = 0;
   double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
 };
 
@@ -167,9 +176,10 @@ struct Detail_preserving_deformation_statistics
 
   - The points are clustered into simplification sample points (SSPs) that never mix fixed, ROI and handle
     points (`compute_simplification_sample_points`).
-  - The SSPs' geometric details `delta = f(K) s` are kept in the least-squares sense while the handle SSPs
-    are pulled to their targets: `min alpha sum_{i in ROI} ||(f(K) s')_i - R(Q_i) delta_i||^2 +
-    w sum_{h in handles} ||s'_h - (R_g s_h + t_g)||^2`, with SSPs outside the ROI fixed. The unknowns are
+  - The SSPs' geometric details `delta = f(K) s` are kept in the least-squares sense with the handle SSPs on
+    their targets: `min alpha sum_{i in ROI} ||(f(K) s')_i - R(Q_i) delta_i||^2` subject to
+    `s'_h = R_g s_h + t_g` (or, with a finite `handle_weight` w, the paper's soft constraint
+    `+ w sum_{h in handles} ||s'_h - (R_g s_h + t_g)||^2`), with SSPs outside the ROI fixed. The unknowns are
     displacements and the normal matrix is factored once in `preprocess()`; a handle move only changes the
     right-hand side.
   - Rotations propagate from the handles by the strength field `f = beta(d0 / (d0 + d1))`, `beta(t) =
@@ -178,10 +188,11 @@ struct Detail_preserving_deformation_statistics
   - Or, `Detail_rotation::as_rigid_as_possible`, each `R_i` is the best rotation of the SSP's neighbourhood
     edges from rest to the solved shape, alternated with the solve (same factorisation) a few times per drag.
   - Every point follows its `m` nearest SSPs through their local frames (normal refitted after the edit,
-    first axis toward a fixed reference neighbour), blended by weights that fall off with distance; normals
-    turn with the blended rotation.
+    first axis toward a fixed reference neighbour), blended by weights `(1 - d_j / d_max)^2` that vanish at
+    the (m+1)-th nearest SSP, so the motion is continuous in space; normals turn with the blended rotation.
+    With exact handles, handle points follow their transform exactly.
 
-  Identities (tested): unmoved handles return every point exactly; with the whole model as ROI, moving every
+  Identities (tested): handle points end on their targets to rounding; unmoved handles return every point exactly; with the whole model as ROI, moving every
   handle group by one rigid motion moves every point and normal rigidly; points whose SSPs are all fixed
   never move.
 
@@ -464,6 +475,7 @@ private:
   std::vector<int> m_sample_of;    // per row
   std::vector<int> m_sample_label; // per sample point
   std::vector<int> m_sample_first_row; // a member row of each sample point (for messages)
+  std::size_t m_requested_samples = 0;  // what the mode-spread rule asked for
   internal::Neighbor_graph m_graph; // symmetrised kNN of the sample points
   internal::Sparse_row_matrix m_K;
   std::vector<int> m_roi;       // sample points of the region, increasing
@@ -482,6 +494,7 @@ private:
   internal::Ssp_frames m_frame_builder;
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
+  std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
   Matrix_n3 m_anchor_displacement, m_detail_change; // per-edit buffers
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
@@ -516,21 +529,22 @@ void Detail_preserving_deformation<ConcurrencyTag>::cluster(internal::Progress& 
   using namespace internal;
   const std::size_t n = m_cloud.size();
   const Simplification_settings& simplification = m_settings.simplification;
-  Cluster_split_rule rule;
-  rule.max_size = simplification.cluster_size_for(n);
+  bool needs_modes = false;
+  Cluster_split_rule rule = split_rule_for(simplification, n, needs_modes);
   rule.labels = &m_label;
-  const std::size_t k = std::min<std::size_t>(simplification.mean_shift_neighbors, n - 1);
-  if(rule.max_size > 1 && std::isfinite(simplification.mode_spread_threshold) && k >= 5) {
+  if(needs_modes) {
     if(!m_has_mean_shift) {
+      const std::size_t k = std::min<std::size_t>(simplification.mean_shift_neighbors, n - 1);
       if(!analyse_mean_shift<ConcurrencyTag>(m_cloud, m_normals, k, simplification.mean_shift, progress, m_mean_shift))
         return;
       m_has_mean_shift = true;
     }
     rule.modes = &m_mean_shift.modes;
-    rule.spread_threshold = simplification.mode_spread_threshold;
   }
   std::vector<int> order;
-  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(m_cloud.positions, rule, order);
+  Cluster_split_counts counts;
+  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(m_cloud.positions, rule, order, &counts);
+  m_requested_samples = counts.requested;
   Simplification_sample_points<CGAL::Simple_cartesian<double>> ssps;
   make_surfels<CGAL::Simple_cartesian<double>, ConcurrencyTag>(m_cloud, m_normals, order, leaves, ssps);
 
@@ -627,8 +641,9 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   for(std::size_t s = 0; s < count; ++s) point_of_sample[s] = m_cloud.input_index[std::size_t(m_sample_first_row[s])];
   check_pinned(m_K, m_roi, in_region, m_anchors, point_of_sample, who);
 
-  // Details of the region's sample points and the factored normal equations. Handles weigh w against alpha:
-  // the minimiser of alpha ||A u - r||^2 + w ||S u - t||^2 is that of (alpha / w) ||A u - r||^2 + ||S u - t||^2.
+  // Details of the region's sample points and the factored normal equations. Soft handles weigh w against
+  // alpha: the minimiser of alpha ||A u - r||^2 + w ||S u - t||^2 is that of (alpha / w) ||A u - r||^2 +
+  // ||S u - t||^2. Exact handles leave the unknowns.
   const Matrix_n3 all_details = apply_detail_filter<ConcurrencyTag>(m_K, m_settings.filter, m_samples);
   m_details.resize(Eigen::Index(m_roi.size()), 3);
   Matrix_n3 region_positions(Eigen::Index(m_roi.size()), 3);
@@ -637,14 +652,15 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
     region_positions.row(Eigen::Index(r)) = m_samples.row(m_roi[r]);
   }
   Least_squares_settings least_squares = m_settings.least_squares;
-  least_squares.detail_weight /= m_settings.handle_weight;
+  const bool exact_handles = std::isinf(m_settings.handle_weight);
+  if(!exact_handles) least_squares.detail_weight /= m_settings.handle_weight;
   // As-rigid-as-possible editing solves for the edges of the sample points' graph instead of their details.
   if(m_settings.rotations == Detail_rotation::as_rigid_as_possible)
     m_system.factor<ConcurrencyTag>(rigid_edge_rows(m_graph, m_roi_local, m_roi.size(), m_rigid_edges), m_anchors,
-                                    region_positions, least_squares);
+                                    region_positions, least_squares, exact_handles);
   else
     m_system.factor<ConcurrencyTag>(detail_operator_rows<ConcurrencyTag>(m_K, m_settings.filter, m_roi), m_anchors,
-                                    region_positions, least_squares);
+                                    region_positions, least_squares, exact_handles);
   if(!progress.report(0.6)) return false;
 
   build_strength_field();
@@ -664,6 +680,11 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
         break;
       }
 
+  m_handle_rows.clear();
+  if(exact_handles)
+    for(std::size_t row = 0; row < m_cloud.size(); ++row)
+      if(m_label[row] >= first_handle_label) m_handle_rows.push_back(int(row));
+
   m_propagated.assign(count, Eigen::Matrix3d::Identity());
   m_has_rigid_rotations = false;
   m_solved_transforms.assign(m_transforms.size(), Transform());
@@ -682,6 +703,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
 
   m_statistics.points = m_cloud.size();
   m_statistics.samples = count;
+  m_statistics.requested_samples = m_requested_samples;
   m_statistics.roi_samples = m_roi.size();
   m_statistics.handle_samples = m_anchors.size();
   m_statistics.least_squares = m_system.statistics();
@@ -783,6 +805,13 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
     m_solved_transforms = m_transforms;
   }
   m_statistics.least_squares = m_system.statistics();
+  double largest = 0, largest_handle = 0;
+  for(std::size_t r = 0; r < m_roi.size(); ++r) {
+    const double d = (m_deformed_samples.row(m_roi[r]) - m_samples.row(m_roi[r])).norm();
+    largest = std::max(largest, d);
+    if(m_sample_label[std::size_t(m_roi[r])] >= first_handle_label) largest_handle = std::max(largest_handle, d);
+  }
+  m_statistics.displacement_ratio = largest_handle > 0 ? largest / largest_handle : 0.0;
   m_statistics.deform_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return true;
 }
@@ -797,8 +826,15 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   // Each region sample point turns by its deformed frame against its original one. A sample point whose
   // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts
   // stay bit for bit; fixed sample points keep their frames (doc/editing.md, "The paper's encoding and ours").
+  std::vector<Eigen::Matrix3d> rotation(m_transforms.size());
+  for(std::size_t g = 0; g < m_transforms.size(); ++g) rotation[g] = m_transforms[g].rotation.toRotationMatrix();
+  const bool exact_handles = !m_handle_rows.empty();
   for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(m_roi[r]);
+    if(exact_handles && m_sample_label[s] >= first_handle_label) { // moved rigidly by its group, exactly
+      m_sample_rotation[s] = rotation[std::size_t(m_sample_label[s] - first_handle_label)];
+      return;
+    }
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));
     for(const int* j = m_graph.begin(s); j != m_graph.end(s) && !moved; ++j)
       moved = m_deformed_samples.row(*j) != m_samples.row(*j);
@@ -815,6 +851,13 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
                                              ? Offset_origin::nearest_sample
                                              : Offset_origin::own_sample,
                                            m_deformed_points, m_deformed_normals, &m_active_points);
+  // Exact handles: the handle points themselves follow their transform, not the blend of their neighbourhood.
+  for_range<ConcurrencyTag>(0, m_handle_rows.size(), [&](std::size_t h) {
+    const Eigen::Index row = m_handle_rows[h];
+    const std::size_t g = std::size_t(m_label[std::size_t(row)] - first_handle_label);
+    m_deformed_points.row(row) = (rotation[g] * m_cloud.positions.row(row).transpose() + m_transforms[g].translation).transpose();
+    m_deformed_normals.row(row) = (rotation[g] * m_normals.row(row).transpose()).transpose();
+  });
   m_statistics.diffuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

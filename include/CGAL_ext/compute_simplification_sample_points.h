@@ -8,6 +8,7 @@
 #include <CGAL_ext/compute_mean_shift_modes.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/cluster_split.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -26,23 +27,25 @@
 #include <string>
 #include <vector>
 
-#ifdef CGAL_LINKED_WITH_TBB
-#include <tbb/parallel_for_each.h>
-#endif
-
 namespace CGAL_ext {
 
 /*!
   \ingroup PkgCGALExtRef
   Settings of the clustering into simplification sample points (Miao et al. 2007, Sect. 5.2).
 
-  A cluster is split in two while it holds more than the maximum cluster size, or while the spread of its
-  members' mean-shift modes exceeds `mode_spread_threshold`: the largest distance of a member's mode (range
-  part: normal and scaled curvature) from the members' mean mode, in range bandwidths.
+  Clusters are split in two by the plane through their centroid orthogonal to their principal axis. Points of
+  different selections (editing's fixed part, region and handles) are always split apart. Then:
 
-  The maximum cluster size is `max_cluster_size` when set, else `ceil(n / target_count)`, so that the count
-  lands between `target_count` and about twice it (more where the modes spread); with `n <= target_count`
-  every point is its own sample point.
+  - With `target_count` (the default): the largest clusters are split until there are `target_count`; then,
+    among the clusters whose mean-shift modes spread more than `mode_spread_threshold` (the largest distance of
+    a member's mode, range part: normal and scaled curvature, from the members' mean mode, in range
+    bandwidths), those with the largest scatter of modes are split first, until there are
+    `(1 + variation_budget) target_count`. The sample points gather where the surface bends, and their count
+    stays within 1.5 times the target on any input (sharp creases, meshes split at their edges' midpoints,
+    noisy scans), where the unbounded rule made up to 28 times as many. With `n <= target_count` every point
+    is its own sample point.
+  - With `max_cluster_size` set (the paper's rule): a cluster is split while it holds more points than that or
+    while its modes spread more than the threshold, with no bound on the count.
 */
 struct Simplification_settings
 {
@@ -50,6 +53,8 @@ struct Simplification_settings
   std::size_t target_count = 4000;             ///< >= 1; used when `max_cluster_size` is not set
   /// In range bandwidths, > 0; infinity splits by size only and skips the mean shift.
   double mode_spread_threshold = 1.0;
+  /// With `target_count`: the mode-spread rule adds at most this fraction of `target_count` sample points, >= 0.
+  double variation_budget = 0.5;
   unsigned int mean_shift_neighbors = default_mean_shift_neighbors; ///< candidates of the mean shift, >= 5
   Mean_shift_settings mean_shift;
 
@@ -64,17 +69,22 @@ struct Simplification_settings
          << "; infinity disables the mode criterion)";
       throw Invalid_input(os.str());
     }
+    if(!(variation_budget >= 0 && std::isfinite(variation_budget)))
+      throw Invalid_input("simplification settings: variation_budget must be a finite number >= 0");
     if(mean_shift_neighbors < 5)
       throw Invalid_input("simplification settings: mean_shift_neighbors must be at least 5 (the curvature fit's minimum)");
     mean_shift.validate();
   }
 
-  /// The maximum cluster size for `n` points.
+  /// The maximum cluster size for `n` points under the paper's rule (1 when every point is its own sample point).
   std::size_t cluster_size_for(std::size_t n) const
   {
     if(max_cluster_size) return *max_cluster_size;
     return n <= target_count ? 1 : (n + target_count - 1) / target_count;
   }
+
+  /// Whether the count is budgeted (`target_count`, with more points than the target).
+  bool budgeted_for(std::size_t n) const { return !max_cluster_size && n > target_count; }
 };
 
 /*!
@@ -104,7 +114,11 @@ struct Simplification_sample_points
   bool completed = false; ///< false when the callback cancelled
   std::vector<Simplification_sample_point<Kernel>> samples;
   std::vector<std::size_t> members;
-  std::size_t max_cluster_size = 0; ///< the maximum cluster size used
+  std::size_t max_cluster_size = 0; ///< the largest cluster
+  /// Sample points after the selection and size splits (with `target_count`; else the final count).
+  std::size_t size_split_count = 0;
+  /// Sample points the mode-spread rule asked for: above `size()` when the budget capped it.
+  std::size_t requested_count = 0;
   Mean_shift_result mean_shift;     ///< `completed` is false where no mean shift ran
 
   std::size_t size() const { return samples.size(); }
@@ -113,108 +127,30 @@ struct Simplification_sample_points
 
 namespace internal {
 
-/// When a cluster is split: by selection label first, then by size, then by the spread of its modes.
-struct Cluster_split_rule
+/// The split rule of `settings` for `n` points, without modes and labels; `needs_modes` says whether the
+/// mean shift is worth running (some cluster of several points may be split for its spread; the curvature
+/// fit needs 5 neighbours, so a set of fewer than 6 points is split by size only).
+inline Cluster_split_rule split_rule_for(const Simplification_settings& settings, std::size_t n, bool& needs_modes)
 {
-  std::size_t max_size = 1;
-  const Matrix_n7* modes = nullptr; ///< normalised modes; null: no mode criterion
-  double spread_threshold = std::numeric_limits<double>::infinity();
-  const std::vector<int>* labels = nullptr; ///< per row; null: one selection
-};
-
-/// Recursive binary partition of the rows of `positions` (Pauly et al. 2002): a cluster that the rule
-/// splits is cut by the plane through its centroid orthogonal to its principal axis. `order` is a
-/// permutation of the rows in which every leaf is a contiguous range; the leaves' first positions are
-/// returned in increasing order. The cuts depend on the data only, so any thread count gives the same leaves.
-template <typename ConcurrencyTag>
-std::vector<int> split_into_clusters(const Matrix_n3& positions, const Cluster_split_rule& rule, std::vector<int>& order)
-{
-  struct Range { int begin, end; };
-  const int n = int(positions.rows());
-  order.resize(std::size_t(n));
-  for(int r = 0; r < n; ++r) order[std::size_t(r)] = r;
-  std::vector<char> leaf_start(std::size_t(n), 0);
-  const double spread2 = rule.spread_threshold * rule.spread_threshold;
-
-  // Splits [begin, end) once, or marks it a leaf; returns the number of children written to `children`.
-  auto split = [&](Range range, Range children[2]) -> int {
-    int* first = order.data() + range.begin;
-    int* last = order.data() + range.end;
-    const std::size_t size = std::size_t(range.end - range.begin);
-    int* middle = nullptr;
-    if(rule.labels && size > 1) {
-      const std::vector<int>& labels = *rule.labels;
-      const int label = labels[std::size_t(*first)];
-      if(std::any_of(first, last, [&](int r) { return labels[std::size_t(r)] != label; }))
-        middle = std::partition(first, last, [&](int r) { return labels[std::size_t(r)] == label; });
-    }
-    if(!middle && size > 1) {
-      Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
-      for(const int* r = first; r != last; ++r) centroid += positions.row(*r);
-      centroid /= double(size);
-      bool cut = size > rule.max_size;
-      if(!cut && rule.modes) {
-        Eigen::Matrix<double, 1, 4> mean = Eigen::Matrix<double, 1, 4>::Zero();
-        for(const int* r = first; r != last; ++r) mean += rule.modes->row(*r).tail<4>();
-        mean /= double(size);
-        for(const int* r = first; r != last && !cut; ++r) cut = (rule.modes->row(*r).tail<4>() - mean).squaredNorm() > spread2;
-      }
-      if(cut) {
-        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-        for(const int* r = first; r != last; ++r) {
-          const Eigen::RowVector3d d = positions.row(*r) - centroid;
-          covariance.noalias() += d.transpose() * d;
-        }
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-        eigen.computeDirect(covariance);
-        const Eigen::RowVector3d axis = eigen.eigenvectors().col(2).transpose();
-        middle = std::partition(first, last, [&](int r) { return (positions.row(r) - centroid).dot(axis) < 0; });
-        if(middle == first || middle == last) middle = first + size / 2; // coincident points: halve
-      }
-    }
-    if(!middle) {
-      leaf_start[std::size_t(range.begin)] = 1;
-      return 0;
-    }
-    const int cut_at = int(middle - order.data());
-    children[0] = {range.begin, cut_at};
-    children[1] = {cut_at, range.end};
-    return 2;
-  };
-  // Depth-first with an explicit stack: a chain of lopsided cuts must not overflow the call stack.
-  auto split_all = [&](Range range, auto&& hand_off) {
-    std::vector<Range> stack{range};
-    while(!stack.empty()) {
-      const Range r = stack.back();
-      stack.pop_back();
-      Range children[2];
-      const int count = split(r, children);
-      for(int c = count - 1; c >= 0; --c)
-        if(!hand_off(children[c])) stack.push_back(children[c]);
-    }
-  };
-  if(n > 0) {
-#ifdef CGAL_LINKED_WITH_TBB
-    if constexpr(is_parallel<ConcurrencyTag>()) {
-      constexpr int grain = 1 << 14; // clusters at least this large become tasks of their own
-      std::vector<Range> roots{{0, n}};
-      tbb::parallel_for_each(roots.begin(), roots.end(), [&](Range root, tbb::feeder<Range>& feeder) {
-        split_all(root, [&](Range child) {
-          if(child.end - child.begin < grain) return false;
-          feeder.add(child);
-          return true;
-        });
-      });
-    } else
-#endif
-    {
-      split_all(Range{0, n}, [](Range) { return false; });
-    }
+  Cluster_split_rule rule;
+  rule.max_size = settings.cluster_size_for(n);
+  if(settings.budgeted_for(n)) {
+    rule.target_count = settings.target_count;
+    rule.variation_budget = settings.variation_budget;
   }
-  std::vector<int> leaves;
-  for(int s = 0; s < n; ++s)
-    if(leaf_start[std::size_t(s)]) leaves.push_back(s);
-  return leaves;
+  needs_modes = rule.max_size > 1 && std::isfinite(settings.mode_spread_threshold) &&
+                std::min<std::size_t>(settings.mean_shift_neighbors, n - 1) >= 5;
+  if(needs_modes) rule.spread_threshold = settings.mode_spread_threshold;
+  return rule;
+}
+
+/// The largest leaf of `split_into_clusters`.
+inline std::size_t largest_cluster(const std::vector<int>& leaves, std::size_t n)
+{
+  std::size_t largest = 0;
+  for(std::size_t s = 0; s < leaves.size(); ++s)
+    largest = std::max(largest, std::size_t((s + 1 < leaves.size() ? std::size_t(leaves[s + 1]) : n) - std::size_t(leaves[s])));
+  return largest;
 }
 
 template <typename Kernel, typename ConcurrencyTag>
@@ -283,7 +219,6 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   const std::size_t n = cloud.size();
 
   Simplification_sample_points<Kernel> result;
-  result.max_cluster_size = settings.cluster_size_for(n);
   Progress progress(callback);
   Matrix_n3 normals;
   const bool given_normals = has_given_normals<NamedParameters>(points);
@@ -291,8 +226,8 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   if(!given_or_estimated_normals<ConcurrencyTag>(points, np, cloud, default_normal_neighbors, progress, normals, who))
     return result;
 
-  Cluster_split_rule rule;
-  rule.max_size = result.max_cluster_size;
+  bool needs_modes = false;
+  Cluster_split_rule rule = split_rule_for(settings, n, needs_modes);
   std::vector<int> labels;
   if constexpr(!std::is_same<LabelMap, No_labels>::value) {
     labels.resize(n);
@@ -301,21 +236,22 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
     for(const auto& item : points) labels[std::size_t(row_of[i++])] = int(get(label_map, item));
     rule.labels = &labels;
   }
-  // Modes matter only where a cluster of several points may be split for its spread; the curvature fit needs
-  // 5 neighbours, so a set of fewer than 6 points is split by size only.
   Mean_shift_analysis analysis;
-  const std::size_t k = std::min<std::size_t>(settings.mean_shift_neighbors, n - 1);
-  if(rule.max_size > 1 && std::isfinite(settings.mode_spread_threshold) && k >= 5) {
+  if(needs_modes) {
     progress.stage(given_normals ? 0.0 : 0.3, 0.9);
+    const std::size_t k = std::min<std::size_t>(settings.mean_shift_neighbors, n - 1);
     if(!analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings.mean_shift, progress, analysis)) return result;
     result.mean_shift = summarize(analysis, settings.mean_shift);
     rule.modes = &analysis.modes;
-    rule.spread_threshold = settings.mode_spread_threshold;
   }
   progress.stage(0.9, 1.0);
   if(!progress.report(0.0)) return result;
   std::vector<int> order;
-  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(cloud.positions, rule, order);
+  Cluster_split_counts counts;
+  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(cloud.positions, rule, order, &counts);
+  result.max_cluster_size = largest_cluster(leaves, n);
+  result.size_split_count = counts.after_size;
+  result.requested_count = counts.requested;
   make_surfels<Kernel, ConcurrencyTag>(cloud, normals, order, leaves, result);
   if(!progress.report(1.0)) return Simplification_sample_points<Kernel>{};
 
@@ -328,22 +264,18 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   return result;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
-#define CGAL_EXT_CLUSTER_SPLIT_INSTANCES(EXTERN, Tag) \
-  EXTERN template std::vector<int> split_into_clusters<Tag>(const Matrix_n3&, const Cluster_split_rule&, \
-                                                            std::vector<int>&);
-CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_CLUSTER_SPLIT_INSTANCES)
 
 } // namespace internal
 
 /*!
   \ingroup PkgCGALExtAlgorithms
-  Clusters the points into simplification sample points (Miao et al. 2007, Sect. 5.2): a recursive binary
-  split of each cluster by the plane through its centroid orthogonal to its principal axis, while the
-  cluster holds more than the maximum cluster size or its members' mean-shift modes
-  (`compute_mean_shift_modes`) spread more than `settings.mode_spread_threshold`. Each leaf becomes a surfel.
-  Since the modes' range part holds the normal and the mean curvature, sample points come out dense where
-  the surface bends and sparse on flat parts, and do not straddle sharp edges.
+  Clusters the points into simplification sample points (Miao et al. 2007, Sect. 5.2): a binary split of
+  each cluster by the plane through its centroid orthogonal to its principal axis, by size and where its
+  members' mean-shift modes (`compute_mean_shift_modes`) spread more than `settings.mode_spread_threshold`,
+  within a budget of 1.5 times `settings.target_count` (or, with `max_cluster_size`, the paper's unbounded
+  rule; `Simplification_settings`). Each leaf becomes a surfel. Since the modes' range part holds the normal
+  and the mean curvature, sample points come out dense where the surface bends and sparse on flat parts, and
+  do not straddle sharp edges.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
           both give the same sample points.

@@ -23,6 +23,8 @@
 #include <new>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace CGAL_ext {
@@ -86,6 +88,10 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
   right-hand sides (`solve`), x, y and z together. Solving for displacements makes "nothing changes" exact:
   r = 0 and t = 0 give u = 0 bit for bit, whatever the conditioning.
 
+  With exact anchors (editing's handles), u_a = t_a is a hard constraint instead: the anchors' columns leave
+  the unknowns (A = [A_f A_a]), and the free points solve min alpha ||A_f u_f - (r - A_a t)||^2, whose normal
+  matrix alpha A_f^T A_f is factored once all the same; the anchors end exactly at their targets.
+
   Cholesky: N is assembled as its upper triangle by a parallel sparse product, scaled symmetrically to a unit
   diagonal (Jacobi equilibration, which narrows the spread between anchor and detail rows), factored with
   CHOLMOD's supernodal LL^T when available or Eigen's SimplicialLDLT, and each solve is followed by iterative
@@ -115,13 +121,14 @@ public:
   Detail_least_squares(const Detail_least_squares&) = delete;
   Detail_least_squares& operator=(const Detail_least_squares&) = delete;
 
-  /// Sets up the system for the operator rows `A` (one column per unknown, |R|; the detail operator is square,
-  /// the edges of as-rigid-as-possible editing are not), the anchors (local indices, increasing) and the
-  /// positions of the region's points (they give the elimination order).
+  /// Sets up the system for the operator rows `A` (one column per point of the region, |R|; the detail
+  /// operator is square, the edges of as-rigid-as-possible editing are not), the anchors (local indices,
+  /// increasing), soft or, with `exact_anchors`, hard constraints, and the positions of the region's points
+  /// (they give the elimination order).
   /// Throws `Numerical_failure` when the normal matrix cannot be factored.
   template <typename ConcurrencyTag>
   void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
-              const Least_squares_settings& settings);
+              const Least_squares_settings& settings, bool exact_anchors = false);
 
   /// Displacements of the region's points for the wanted detail change `detail_change` (|R| x 3) and anchor
   /// displacements `anchor_displacement` (one row per anchor, in the order given to `factor`).
@@ -165,6 +172,24 @@ private:
   }
 #endif
 
+  /// The columns of `A` where `pinned` is 0, then those where it is 1, each renumbered in increasing order.
+  static std::pair<Sparse_row_matrix, Sparse_row_matrix> split_columns(const Sparse_row_matrix& A,
+                                                                      const std::vector<char>& pinned)
+  {
+    std::vector<int> new_column(pinned.size());
+    int counts[2] = {0, 0};
+    for(std::size_t j = 0; j < pinned.size(); ++j) new_column[j] = counts[int(pinned[j])]++;
+    Sparse_row_matrix part[2] = {Sparse_row_matrix(A.rows(), counts[0]), Sparse_row_matrix(A.rows(), counts[1])};
+    std::vector<Eigen::Triplet<double, int>> entries[2];
+    for(Eigen::Index i = 0; i < A.outerSize(); ++i)
+      for(int e = A.outerIndexPtr()[i]; e < A.outerIndexPtr()[i + 1]; ++e) {
+        const int j = A.innerIndexPtr()[e];
+        entries[int(pinned[std::size_t(j)])].emplace_back(int(i), new_column[std::size_t(j)], A.valuePtr()[e]);
+      }
+    for(int p = 0; p < 2; ++p) part[p].setFromTriplets(entries[p].begin(), entries[p].end());
+    return {std::move(part[0]), std::move(part[1])};
+  }
+
   /// Adds a diagonal 1 where `where` says (anchors whose column of A is empty: a polynomial with a zero there).
   static Sparse_row_matrix with_unit_diagonals(const Sparse_row_matrix& upper, const std::vector<char>& where)
   {
@@ -193,10 +218,15 @@ private:
   template <typename ConcurrencyTag>
   Matrix_n3 right_hand_side(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement) const
   {
-    if(detail_change.rows() != m_A.rows() || anchor_displacement.rows() != Eigen::Index(m_anchors.size()))
-      throw Invalid_input("detail least squares: right-hand side sizes do not match the factored system");
     Matrix_n3 b;
-    multiply<ConcurrencyTag>(m_At, detail_change, b);
+    if(m_exact.empty()) {
+      multiply<ConcurrencyTag>(m_At, detail_change, b);
+    } else {
+      // The anchors' known displacements move to the right-hand side: A_f^T (r - A_a t).
+      Matrix_n3 pinned;
+      multiply<ConcurrencyTag>(m_A_exact, anchor_displacement, pinned);
+      multiply<ConcurrencyTag>(m_At, Matrix_n3(detail_change - pinned), b);
+    }
     b *= m_settings.detail_weight;
     for(std::size_t i = 0; i < m_anchors.size(); ++i) b.row(m_anchors[i]) += anchor_displacement.row(Eigen::Index(i));
     return b;
@@ -276,8 +306,12 @@ private:
   }
 
   Least_squares_settings m_settings;
-  Sparse_row_matrix m_A, m_At;
-  std::vector<int> m_anchors;
+  Sparse_row_matrix m_A, m_At;     // the columns of the unknowns (without exact anchors: the whole region)
+  std::vector<int> m_anchors;      // soft anchors, as rows of the unknowns
+  std::size_t m_region_size = 0;   // |R|
+  std::vector<int> m_exact;        // exact anchors, as rows of the region (increasing)
+  std::vector<int> m_free;         // the region's row of each unknown, with exact anchors
+  Sparse_row_matrix m_A_exact;     // the columns of the exact anchors
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> m_new_of; // elimination order
   Eigen::VectorXd m_scale;         // Jacobi equilibration of the Cholesky path
   Eigen::VectorXd m_diagonal;      // diagonal of N for the conjugate-gradient preconditioner
@@ -292,24 +326,45 @@ private:
 };
 
 template <typename ConcurrencyTag>
-void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
-                                  const Least_squares_settings& settings)
+void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& given_positions,
+                                  const Least_squares_settings& settings, bool exact_anchors)
 try {
-  if(positions.rows() != A.cols())
+  if(given_positions.rows() != A.cols())
     throw Invalid_input("detail least squares: the operator needs one position per unknown");
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   m_settings = settings;
-  m_A = std::move(A);
-  m_At = m_A.transpose();
-  m_anchors = std::move(anchors);
+  m_region_size = std::size_t(A.cols());
   m_statistics = Least_squares_statistics();
-  m_statistics.unknowns = std::size_t(m_A.cols());
-  m_statistics.anchors = m_anchors.size();
-  m_statistics.operator_nonzeros = std::size_t(m_A.nonZeros());
+  m_statistics.anchors = anchors.size();
+  m_statistics.operator_nonzeros = std::size_t(A.nonZeros());
   m_main.reset();
   m_fallback.reset();
   m_factored = false;
+  m_exact.clear();
+  m_free.clear();
+  Matrix_n3 free_positions;
+  if(exact_anchors) {
+    m_exact = std::move(anchors);
+    anchors.clear();
+    std::vector<char> pinned(m_region_size, 0);
+    for(int a : m_exact) pinned[std::size_t(a)] = 1;
+    for(std::size_t j = 0; j < m_region_size; ++j)
+      if(!pinned[j]) m_free.push_back(int(j));
+    std::tie(A, m_A_exact) = split_columns(A, pinned);
+    free_positions.resize(Eigen::Index(m_free.size()), 3);
+    for(std::size_t f = 0; f < m_free.size(); ++f) free_positions.row(Eigen::Index(f)) = given_positions.row(m_free[f]);
+  }
+  const Matrix_n3& positions = exact_anchors ? free_positions : given_positions;
+  m_A = std::move(A);
+  m_At = m_A.transpose();
+  m_anchors = std::move(anchors);
+  m_statistics.unknowns = std::size_t(m_A.cols());
+  if(m_A.cols() == 0) { // every point of the region is an exact anchor
+    m_statistics.method = "none (every point is an exact anchor)";
+    m_factored = true;
+    return;
+  }
 
   const double alpha = settings.detail_weight;
   const std::size_t n = std::size_t(m_A.cols());
@@ -417,6 +472,9 @@ template <typename ConcurrencyTag>
 Matrix_n3 Detail_least_squares::solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement)
 try {
   if(!m_factored) throw Invalid_input("detail least squares: solve() needs a factor() that succeeded");
+  if(detail_change.rows() != m_A.rows() ||
+     anchor_displacement.rows() != Eigen::Index(m_exact.empty() ? m_anchors.size() : m_exact.size()))
+    throw Invalid_input("detail least squares: right-hand side sizes do not match the factored system");
   const auto start = std::chrono::steady_clock::now();
   const Matrix_n3 b = right_hand_side<ConcurrencyTag>(detail_change, anchor_displacement);
   const double b_norm = b.norm();
@@ -428,6 +486,12 @@ try {
       conjugate_gradients<ConcurrencyTag>(b, b_norm, u);
     else
       refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
+  }
+  if(!m_exact.empty()) {
+    Matrix_n3 whole(Eigen::Index(m_region_size), 3);
+    for(std::size_t f = 0; f < m_free.size(); ++f) whole.row(m_free[f]) = u.row(Eigen::Index(f));
+    for(std::size_t a = 0; a < m_exact.size(); ++a) whole.row(m_exact[a]) = anchor_displacement.row(Eigen::Index(a));
+    u.swap(whole);
   }
   if(!u.allFinite())
     throw Numerical_failure("detail least squares: the solve produced non-finite values (" + system_size() + ")");
@@ -450,7 +514,7 @@ try {
   EXTERN template Sparse_row_matrix detail_operator_rows<Tag>(const Sparse_row_matrix&, const Detail_filter&, \
                                                               const std::vector<int>&); \
   EXTERN template void Detail_least_squares::factor<Tag>(Sparse_row_matrix, std::vector<int>, const Matrix_n3&, \
-                                                         const Least_squares_settings&); \
+                                                         const Least_squares_settings&, bool); \
   EXTERN template Matrix_n3 Detail_least_squares::solve<Tag>(const Matrix_n3&, const Matrix_n3&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DETAIL_LEAST_SQUARES_INSTANCES)
 

@@ -104,8 +104,9 @@ public:
   Neighbor_graph samples; ///< nearest first
   std::vector<double> weights;
 
-  /// Weights `1 / (d^2 + h^2)`, normalised per point, with `h` the mean distance of a point to its nearest
-  /// sample point: they fall off with distance and stay finite on a sample point.
+  /// Weights `(1 - d_j / d_max)^2` (Sumner, Schmid and Pauly 2007), normalised per point, with `d_max` the
+  /// distance to the (m+1)-th nearest sample point: a sample point's weight falls to zero before it leaves the
+  /// stencil, so the blend, and the motion, is continuous in space (doc/editing.md, "Seamless diffusion").
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m);
 
@@ -130,21 +131,30 @@ private:
 template <typename ConcurrencyTag>
 void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m)
 {
-  samples = k_nearest_samples<ConcurrencyTag>(sample_positions, points, m);
-  const std::size_t n = samples.size();
-  double nearest = 0;
-  for(std::size_t i = 0; i < n; ++i)
-    nearest += (points.row(Eigen::Index(i)) - sample_positions.row(*samples.begin(i))).norm();
-  const double h2 = std::pow(nearest / double(std::max<std::size_t>(n, 1)), 2) + 1e-300;
-  weights.resize(samples.indices.size());
+  const std::size_t count = std::size_t(sample_positions.rows());
+  const bool bounded = count > m; // else every sample point is in every stencil, which then never changes
+  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(sample_positions, points, bounded ? m + 1 : count);
+  const std::size_t n = nearest.size(), kept = std::min(m, count);
+  samples.offsets.resize(n + 1);
+  for(std::size_t i = 0; i <= n; ++i) samples.offsets[i] = int(i * kept);
+  samples.indices.resize(n * kept);
+  weights.resize(n * kept);
   for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    const int* first = nearest.begin(i);
+    const Eigen::RowVector3d p = points.row(Eigen::Index(i));
+    // Without an (m+1)-th sample point, twice the farthest one's distance: also continuous in space.
+    const double d_max = bounded ? (p - sample_positions.row(first[kept])).norm()
+                                 : 2 * (p - sample_positions.row(first[kept - 1])).norm();
     double sum = 0;
-    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) {
-      const double d2 = (points.row(Eigen::Index(i)) - sample_positions.row(samples.indices[std::size_t(e)])).squaredNorm();
-      weights[std::size_t(e)] = 1.0 / (d2 + h2);
-      sum += weights[std::size_t(e)];
+    for(std::size_t e = 0; e < kept; ++e) {
+      const std::size_t out = i * kept + e;
+      samples.indices[out] = first[e];
+      const double falloff = d_max > 0 ? 1 - (p - sample_positions.row(first[e])).norm() / d_max : 0.0;
+      weights[out] = falloff * falloff;
+      sum += weights[out];
     }
-    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e) weights[std::size_t(e)] /= sum;
+    // All sample points as far as the (m+1)-th (ties, coincident points): equal weights.
+    for(std::size_t e = 0; e < kept; ++e) weights[i * kept + e] = sum > 0 ? weights[i * kept + e] / sum : 1.0 / double(kept);
   });
 }
 
