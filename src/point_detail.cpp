@@ -573,6 +573,7 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["handle_constraints"] = std::isinf(edit.settings.handle_weight) ? nlohmann::json("exact") : nlohmann::json(edit.settings.handle_weight);
   r["max_handle_point_error"] = handle_error;
   r["displacement_ratio"] = st.displacement_ratio;
+  if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) r["rigid_iterations"] = st.rigid_iterations;
 }
 
 /// Above this ratio of the largest sample-point displacement to the handles' largest, `edit` warns.

@@ -502,6 +502,33 @@ TEST(DetailPreservingDeformation, DiffusionCarriesRigidSampleMotionsExactly)
   }
 }
 
+TEST(DetailPreservingDeformation, AsRigidAsPossibleStopsOnceTheSamplePointsSettle)
+{
+  const Tentacle t(2500);
+  const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.1); // one step of 6 degrees
+  Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
+  settings.rigid_iterations = 40;
+  auto capped = t.edit(settings);
+  capped->set_handle_transform(0, R, shift);
+  ASSERT_TRUE(capped->deform());
+  EXPECT_EQ(capped->statistics().rigid_iterations, 40u) << "without a tolerance, every iteration runs";
+  settings.rigid_tolerance = 1e-4;
+  auto settled = t.edit(settings);
+  settled->set_handle_transform(0, R, shift);
+  ASSERT_TRUE(settled->deform());
+  const unsigned used = settled->statistics().rigid_iterations;
+  EXPECT_LT(used, 40u);
+  EXPECT_GE(used, 2u);
+  // Stopped where the last iteration moved no sample point more than 1e-4 of the region: the 40 iterations
+  // land close to where it stopped.
+  double difference = 0;
+  for(std::size_t s = 0; s < settled->number_of_sample_points(); ++s)
+    difference = std::max(difference, (settled->deformed_sample_position(s) - capped->deformed_sample_position(s)).norm());
+  std::printf("as rigid as possible settles in %u iterations; 40 iterations land %.2e of the diagonal away\n", used,
+              difference / t.diagonal);
+  EXPECT_LT(difference, 1e-3 * t.diagonal);
+}
+
 TEST(DetailPreservingDeformation, DiffusionOfASmoothBendIsContinuous)
 {
   // A jittered 300 x 300 grid of spacing 1 in z = 0 and 900 sample points (the centroids of 10 x 10 blocks),

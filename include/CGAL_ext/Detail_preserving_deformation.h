@@ -106,7 +106,11 @@ struct Detail_preserving_deformation_settings
   /// With `as_rigid_as_possible`: rotation fits and solves per step of `deform()` (a change of the handles
   /// larger than 10 degrees or 5 % of the region's size is taken in steps). Each drag starts from the last
   /// drag's rotations (the first from the propagated ones), so a drag in small steps converges as it goes.
+  /// More iterations do not bring the result closer to a mesh ARAP (doc/editing.md, "As rigid as possible").
   unsigned int rigid_iterations = 3;
+  /// With `as_rigid_as_possible`: a step stops iterating before `rigid_iterations` once no sample point moved
+  /// more than this fraction of the region's size in the last iteration (0: always `rigid_iterations`).
+  double rigid_tolerance = 0;
   /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1.
   unsigned int diffusion_samples = 4;
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
@@ -141,6 +145,8 @@ struct Detail_preserving_deformation_settings
       throw Invalid_input("detail-preserving deformation: diffusion_samples must be at least 1");
     if(rigid_iterations < 1)
       throw Invalid_input("detail-preserving deformation: rigid_iterations must be at least 1");
+    if(!(rigid_tolerance >= 0) || std::isinf(rigid_tolerance))
+      throw Invalid_input("detail-preserving deformation: rigid_tolerance must be a finite number >= 0");
   }
 };
 
@@ -161,6 +167,8 @@ struct Detail_preserving_deformation_statistics
   double preprocess_seconds = 0; ///< all of `preprocess()`, clustering and factorisation included
   Least_squares_statistics least_squares; ///< assembly, factorisation and last solve of the sample points' system
   double deform_seconds = 0;  ///< last `deform()`: propagated rotations, right-hand side, back-substitution
+  /// Last `deform()` with `as_rigid_as_possible`: rotation fits and solves, over all its steps.
+  unsigned int rigid_iterations = 0;
   /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
   /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
   /// anything (the cubic order on a long region can; doc/editing.md, "Orders").
@@ -495,7 +503,7 @@ private:
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
-  Matrix_n3 m_anchor_displacement, m_detail_change; // per-edit buffers
+  Matrix_n3 m_anchor_displacement, m_detail_change, m_previous_samples; // per-edit buffers
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
 };
@@ -770,6 +778,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
     }
     std::vector<Transform> along(groups);
     std::vector<Eigen::Quaterniond> previous(groups);
+    unsigned int iterations_used = 0;
     for(std::size_t step = 1; step <= steps; ++step) {
       const double f = double(step) / double(steps);
       for(std::size_t g = 0; g < groups; ++g) {
@@ -798,11 +807,18 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
       pull_anchors(along);
       for(unsigned int iteration = 0; iteration < m_settings.rigid_iterations; ++iteration) {
         m_detail_change = rigid_edge_change<ConcurrencyTag>(m_rigid_edges, m_samples, m_propagated);
+        m_previous_samples = m_deformed_samples;
         solve();
         fit_neighborhood_rotations<ConcurrencyTag>(m_samples, m_deformed_samples, m_graph, m_roi, m_propagated);
+        ++iterations_used;
+        // Settled: no sample point moved more than the tolerance since the last solve.
+        double moved = 0;
+        for(int s : m_roi) moved = std::max(moved, (m_deformed_samples.row(s) - m_previous_samples.row(s)).norm());
+        if(moved <= m_settings.rigid_tolerance * m_region_size) break;
       }
     }
     m_solved_transforms = m_transforms;
+    m_statistics.rigid_iterations = iterations_used;
   }
   m_statistics.least_squares = m_system.statistics();
   double largest = 0, largest_handle = 0;

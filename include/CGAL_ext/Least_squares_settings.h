@@ -66,7 +66,7 @@ struct Least_squares_settings
 struct Least_squares_statistics
 {
   std::size_t unknowns = 0;          ///< points of the region of interest
-  std::size_t anchors = 0;           ///< soft position constraints
+  std::size_t anchors = 0;           ///< position constraints (soft, or exact and out of the unknowns)
   std::size_t operator_nonzeros = 0; ///< non-zeros of the ROI rows of `f(K)`
   std::size_t normal_nonzeros = 0;   ///< non-zeros of the normal matrix (both triangles; 0 for conjugate gradients)
   double assembly_seconds = 0;       ///< building `f(K)` rows and, for Cholesky, the normal matrix

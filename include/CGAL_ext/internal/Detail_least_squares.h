@@ -172,6 +172,9 @@ private:
   }
 #endif
 
+  /// The region's row of unknown `j` (they differ with exact anchors), for error messages.
+  std::size_t region_row(std::size_t j) const { return m_free.empty() ? j : std::size_t(m_free[j]); }
+
   /// The columns of `A` where `pinned` is 0, then those where it is 1, each renumbered in increasing order.
   static std::pair<Sparse_row_matrix, Sparse_row_matrix> split_columns(const Sparse_row_matrix& A,
                                                                       const std::vector<char>& pinned)
@@ -376,7 +379,7 @@ try {
     for(int a : m_anchors) m_diagonal(a) += 1.0;
     for(Eigen::Index j = 0; j < m_diagonal.size(); ++j)
       if(!(m_diagonal(j) > 0))
-        throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+        throw Numerical_failure("detail least squares: point " + std::to_string(region_row(std::size_t(j))) +
                                 " of the region appears in no equation; the normal matrix is singular");
     m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
     m_statistics.assembly_seconds = seconds_since(start);
@@ -401,7 +404,7 @@ try {
     else if(is_anchor[j])
       lacks_diagonal[j] = any_lacking = true;
     else
-      throw Numerical_failure("detail least squares: point " + std::to_string(j) +
+      throw Numerical_failure("detail least squares: point " + std::to_string(region_row(j)) +
                               " of the region appears in no equation; the normal matrix is singular");
   }
   if(any_lacking) upper = with_unit_diagonals(upper, lacks_diagonal);
