@@ -171,7 +171,8 @@ struct Detail_preserving_deformation_statistics
   unsigned int rigid_iterations = 0;
   /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
   /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
-  /// anything (the cubic order on a long region can; doc/editing.md, "Orders").
+  /// anything (the cubic order on a long region can: doc/editing.md, "Against CGAL on the Botsch–Sorkine
+  /// cactus").
   double displacement_ratio = 0;
   double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
 };
@@ -200,9 +201,9 @@ struct Detail_preserving_deformation_statistics
     the (m+1)-th nearest SSP, so the motion is continuous in space; normals turn with the blended rotation.
     With exact handles, handle points follow their transform exactly.
 
-  Identities (tested): handle points end on their targets to rounding; unmoved handles return every point exactly; with the whole model as ROI, moving every
-  handle group by one rigid motion moves every point and normal rigidly; points whose SSPs are all fixed
-  never move.
+  Identities (tested): handle points end on their targets to rounding; unmoved handles return every point
+  exactly; with the whole model as ROI, moving every handle group by one rigid motion moves every point and
+  normal rigidly; points whose SSPs are all fixed never move.
 
   The object copies the points and normals at construction; the caller's range is only written by
   `diffuse(points, np)`. It is not copyable (it owns its factorisation).
@@ -503,6 +504,7 @@ private:
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
+  std::vector<Eigen::Matrix3d> m_group_rotations; // per handle group, filled by each diffuse()
   Matrix_n3 m_anchor_displacement, m_detail_change, m_previous_samples; // per-edit buffers
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
@@ -688,6 +690,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
         break;
       }
 
+  m_group_rotations.resize(m_transforms.size());
   m_handle_rows.clear();
   if(exact_handles)
     for(std::size_t row = 0; row < m_cloud.size(); ++row)
@@ -842,7 +845,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   // Each region sample point turns by its deformed frame against its original one. A sample point whose
   // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts
   // stay bit for bit; fixed sample points keep their frames (doc/editing.md, "The paper's encoding and ours").
-  std::vector<Eigen::Matrix3d> rotation(m_transforms.size());
+  std::vector<Eigen::Matrix3d>& rotation = m_group_rotations; // sized by preprocess(): no allocation per drag
   for(std::size_t g = 0; g < m_transforms.size(); ++g) rotation[g] = m_transforms[g].rotation.toRotationMatrix();
   const bool exact_handles = !m_handle_rows.empty();
   for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
