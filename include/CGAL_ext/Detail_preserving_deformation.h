@@ -809,11 +809,13 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
       for(std::size_t g = 0; g < groups; ++g) previous[g] = along[g].rotation;
       pull_anchors(along);
       for(unsigned int iteration = 0; iteration < m_settings.rigid_iterations; ++iteration) {
+        const bool check_settled = m_settings.rigid_tolerance > 0;
         m_detail_change = rigid_edge_change<ConcurrencyTag>(m_rigid_edges, m_samples, m_propagated);
-        m_previous_samples = m_deformed_samples;
+        if(check_settled) m_previous_samples = m_deformed_samples;
         solve();
         fit_neighborhood_rotations<ConcurrencyTag>(m_samples, m_deformed_samples, m_graph, m_roi, m_propagated);
         ++iterations_used;
+        if(!check_settled) continue;
         // Settled: no sample point moved more than the tolerance since the last solve.
         double moved = 0;
         for(int s : m_roi) moved = std::max(moved, (m_deformed_samples.row(s) - m_previous_samples.row(s)).norm());
