@@ -14,6 +14,7 @@
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/estimate_oriented_normals.h>
+#include <CGAL_ext/refit_normals.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/scale_geometric_details.h>
@@ -52,6 +53,7 @@ struct Detail_options
   double lambda = CGAL_ext::Detail_filter().lambda, mu = CGAL_ext::Detail_filter().mu;
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
   std::string weights = "uniform", neighbors = "knn";
+  std::string color_by = "detail_normal"; // the relief on any sampling (doc/geometric_details.md, "Colour maps")
 
   CGAL_ext::Detail_settings settings() const
   {
@@ -120,7 +122,7 @@ constexpr std::uint64_t simplify = 448;  // 355
 constexpr std::uint64_t manipulate = 800; // 632 (whole-model enhancement)
 constexpr std::uint64_t edit = 640;      // 492
 constexpr std::uint64_t upsample = 512;  // 400
-constexpr std::uint64_t render = 256;    // 185
+constexpr std::uint64_t render = 416;    // 185 with normals; estimating them, as curvature
 } // namespace bytes_per_point
 
 /// Reads `input` (timed in the report), asking the machine for `bytes` per point, and checks that it has more
@@ -134,28 +136,43 @@ Point_cloud read_for_neighbors(const std::string& input, unsigned int k, std::ui
   return cloud;
 }
 
-/// Gives the cloud normals when it has none (CGAL_ext::estimate_oriented_normals).
+/// Gives the cloud normals when it has none (CGAL_ext::estimate_oriented_normals), and the vertices of a mesh
+/// that lie on no face theirs: estimated normals turned, as a whole, to the side of the mesh's.
 void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& report)
 {
   report.data()["normal_source"] = cloud.normals.empty() ? "estimated" : cloud.normal_source;
-  if(!cloud.normals.empty()) return;
+  if(!cloud.normals.empty() && cloud.vertices_without_normal == 0) return;
   if(cloud.points.size() < 6) throw Cli_error("normal estimation needs at least 6 points (a jet fit has 6 coefficients)");
+  if(cloud.unread_triangle_strips)
+    std::fprintf(stderr, "point-detail: warning: the faces of this PLY file are triangle strips, which are not read; "
+                         "its normals are estimated from the points\n");
+  std::vector<Vector> estimated(cloud.points.size());
   report.time("normals", [&] {
-    std::vector<Vector> normals(cloud.points.size());
     if(!CGAL_ext::estimate_oriented_normals(
          index_range(cloud.points.size()),
          std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(cloud.points.size())),
          CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
-           .normal_map(CGAL::make_property_map(normals))
+           .normal_map(CGAL::make_property_map(estimated))
            .callback(progress.stage("normals"))))
       throw Cancelled();
-    cloud.normals = std::move(normals);
-    cloud.normal_source = "estimated";
   });
+  progress.finish();
+  if(cloud.normals.empty()) {
+    cloud.normals = std::move(estimated);
+    cloud.normal_source = "estimated";
+    return;
+  }
+  double agreement = 0;
+  for(std::size_t i = 0; i < estimated.size(); ++i) agreement += estimated[i] * cloud.normals[i];
+  for(std::size_t i = 0; i < estimated.size(); ++i)
+    if(cloud.normals[i] == CGAL::NULL_VECTOR) cloud.normals[i] = agreement < 0 ? -estimated[i] : estimated[i];
+  report.data()["estimated_normals"] = cloud.vertices_without_normal;
+  cloud.vertices_without_normal = 0;
 }
 
-/// Adds detail_x/y/z, detail_magnitude and the colour map to `cloud` (which has normals).
-void add_details(Point_cloud& cloud, const Detail_options& options, Progress_printer& progress, Report& report)
+/// Adds detail_x/y/z, detail_magnitude (the paper's signed |delta|), detail_normal (delta . n) and the colour
+/// map of `options.color_by` to `cloud` (which has normals); returns that map.
+Coloring add_details(Point_cloud& cloud, const Detail_options& options, Progress_printer& progress, Report& report)
 {
   const std::size_t n = cloud.points.size();
   std::vector<Vector> details(n);
@@ -170,14 +187,20 @@ void add_details(Point_cloud& cloud, const Detail_options& options, Progress_pri
   });
   progress.finish();
   if(!done) throw Cancelled();
-  std::vector<double> dx(n), dy(n), dz(n);
-  for(std::size_t i = 0; i < n; ++i) { dx[i] = details[i].x(); dy[i] = details[i].y(); dz[i] = details[i].z(); }
+  std::vector<double> dx(n), dy(n), dz(n), along_normal(n);
+  for(std::size_t i = 0; i < n; ++i) {
+    dx[i] = details[i].x();
+    dy[i] = details[i].y();
+    dz[i] = details[i].z();
+    along_normal[i] = details[i] * cloud.normals[i] / std::sqrt(cloud.normals[i].squared_length());
+  }
   cloud.set_scalar("detail_x", std::move(dx));
   cloud.set_scalar("detail_y", std::move(dy));
   cloud.set_scalar("detail_z", std::move(dz));
-  double range = 0;
-  cloud.colors = diverging_colors(magnitude, &range);
   cloud.set_scalar("detail_magnitude", std::move(magnitude));
+  cloud.set_scalar("detail_normal", std::move(along_normal));
+  Coloring coloring = diverging_colors(*cloud.scalar(options.color_by));
+  cloud.colors = coloring.colors;
   auto& r = report.data();
   r["points"] = n;
   r["k"] = options.k;
@@ -186,12 +209,14 @@ void add_details(Point_cloud& cloud, const Detail_options& options, Progress_pri
   if(settings.filter.order != CGAL_ext::Detail_order::linear) r["mu"] = options.mu;
   r["weights"] = options.weights;
   r["neighbors"] = options.neighbors;
-  r["color_range"] = range;
+  r["color_by"] = options.color_by;
+  r["color_range"] = coloring.hi;
+  return coloring;
 }
 
 /// The detail colours shown on the balanced-flow base surface (paper Fig. 3).
-std::string render_on_base_surface(const Point_cloud& cloud, unsigned int k, const Render_settings& render,
-                                   Report& report)
+std::string render_on_base_surface(const Point_cloud& cloud, const Coloring& coloring, unsigned int k,
+                                   const Render_settings& render, Report& report)
 {
   std::vector<Point> base = cloud.points;
   std::vector<std::size_t> indices = index_range(base.size());
@@ -200,7 +225,7 @@ std::string render_on_base_surface(const Point_cloud& cloud, unsigned int k, con
                                              CGAL::parameters::point_map(CGAL::make_property_map(base))
                                                .normal_map(CGAL::make_property_map(cloud.normals)));
   });
-  return report.time("render", [&] { return render_png(base, cloud.normals, cloud.colors, render); });
+  return report.time("render", [&] { return render_png(base, cloud.normals, coloring, render); });
 }
 
 void add_render_options(CLI::App& app, Render_settings& r, std::string& view)
@@ -230,16 +255,17 @@ struct Details_command
     rep.data()["input"] = input;
     Point_cloud cloud = read_for_neighbors(input, detail.k, bytes_per_point::details, rep);
     ensure_normals(cloud, progress, rep);
-    add_details(cloud, detail, progress, rep);
+    const Coloring coloring = add_details(cloud, detail, progress, rep);
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
-    if(!png.empty()) write_file(written.png, render_on_base_surface(cloud, detail.k, render, rep));
+    if(!png.empty()) write_file(written.png, render_on_base_surface(cloud, coloring, detail.k, render, rep));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
   }
 };
 
 /// Scales (or enhances) the details of `region` of `cloud` (which has normals) by `factor`; `out` receives the
-/// moved points with the input's normals, their displacement along the normal and the region flag.
+/// moved points with normals re-fitted where they moved, their displacement along the input normal and the
+/// region flag.
 CGAL_ext::Detail_manipulation_result manipulate(bool enhance, const Point_cloud& cloud, const std::vector<std::size_t>& region,
                                                 const std::vector<std::size_t>* anchors, double factor, unsigned int k,
                                                 const CGAL_ext::Detail_enhancement_settings& settings,
@@ -270,10 +296,41 @@ CGAL_ext::Detail_manipulation_result manipulate(bool enhance, const Point_cloud&
   out = Point_cloud();
   out.points = std::move(moved);
   out.normals = cloud.normals;
+  std::vector<std::size_t> displaced;
+  for(std::size_t i = 0; i < out.points.size(); ++i)
+    if(out.points[i] != cloud.points[i]) displaced.push_back(i);
+  if(!displaced.empty())
+    CGAL_ext::refit_normals(index_range(out.points.size()), displaced,
+                            std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(out.points.size())),
+                            CGAL::parameters::point_map(CGAL::make_property_map(out.points))
+                              .normal_map(CGAL::make_property_map(out.normals)));
   out.set_scalar("displacement", std::move(displacement));
   out.set_scalar("in_roi", std::move(in_roi));
   return result;
 }
+
+/// How far a region stands out from the surface its border spans, relative to its size: the median distance
+/// its points moved divided by |s - 1| (the detail scaling is affine in s, so this is the deviation the region's
+/// details have in all), over the region's RMS radius. Small for bumps on a patch (0.01-0.05), large for a
+/// feature the region covers (a head, a finger: 0.2 and more). 0 at s = 1.
+double region_deviation(const std::vector<Point>& before, const std::vector<Point>& after,
+                        const std::vector<std::size_t>& region, double factor)
+{
+  if(factor == 1 || region.empty()) return 0;
+  std::vector<double> moved;
+  Vector centroid(0, 0, 0);
+  for(std::size_t i : region) {
+    moved.push_back(std::sqrt(CGAL::squared_distance(before[i], after[i])));
+    centroid = centroid + (before[i] - CGAL::ORIGIN) / double(region.size());
+  }
+  double radius = 0;
+  for(std::size_t i : region) radius += (before[i] - (CGAL::ORIGIN + centroid)).squared_length() / double(region.size());
+  std::nth_element(moved.begin(), moved.begin() + std::ptrdiff_t(moved.size() / 2), moved.end());
+  return radius > 0 ? moved[moved.size() / 2] / std::abs(factor - 1) / std::sqrt(radius) : 0;
+}
+
+/// Above this region deviation, `scale` warns that it reshapes a feature rather than its details.
+constexpr double feature_deviation = 0.1;
 
 /// `scale` and `enhance`: move a region so that its details become s times larger (paper Sect. 4).
 struct Manipulate_command
@@ -321,6 +378,7 @@ struct Manipulate_command
     });
     progress.finish();
     if(!result) throw Cancelled();
+    const double deviation = enhance ? 0.0 : region_deviation(cloud.points, out.points, region, factor);
     rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
@@ -334,12 +392,17 @@ struct Manipulate_command
     r["roi_points"] = result.region_size;
     r["anchors"] = result.anchor_count;
     r["default_anchors"] = result.default_anchors;
+    if(!enhance) r["region_deviation"] = deviation;
     const CGAL_ext::Least_squares_statistics& ls = result.least_squares;
     r["solver"] = {{"method", ls.method}, {"operator_nonzeros", ls.operator_nonzeros}, {"normal_nonzeros", ls.normal_nonzeros},
                    {"assembly_s", ls.assembly_seconds}, {"factor_s", ls.factor_seconds}, {"solve_s", ls.solve_seconds},
                    {"iterations", ls.iterations}, {"relative_residual", ls.relative_residual}};
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
+    // Printed even with --quiet: the result is probably not what the user wanted.
+    if(deviation > feature_deviation)
+      std::fprintf(stderr, "point-detail: warning: the region stands out from the surface its border spans by %.0f %% of "
+                   "its size: scale reshapes all of it, not only its small details (for those, use enhance)\n", 100 * deviation);
   }
 };
 
@@ -378,11 +441,12 @@ struct Curvature_command
     r["k"] = k;
     r["fitting"] = fitting;
     r["curvature_percentiles"] = {{"p02", sorted[n / 50]}, {"p50", sorted[n / 2]}, {"p98", sorted[n - 1 - n / 50]}};
-    cloud.colors = diverging_colors(H);
+    const Coloring coloring = diverging_colors(H);
+    cloud.colors = coloring.colors;
     cloud.set_scalar("mean_curvature", std::move(H));
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
     if(!png.empty())
-      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, coloring, render); }));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
   }
@@ -434,14 +498,15 @@ struct Simplify_command
     surfels.set_scalar("radius", std::move(radius));
     surfels.set_scalar("member_count", std::move(member_count));
     rep.time("write", [&] { write_file(written.ply, ply_bytes(surfels)); });
-    cloud.colors = label_colors(sample_of);
+    const Coloring coloring = label_colors(sample_of);
+    cloud.colors = coloring.colors;
     if(!clusters.empty()) {
       std::vector<double> ssp_index(sample_of.begin(), sample_of.end());
       cloud.set_scalar("ssp_index", std::move(ssp_index));
       write_file(clusters_tmp, ply_bytes(cloud));
     }
     if(!png.empty())
-      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, cloud.colors, render); }));
+      write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, coloring, render); }));
 
     auto& r = rep.data();
     r["points"] = n;
@@ -465,35 +530,38 @@ struct Simplify_command
   }
 };
 
-/// The typical spacing of `cloud` (the median of the points' mean distance to 6 neighbours): what an edit keeps.
-double typical_spacing(const Point_cloud& cloud)
+/// Every point's local spacing (CGAL_ext::compute_local_spacing): what an edit keeps.
+std::vector<double> local_spacing(const Point_cloud& cloud)
 {
-  const auto spatial = CGAL_ext::internal::make_spatial_point_cloud<CGAL::Parallel_if_available_tag>(
-    cloud.points, CGAL::Identity_property_map<const Point>(), "spacing");
-  const CGAL_ext::internal::Position_tree tree(spatial.positions, CGAL::Parallel_if_available_tag());
-  return CGAL_ext::internal::typical_spacing<CGAL::Parallel_if_available_tag>(spatial.positions, tree);
+  std::vector<double> spacing(cloud.points.size());
+  CGAL_ext::compute_local_spacing(index_range(cloud.points.size()), CGAL::make_property_map(spacing),
+                                  CGAL::parameters::point_map(CGAL::make_property_map(cloud.points)));
+  return spacing;
 }
 
-/// Fills the holes of `cloud` (which has normals) at `spacing` (0: its typical spacing), looking for gaps from the
-/// points `region` only (all when null): the new points are appended with the flag `inserted` = 1, 0 in the other
-/// scalars and grey; the report gets the figures.
-void upsample_cloud(Point_cloud& cloud, CGAL_ext::Upsampling_settings settings, double spacing,
-                    const std::vector<std::size_t>* region, Progress_printer& progress, Report& rep)
+/// Fills the holes of `cloud` (which has normals), looking for gaps from the points `region` only (all when
+/// null), at the spacing each point had before an edit (`spacing_before`, with `region`) or else that of the
+/// settings (0: local): the new points are appended with the flag `inserted` = 1, 0 in the other scalars and
+/// `flag_color` (when the cloud has colours); the report gets the figures.
+void upsample_cloud(Point_cloud& cloud, const CGAL_ext::Upsampling_settings& settings, const std::vector<std::size_t>* region,
+                    const std::vector<double>* spacing_before, Progress_printer& progress, Report& rep)
 {
-  settings.detection.spacing = spacing;
   std::vector<std::pair<Point, Vector>> added;
   const std::size_t n = cloud.points.size();
   const auto np = CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
                     .normal_map(CGAL::make_property_map(cloud.normals))
                     .callback(progress.stage("upsample"));
   const CGAL_ext::Upsampling_result result = rep.time("upsample", [&] {
+    if(region && spacing_before)
+      return CGAL_ext::upsample_point_set(index_range(n), *region, CGAL::make_property_map(*spacing_before), settings,
+                                          std::back_inserter(added), np);
     return region ? CGAL_ext::upsample_point_set(index_range(n), *region, settings, std::back_inserter(added), np)
                   : CGAL_ext::upsample_point_set(index_range(n), settings, std::back_inserter(added), np);
   });
   progress.finish();
   if(!result) throw Cancelled();
   for(auto& [name, values] : cloud.scalars) values.resize(n + added.size(), 0.0);
-  if(!cloud.colors.empty()) cloud.colors.resize(n + added.size(), Color{200, 200, 200});
+  if(!cloud.colors.empty()) cloud.colors.resize(n + added.size(), flag_color);
   std::vector<double> inserted(n + added.size(), 0.0);
   for(std::size_t m = 0; m < added.size(); ++m) {
     cloud.points.push_back(added[m].first);
@@ -541,7 +609,7 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   for(std::size_t i : edit.roi) status[i] = 1;
   for(const Handle_edit& handle : edit.handles)
     for(std::size_t i : handle.points) status[i] = 2;
-  out.colors = sequential_colors(moved);
+  out.colors = sequential_colors(moved).colors;
   out.set_scalar("displacement", std::move(moved));
   out.set_scalar("status", std::move(status));
   out.set_scalar("ssp_index", std::move(sample));
@@ -574,6 +642,14 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["max_handle_point_error"] = handle_error;
   r["displacement_ratio"] = st.displacement_ratio;
   if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) r["rigid_iterations"] = st.rigid_iterations;
+}
+
+/// An edit's picture: the distance each point moved, and the points an up-sampling added, flagged.
+Coloring edit_coloring(const Point_cloud& out)
+{
+  Coloring coloring = sequential_colors(*out.scalar("displacement"));
+  if(const std::vector<double>* inserted = out.scalar("inserted")) emphasize(coloring, *inserted);
+  return coloring;
 }
 
 /// Above this ratio of the largest sample-point displacement to the handles' largest, `edit` warns.
@@ -636,11 +712,12 @@ struct Edit_command
       std::vector<std::size_t> region;
       for(std::size_t i = 0; i < moved.size(); ++i)
         if(moved[i] > 0) region.push_back(i);
-      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(cloud), &region, progress, rep);
+      const std::vector<double> spacing_before = local_spacing(cloud);
+      upsample_cloud(out, CGAL_ext::Upsampling_settings(), &region, &spacing_before, progress, rep);
     }
     rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
-      write_file(written.png, rep.time("render", [&] { return render_png(out.points, out.normals, out.colors, render); }));
+      write_file(written.png, rep.time("render", [&] { return render_png(out.points, out.normals, edit_coloring(out), render); }));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
     if(!common.quiet) {
@@ -679,12 +756,12 @@ struct Upsample_command
     Point_cloud cloud = read_for_neighbors(input, settings.neighbors, bytes_per_point::upsample, rep);
     ensure_normals(cloud, progress, rep);
     const std::size_t n = cloud.points.size();
-    upsample_cloud(cloud, settings, spacing, nullptr, progress, rep);
+    upsample_cloud(cloud, settings, nullptr, nullptr, progress, rep);
     rep.data()["points"] = n;
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
-        return render_png(cloud.points, cloud.normals, sequential_colors(*cloud.scalar("inserted")), render);
+        return render_png(cloud.points, cloud.normals, flag_colors(*cloud.scalar("inserted")), render);
       }));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
@@ -699,7 +776,7 @@ struct Render_command
   std::string input, output, color_by, report, view = "front";
   Render_settings render;
 
-  void run(const Common_options&)
+  void run(const Common_options& common)
   {
     Output_files outputs({input});
     const fs::path png_tmp = outputs.add(output);
@@ -707,14 +784,22 @@ struct Render_command
     render.view = parse_view(view);
     Report rep("render");
     rep.data()["input"] = input;
-    const Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::render); });
+    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::render); });
     rep.data()["points"] = cloud.points.size();
-    std::vector<Color> colors;
+    if(cloud.points.size() >= 6) { // shaded pictures: normals from the points when the file has none
+      Progress_printer progress(common.quiet);
+      ensure_normals(cloud, progress, rep);
+    }
+    Coloring colors;
     std::string by = color_by;
-    if(by.empty()) by = !cloud.colors.empty() ? "rgb" : cloud.scalar("detail_magnitude") ? "detail_magnitude" : "none";
+    if(by.empty())
+      by = !cloud.colors.empty()                ? "rgb"
+           : cloud.scalar("detail_normal")      ? "detail_normal"
+           : cloud.scalar("detail_magnitude")   ? "detail_magnitude"
+                                                : "none";
     if(by == "rgb") {
       if(cloud.colors.empty()) throw Cli_error(input + " has no red/green/blue properties to colour by");
-      colors = cloud.colors;
+      colors.colors = cloud.colors;
     } else if(by != "none") {
       const std::vector<double>* values = cloud.scalar(by);
       if(!values) {
@@ -722,8 +807,7 @@ struct Render_command
         for(const auto& s : cloud.scalars) names += " " + s.first;
         throw Cli_error(input + " has no property '" + by + "' (it has:" + (names.empty() ? " none" : names) + "; or use rgb, none)");
       }
-      const auto [lo, hi] = std::minmax_element(values->begin(), values->end());
-      colors = (*lo < 0 && *hi > 0) ? diverging_colors(*values) : sequential_colors(*values);
+      colors = colors_for(*values);
     }
     rep.data()["color_by"] = by;
     write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, colors, render); }));
@@ -756,17 +840,17 @@ struct Demo_command
     input.points = tube.points;
     input.normals = tube.normals;
     write_file(outputs.add(dir / "tentacle.ply"), ply_bytes(input));
-    write_file(outputs.add(dir / "tentacle.png"), render_png(input.points, input.normals, {}, render));
+    write_file(outputs.add(dir / "tentacle.png"), render_png(input.points, input.normals, Coloring(), render));
     std::printf("demo: tentacle of %zu points with exact normals\n", input.points.size());
     for(const char* order : {"linear", "quadric", "cubic"}) {
       Detail_options options;
       options.order = order;
       Point_cloud cloud = input;
       Report rep(std::string("demo details ") + order);
-      add_details(cloud, options, progress, rep);
+      const Coloring coloring = add_details(cloud, options, progress, rep);
       const std::string stem = std::string("details_") + order;
       write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(cloud));
-      write_file(outputs.add(dir / (stem + ".png")), render_on_base_surface(cloud, options.k, render, rep));
+      write_file(outputs.add(dir / (stem + ".png")), render_on_base_surface(cloud, coloring, options.k, render, rep));
       std::printf("demo: %-7s details (lambda %.1f, mu %.1f, k %u) in %.3f s -> %s.ply, %s.png\n", order, options.lambda,
                   options.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
       runs.push_back(rep.data());
@@ -815,7 +899,7 @@ struct Demo_command
       run_edit(input, bend, progress, rep, out);
       const std::string stem = std::string("edit_") + order;
       write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(out));
-      write_file(outputs.add(dir / (stem + ".png")), render_png(out.points, out.normals, out.colors, render));
+      write_file(outputs.add(dir / (stem + ".png")), render_png(out.points, out.normals, edit_coloring(out), render));
       const auto& r = rep.data();
       std::printf("demo: %-7s edit, tip swung 50 degrees: %zu SSPs (%zu in the region), SSPs %.3f s, diffusion %.3f s -> %s.ply, %s.png\n",
                   order, r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(), r["table1"]["editing_ssps_s"].get<double>(),
@@ -823,7 +907,7 @@ struct Demo_command
       runs.push_back(r);
     }
     // Up-sampling (paper Sect. 6.3, Fig. 9-10): the tip pulled 1.0 further along the tube stretches the region;
-    // what the stretch thinned is filled at the pre-edit spacing. Grey: the new points.
+    // what the stretch thinned is filled at the pre-edit spacing. Highlighted: the new points.
     {
       Edit_description pull = bend;
       pull.handles.front().rotation.setIdentity();
@@ -831,13 +915,14 @@ struct Demo_command
       Report rep("demo stretch and upsample");
       Point_cloud out;
       run_edit(input, pull, progress, rep, out);
-      write_file(outputs.add(dir / "edit_stretch.png"), render_png(out.points, out.normals, out.colors, render));
+      write_file(outputs.add(dir / "edit_stretch.png"), render_png(out.points, out.normals, edit_coloring(out), render));
       std::vector<std::size_t> moved;
       for(std::size_t i = 0; i < out.points.size(); ++i)
         if((*out.scalar("displacement"))[i] > 0) moved.push_back(i);
-      upsample_cloud(out, CGAL_ext::Upsampling_settings(), typical_spacing(input), &moved, progress, rep);
+      const std::vector<double> spacing_before = local_spacing(input);
+      upsample_cloud(out, CGAL_ext::Upsampling_settings(), &moved, &spacing_before, progress, rep);
       write_file(outputs.add(dir / "edit_stretch_upsampled.ply"), ply_bytes(out));
-      write_file(outputs.add(dir / "edit_stretch_upsampled.png"), render_png(out.points, out.normals, out.colors, render));
+      write_file(outputs.add(dir / "edit_stretch_upsampled.png"), render_png(out.points, out.normals, edit_coloring(out), render));
       std::printf("demo: tip pulled by 1.0, then %zu points inserted where the stretch thinned the tentacle -> "
                   "edit_stretch.png, edit_stretch_upsampled.{ply,png}\n", rep.data()["upsampling"]["inserted"].get<std::size_t>());
       runs.push_back(rep.data());
@@ -864,17 +949,22 @@ int main(int argc, char** argv)
   details_app->add_option("-i,--input", details.input, "input points (.ply, .off, .xyz, .pwn)")->required();
   details_app->add_option("-o,--output", details.output, "output binary PLY")->required();
   details_app->add_option("--png", details.png, "also render the colour map on the base surface");
+  details_app->add_option("--color-by", details.detail.color_by, "colour map (and PLY colours): detail_normal (delta . n, the "
+                          "relief on any sampling) or detail_magnitude (the paper's signed |delta|)")
+    ->check(CLI::IsMember({"detail_normal", "detail_magnitude"}))->capture_default_str();
   details_app->add_option("--report", details.report, "write stage timings and counts as JSON");
   add_detail_options(*details_app, details.detail);
   add_render_options(*details_app, details.render, details.view);
 
   Manipulate_command scale, enhance;
   enhance.enhance = true;
-  CLI::App* scale_app = app.add_subcommand("scale", "scale the geometric details of a region by a factor (paper Sect. 4.1)");
+  CLI::App* scale_app = app.add_subcommand("scale", "scale a region's deviation from the surface its border spans by a factor "
+    "(paper Sect. 4.1): all of it, so a region around a whole feature (a head) reshapes the feature; for only the "
+    "small details, use enhance");
   CLI::App* enhance_app = app.add_subcommand("enhance", "enhance the details against the balanced-flow base surface (paper Sect. 4.2)");
   for(auto [sub, command] : {std::pair{scale_app, &scale}, std::pair{enhance_app, &enhance}}) {
     sub->add_option("-i,--input", command->input, "input points (.ply, .off, .xyz, .pwn)")->required();
-    sub->add_option("-o,--output", command->output, "output binary PLY: moved points, normals, displacement, in_roi")->required();
+    sub->add_option("-o,--output", command->output, "output binary PLY: moved points, their normals (re-fitted where they moved), displacement, in_roi")->required();
     sub->add_option("-s,--factor", command->factor, "scale factor s (1: unchanged)")->required();
     auto* roi_option = sub->add_option("--roi", command->roi,
       "region of interest, repeatable (union): sphere:x,y,z,r | box:xmin,ymin,zmin,xmax,ymax,zmax | indices:FILE"
@@ -910,7 +1000,7 @@ int main(int argc, char** argv)
   simplify_app->add_option("-o,--output", simplify.output, "output binary PLY of the SSP surfels: position, normal, radius, member_count")->required();
   simplify.max_cluster_size_option = simplify_app->add_option("--max-cluster-size", simplify.max_cluster_size,
     "largest number of points per SSP (default: ceil(points / target))");
-  simplify_app->add_option("--target", simplify.settings.target_count, "SSP count that sets the default cluster size")->capture_default_str();
+  simplify_app->add_option("--target", simplify.settings.target_count, "SSP count the clustering aims at: the largest clusters split to it, then the mode-spread rule adds at most half as many again")->capture_default_str();
   simplify_app->add_option("--mode-threshold", simplify.settings.mode_spread_threshold,
     "split while the members' modes spread more than this many range bandwidths (inf: by size only)")->capture_default_str();
   simplify_app->add_option("-k,--neighbor-count", simplify.settings.mean_shift_neighbors, "neighbours of the mean shift (>= 5)")->capture_default_str();
@@ -947,19 +1037,19 @@ int main(int argc, char** argv)
                                        ->check(CLI::IsMember({"own", "nearest"}));
   edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles");
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
-  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count that sets the default cluster size (default 3000)");
+  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule (default 3000)");
   edit.given["--rotations"] = edit_app->add_option("--rotations", edit.rotations, "how the details turn: none, propagate (the paper's), arap (as rigid as possible)")
     ->check(CLI::IsMember({"none", "propagate", "arap"}));
   edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
     ->check(CLI::Range(1u, 1000u));
-  edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at the model's pre-edit spacing (new points: inserted = 1)");
+  edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
 
   Upsample_command upsample;
   CLI::App* upsample_app = app.add_subcommand("upsample", "fill holes and stretched parts with new samples, relaxed on the surface (paper Sect. 6.3)");
   upsample_app->add_option("-i,--input", upsample.input, "input points with normals (.ply, .off, .xyz, .pwn)")->required();
   upsample_app->add_option("-o,--output", upsample.output, "output binary PLY: the input, then the new points (inserted = 1)")->required();
-  upsample_app->add_option("--spacing", upsample.spacing, "target spacing (0: the median of the points' mean distance to 6 neighbours)")->capture_default_str();
+  upsample_app->add_option("--spacing", upsample.spacing, "target spacing everywhere (0: each point's local spacing, so that only what is sparse for its surroundings is filled)")->capture_default_str();
   upsample_app->add_option("--max-hole-size", upsample.settings.detection.max_hole_size, "widest gap filled, in spacings (open borders are never grown)")->capture_default_str();
   upsample_app->add_option("-k,--neighbor-count", upsample.settings.neighbors, "neighbours of the tangent axes and surface fits (>= 6)")->capture_default_str();
   upsample_app->add_option("--png", upsample.png, "also render the result, new points highlighted");
@@ -970,7 +1060,7 @@ int main(int argc, char** argv)
   CLI::App* render_app = app.add_subcommand("render", "headless PNG picture of a point set");
   render_app->add_option("-i,--input", render.input, "input points")->required();
   render_app->add_option("-o,--output", render.output, "output PNG")->required();
-  render_app->add_option("--color-by", render.color_by, "rgb, none or a scalar property (default: rgb, else detail_magnitude)");
+  render_app->add_option("--color-by", render.color_by, "rgb, none or a scalar property: 0/1 flags (inserted, in_roi) are highlighted, signed values get a diverging map, others a sequential one (default: rgb, else detail_normal, else detail_magnitude)");
   render_app->add_option("--report", render.report, "write stage timings and counts as JSON");
   add_render_options(*render_app, render.render, render.view);
 
@@ -1007,7 +1097,7 @@ int main(int argc, char** argv)
     std::fprintf(stderr, "point-detail: error: %s\n", e.what());
     return 1;
   } catch(const CGAL_ext::Invalid_input& e) {
-    std::fprintf(stderr, "point-detail: invalid input: %s\n", e.what());
+    std::fprintf(stderr, "point-detail: error: %s\n", e.what());
     return 1;
   } catch(const CGAL_ext::Numerical_failure& e) {
     std::fprintf(stderr, "point-detail: error: %s\n", e.what());

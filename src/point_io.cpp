@@ -45,7 +45,13 @@ std::string lower_extension(const fs::path& path)
   return ext.empty() ? ext : ext.substr(1);
 }
 
-/// Area-weighted vertex normals of a polygon soup, or nothing if a vertex is on no usable face.
+std::size_t count_zero(const std::vector<Vector>& normals)
+{
+  return std::size_t(std::count(normals.begin(), normals.end(), CGAL::NULL_VECTOR));
+}
+
+/// Area-weighted vertex normals of a polygon soup (zero at a vertex on no usable face), or nothing if no face
+/// is usable.
 std::vector<Vector> face_normals(const std::vector<Point>& vertices, const std::vector<std::vector<std::size_t>>& faces)
 {
   if(faces.empty()) return {};
@@ -60,11 +66,16 @@ std::vector<Vector> face_normals(const std::vector<Point>& vertices, const std::
       area = area + CGAL::cross_product(vertices[face[i]] - vertices[face[0]], vertices[face[i + 1]] - vertices[face[0]]);
     for(std::size_t v : face) normals[v] = normals[v] + area;
   }
+  std::size_t without = 0;
   for(Vector& n : normals) {
     const double len = std::sqrt(n.squared_length());
-    if(!(len > 0) || !std::isfinite(len)) return {}; // a vertex on no face: the caller estimates instead
-    n = n / len;
+    if(!(len > 0) || !std::isfinite(len)) {
+      n = CGAL::NULL_VECTOR; // a vertex on no face (or on degenerate ones only): the caller estimates it
+      ++without;
+    } else
+      n = n / len;
   }
+  if(without == normals.size()) return {};
   return normals;
 }
 
@@ -222,6 +233,7 @@ struct Announced
 {
   std::uint64_t vertices = 0;
   std::uint64_t smallest_bytes = 0; ///< the fewest bytes of data after the header that can hold them
+  bool triangle_strips = false;     ///< faces given as an element 'tristrips' (CGAL's reader reads only 'face')
 };
 
 std::uint64_t ply_scalar_size(const std::string& type)
@@ -310,6 +322,7 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
         if(per_item > 0 && e.count > (std::uint64_t(1) << 62) / per_item) fail("element '" + e.name + "' is too large");
         a.smallest_bytes += e.count * per_item;
         if(e.name == "vertex") a.vertices = e.count;
+        if(e.name == "tristrips" && e.count > 0) a.triangle_strips = true;
       }
       return a;
     } else
@@ -319,8 +332,8 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
 }
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
-/// hold what it announces. Returns the announced vertex count.
-std::uint64_t check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
+/// hold what it announces. Returns what it announces.
+Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
 {
   std::ifstream in(path, std::ios::binary);
   std::uint64_t header_bytes = 0;
@@ -332,7 +345,7 @@ std::uint64_t check_ply_header(const fs::path& path, std::uint64_t bytes_per_poi
     throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
                     std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
                     " bytes, the file holds " + std::to_string(size - header_bytes) + " after its header)");
-  return a.vertices;
+  return a;
 }
 
 } // namespace
@@ -355,11 +368,13 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
     } else {
       cloud.normals = face_normals(cloud.points, off.faces);
       if(!cloud.normals.empty()) cloud.normal_source = "mesh";
+      cloud.vertices_without_normal = count_zero(cloud.normals);
     }
     return cloud;
   }
 
-  const std::uint64_t announced = ext == "ply" ? check_ply_header(path, bytes_per_point) : 0;
+  const Announced header = ext == "ply" ? check_ply_header(path, bytes_per_point) : Announced();
+  const std::uint64_t announced = header.vertices;
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   try {
@@ -381,6 +396,8 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
   } else if(ext == "ply") {
     cloud.normals = ply_face_normals(path, cloud.points.size());
     if(!cloud.normals.empty()) cloud.normal_source = "mesh";
+    cloud.vertices_without_normal = count_zero(cloud.normals);
+    cloud.unread_triangle_strips = header.triangle_strips && cloud.normals.empty();
   }
 
   auto red = ps.property_map<unsigned char>("red"), green = ps.property_map<unsigned char>("green"),

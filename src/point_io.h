@@ -27,6 +27,8 @@ struct Point_cloud
   std::string normal_source;     ///< "file", "mesh" (area-weighted vertex normals of the file's faces) or ""
   std::vector<std::pair<std::string, std::vector<double>>> scalars; ///< extra per-point properties, written in order
   std::vector<Color> colors;     ///< written as red green blue when not empty
+  std::size_t vertices_without_normal = 0; ///< "mesh" normals: vertices on no face, whose normal is zero
+  bool unread_triangle_strips = false;     ///< a PLY mesh of triangle strips: its faces are not read
 
   const std::vector<double>* scalar(const std::string& name) const;
   void set_scalar(const std::string& name, std::vector<double> values);

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 
@@ -72,31 +73,94 @@ double percentile(std::vector<double> v, double q)
 
 } // namespace
 
-std::vector<Color> diverging_colors(const std::vector<double>& values, double* range)
+namespace {
+bool negligible(double v, double largest) { return std::abs(v) <= 1e-12 * largest; }
+} // namespace
+
+Coloring diverging_colors(const std::vector<double>& values)
 {
-  std::vector<double> magnitude(values.size());
-  std::transform(values.begin(), values.end(), magnitude.begin(), [](double v) { return std::abs(v); });
+  double largest = 0;
+  for(double v : values) largest = std::max(largest, std::abs(v));
+  std::vector<double> magnitude;
+  for(double v : values)
+    if(!negligible(v, largest)) magnitude.push_back(std::abs(v));
+  if(2 * magnitude.size() > values.size()) {
+    magnitude.resize(values.size());
+    std::transform(values.begin(), values.end(), magnitude.begin(), [](double v) { return std::abs(v); });
+  }
   double r = percentile(std::move(magnitude), 0.98);
   if(!(r > 0)) r = 1;
-  if(range) *range = r;
-  std::vector<Color> out;
-  out.reserve(values.size());
-  for(double v : values) out.push_back(sample(cool_warm, 0.5 + 0.5 * v / r));
+  Coloring out;
+  out.scale = Coloring::Scale::diverging;
+  out.lo = -r;
+  out.hi = r;
+  out.colors.reserve(values.size());
+  for(double v : values) out.colors.push_back(sample(cool_warm, 0.5 + 0.5 * v / r));
   return out;
 }
 
-std::vector<Color> sequential_colors(const std::vector<double>& values)
+Coloring sequential_colors(const std::vector<double>& values)
 {
-  const double lo = percentile(values, 0.02), hi = percentile(values, 0.98);
-  std::vector<Color> out;
-  out.reserve(values.size());
-  for(double v : values) out.push_back(sample(viridis, hi > lo ? (v - lo) / (hi - lo) : 0.5));
+  double lo = percentile(values, 0.02), hi = percentile(values, 0.98);
+  if(!(hi > lo) && !values.empty()) {
+    // Most points share one value: span it and the values that differ from it.
+    const double common = lo;
+    double largest = 0;
+    for(double v : values) largest = std::max(largest, std::abs(v - common));
+    std::vector<double> others;
+    for(double v : values)
+      if(!negligible(v - common, largest)) others.push_back(v);
+    if(!others.empty()) {
+      lo = std::min(common, percentile(others, 0.02));
+      hi = std::max(common, percentile(others, 0.98));
+    }
+  }
+  Coloring out;
+  out.scale = Coloring::Scale::sequential;
+  out.lo = lo;
+  out.hi = hi;
+  out.colors.reserve(values.size());
+  for(double v : values) out.colors.push_back(sample(viridis, hi > lo ? (v - lo) / (hi - lo) : 0.5));
   return out;
 }
 
-std::vector<Color> label_colors(const std::vector<std::size_t>& labels)
+void emphasize(Coloring& coloring, const std::vector<double>& flags)
 {
-  std::vector<Color> out;
+  coloring.colors.resize(flags.size(), Color{200, 200, 200});
+  coloring.emphasized.assign(flags.size(), 0);
+  coloring.emphasized_count = 0;
+  for(std::size_t i = 0; i < flags.size(); ++i)
+    if(flags[i] == 1) {
+      coloring.colors[i] = flag_color;
+      coloring.emphasized[i] = 1;
+      ++coloring.emphasized_count;
+    }
+}
+
+Coloring flag_colors(const std::vector<double>& flags)
+{
+  Coloring out;
+  out.scale = Coloring::Scale::flag;
+  emphasize(out, flags);
+  return out;
+}
+
+Coloring colors_for(const std::vector<double>& values)
+{
+  bool flags = true, negative = false, positive = false;
+  for(double v : values) {
+    flags = flags && (v == 0 || v == 1);
+    negative = negative || v < 0;
+    positive = positive || v > 0;
+  }
+  if(flags) return flag_colors(values);
+  return negative && positive ? diverging_colors(values) : sequential_colors(values);
+}
+
+Coloring label_colors(const std::vector<std::size_t>& labels)
+{
+  Coloring coloring;
+  std::vector<Color>& out = coloring.colors;
   out.reserve(labels.size());
   for(std::size_t label : labels) {
     // A hash spreads neighbouring labels over the hue circle; saturation and value vary a little too.
@@ -111,7 +175,7 @@ std::vector<Color> label_colors(const std::vector<std::size_t>& labels)
     out.push_back({static_cast<unsigned char>(255 * c[0]), static_cast<unsigned char>(255 * c[1]),
                    static_cast<unsigned char>(255 * c[2])});
   }
-  return out;
+  return coloring;
 }
 
 namespace {
@@ -134,12 +198,100 @@ std::vector<double> local_spacing(const std::vector<Point>& points)
 }
 } // namespace
 
-std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals,
-                       const std::vector<Color>& colors, const Render_settings& settings)
+namespace {
+
+/// 3x5 glyphs of the characters numbers need, one row per 3 bits (top row first).
+int glyph(char c)
+{
+  switch(c) {
+  case '0': return 0b111101101101111;
+  case '1': return 0b010110010010111;
+  case '2': return 0b111001111100111;
+  case '3': return 0b111001111001111;
+  case '4': return 0b101101111001001;
+  case '5': return 0b111100111001111;
+  case '6': return 0b111100111101111;
+  case '7': return 0b111001001001001;
+  case '8': return 0b111101111101111;
+  case '9': return 0b111101111001111;
+  case '.': return 0b000000000000010;
+  case '-': return 0b000000111000000;
+  case '+': return 0b000010111010000;
+  case 'e': return 0b010101111100011;
+  default: return 0;
+  }
+}
+
+/// An RGB picture to draw the legend on.
+struct Canvas
+{
+  std::vector<unsigned char>& rgb;
+  int width, height;
+
+  void fill(int x0, int y0, int w, int h, const Color& c)
+  {
+    for(int y = std::max(0, y0); y < std::min(height, y0 + h); ++y)
+      for(int x = std::max(0, x0); x < std::min(width, x0 + w); ++x)
+        for(int k = 0; k < 3; ++k) rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(k)] = c[std::size_t(k)];
+  }
+  /// Text in 3x5 glyphs scaled by `size`; returns its width. `anchor` 0 left, 0.5 centred, 1 right of x.
+  int text(const std::string& t, int x, int y, int size, double anchor = 0)
+  {
+    const int advance = 4 * size, w = int(t.size()) * advance - size;
+    x -= int(anchor * w);
+    for(char c : t) {
+      const int bits = glyph(c);
+      for(int row = 0; row < 5; ++row)
+        for(int col = 0; col < 3; ++col)
+          if(bits >> (14 - 3 * row - col) & 1) fill(x + col * size, y + row * size, size, size, Color{40, 40, 40});
+      x += advance;
+    }
+    return w;
+  }
+};
+
+std::string number(double v)
+{
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", v);
+  return buffer;
+}
+
+/// The legend strip: the colour bar with its ends (and 0 for a diverging map), and a swatch of the flag colour
+/// with the count of flagged points (beside the bar, or alone).
+void draw_legend(Canvas canvas, int top, const Coloring& coloring)
+{
+  const int size = std::max(1, canvas.width / 400), bar_height = 5 * size + 2;
+  const int y = top + (canvas.height - top - bar_height) / 2;
+  const bool bar = coloring.scale == Coloring::Scale::diverging || coloring.scale == Coloring::Scale::sequential;
+  if(bar) {
+    const int length = canvas.width / 2, x0 = (canvas.width - length) / 2;
+    for(int x = 0; x < length; ++x) {
+      const double t = (x + 0.5) / length;
+      canvas.fill(x0 + x, y, 1, bar_height, coloring.scale == Coloring::Scale::diverging ? sample(cool_warm, t) : sample(viridis, t));
+    }
+    canvas.text(number(coloring.lo), x0 - 3 * size, y + 1, size, 1);
+    canvas.text(number(coloring.hi), x0 + length + 3 * size, y + 1, size, 0);
+    if(coloring.scale == Coloring::Scale::diverging) canvas.fill(x0 + length / 2, y - size, 1, bar_height + 2 * size, Color{40, 40, 40});
+  }
+  if(coloring.emphasized_count > 0) {
+    const int x0 = (bar ? canvas.width * 7 / 8 : canvas.width / 2) - 6 * size;
+    canvas.fill(x0, y, bar_height, bar_height, flag_color);
+    canvas.text("+" + std::to_string(coloring.emphasized_count), x0 + bar_height + 3 * size, y + 1, size, 0);
+  }
+}
+
+} // namespace
+
+std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals, const Coloring& coloring,
+                       const Render_settings& settings)
 {
   if(points.empty()) throw Cli_error("nothing to render: no points");
+  const std::vector<Color>& colors = coloring.colors;
   constexpr int ss = 2; // supersampling factor
-  const int W = settings.width * ss, H = settings.height * ss;
+  const bool legend = (coloring.scale != Coloring::Scale::none || coloring.emphasized_count > 0) && settings.height >= 80;
+  const int legend_height = legend ? std::max(20, settings.height / 25) : 0;
+  const int W = settings.width * ss, H = (settings.height - legend_height) * ss; // the model's part of the picture
   const double pi = 3.14159265358979323846;
   const double az = settings.view.azimuth * pi / 180, el = settings.view.elevation * pi / 180;
   const Eigen::Vector3d to_camera(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
@@ -164,7 +316,9 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
   std::vector<float> depth(std::size_t(W) * std::size_t(H), -std::numeric_limits<float>::infinity());
   std::vector<Color> image(depth.size(), Color{255, 255, 255});
   for(std::size_t i = 0; i < n; ++i) {
-    const double radius = std::clamp(0.75 * settings.splat_scale * spacings[i] * scale, 1.0 * ss, 20.0 * ss);
+    // Flagged points are drawn over the others (a few spacings nearer the camera) and never thinner than 2 pixels.
+    const bool emphasized = !coloring.emphasized.empty() && coloring.emphasized[i];
+    const double radius = std::clamp(0.75 * settings.splat_scale * spacings[i] * scale, (emphasized ? 2.0 : 1.0) * ss, 20.0 * ss);
     const int r = int(std::ceil(radius));
     const double x = W / 2.0 + (view[i].x() - 0.5 * (lo.x() + hi.x())) * scale;
     const double y = H / 2.0 - (view[i].y() - 0.5 * (lo.y() + hi.y())) * scale;
@@ -176,7 +330,7 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
     const Color base = colors.empty() ? Color{200, 200, 200} : colors[i];
     Color c;
     for(int k = 0; k < 3; ++k) c[std::size_t(k)] = (unsigned char)std::lround(std::min(255.0, base[std::size_t(k)] * shade));
-    const float z = float(view[i].z());
+    const float z = float(view[i].z() + (emphasized ? 3 * spacings[i] : 0.0));
     const int cx = int(std::lround(x)), cy = int(std::lround(y));
     for(int dy = -r; dy <= r; ++dy)
       for(int dx = -r; dx <= r; ++dx) {
@@ -205,8 +359,8 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
         }
     }
   // Box-filter the supersampled image down.
-  std::vector<unsigned char> rgb(std::size_t(settings.width) * std::size_t(settings.height) * 3);
-  for(int y = 0; y < settings.height; ++y)
+  std::vector<unsigned char> rgb(std::size_t(settings.width) * std::size_t(settings.height) * 3, 255);
+  for(int y = 0; y < settings.height - legend_height; ++y)
     for(int x = 0; x < settings.width; ++x)
       for(int k = 0; k < 3; ++k) {
         int sum = 0;
@@ -215,6 +369,7 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
             sum += outlined[std::size_t(y * ss + sy) * std::size_t(W) + std::size_t(x * ss + sx)][std::size_t(k)];
         rgb[(std::size_t(y) * std::size_t(settings.width) + std::size_t(x)) * 3 + std::size_t(k)] = (unsigned char)(sum / (ss * ss));
       }
+  if(legend) draw_legend(Canvas{rgb, settings.width, settings.height}, settings.height - legend_height, coloring);
   std::string png;
   stbi_write_png_to_func([](void* context, void* data, int size) { static_cast<std::string*>(context)->append(static_cast<char*>(data), std::size_t(size)); },
                          &png, settings.width, settings.height, 3, rgb.data(), settings.width * 3);

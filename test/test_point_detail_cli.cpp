@@ -14,6 +14,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -82,8 +86,10 @@ TEST_F(Cli, details_writes_every_property_in_input_order_and_matches_the_library
   ASSERT_EQ(output.size(), input.size());
   ASSERT_TRUE(output.has_normal_map());
   auto dx = output.property_map<double>("detail_x").first, dy = output.property_map<double>("detail_y").first,
-       dz = output.property_map<double>("detail_z").first, mag = output.property_map<double>("detail_magnitude").first;
+       dz = output.property_map<double>("detail_z").first, mag = output.property_map<double>("detail_magnitude").first,
+       along_normal = output.property_map<double>("detail_normal").first;
   ASSERT_TRUE(output.property_map<double>("detail_magnitude").second);
+  ASSERT_TRUE(output.property_map<double>("detail_normal").second);
   ASSERT_TRUE(output.property_map<unsigned char>("red").second);
 
   std::vector<Vector> details(input.size());
@@ -91,12 +97,12 @@ TEST_F(Cli, details_writes_every_property_in_input_order_and_matches_the_library
   ASSERT_TRUE(CGAL_ext::compute_geometric_details(input, 12, CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.3, 1.8},
                                                   CGAL::make_property_map(details), CGAL::make_property_map(magnitude),
                                                   input.parameters()));
-  (void)details;
   std::size_t i = 0;
   for(auto it = output.begin(); it != output.end(); ++it, ++i) {
     ASSERT_EQ(output.point(*it), input.point(*(input.begin() + std::ptrdiff_t(i)))) << "order changed at " << i;
     EXPECT_DOUBLE_EQ(mag[*it], magnitude[i]);
     EXPECT_NEAR(std::sqrt(dx[*it] * dx[*it] + dy[*it] * dy[*it] + dz[*it] * dz[*it]), std::abs(magnitude[i]), 1e-12);
+    EXPECT_NEAR(along_normal[*it], details[i] * input.normal(*(input.begin() + std::ptrdiff_t(i))), 1e-12);
   }
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
   const auto report = nlohmann::json::parse(contents(path("report.json")));
@@ -138,6 +144,44 @@ TEST_F(Cli, normals_come_from_mesh_faces_or_are_estimated)
     if(std::string(source) == "mesh") EXPECT_EQ(up, out.size());
     else EXPECT_TRUE(up == out.size() || up == 0) << up; // one consistent orientation
   }
+
+  // Vertices on no face (three extra vertices on the surface, in no face) get estimated normals, turned to the
+  // mesh's side; the others keep the faces' normals.
+  {
+    std::ofstream off(path("unused.off"));
+    off.precision(17);
+    off << "OFF\n" << g.points.size() + 3 << " " << 2 * 29 * 29 << " 0\n";
+    for(const Point& p : g.points) off << p << "\n";
+    for(int m = 0; m < 3; ++m) off << g.points[std::size_t(100 + 200 * m)] + Vector(0.05, 0.05, 0) << "\n";
+    for(int j = 0; j < 29; ++j)
+      for(int i = 0; i < 29; ++i) {
+        const int a = j * 30 + i;
+        off << "3 " << a << " " << a + 1 << " " << a + 31 << "\n3 " << a << " " << a + 31 << " " << a + 30 << "\n";
+      }
+  }
+  const Program_run unused = run("details -i " + path("unused.off") + " -o " + path("out.ply") + " --report " + path("r.json"));
+  ASSERT_EQ(unused.exit_code, 0) << unused.output;
+  const auto report = nlohmann::json::parse(contents(path("r.json")));
+  EXPECT_EQ(report["normal_source"], "mesh");
+  EXPECT_EQ(report["estimated_normals"], 3);
+  CGAL::Point_set_3<Point> out;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("out.ply"), out));
+  ASSERT_EQ(out.size(), g.points.size() + 3);
+  for(auto it = out.begin(); it != out.end(); ++it) EXPECT_GT(out.normal(*it).z(), 0.9);
+
+  // A PLY mesh of triangle strips: its faces are not read; the program says so and estimates the normals.
+  {
+    std::ofstream ply(path("strips.ply"));
+    ply.precision(17);
+    ply << "ply\nformat ascii 1.0\nelement vertex " << g.points.size()
+        << "\nproperty double x\nproperty double y\nproperty double z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+    for(const Point& p : g.points) ply << p << "\n";
+    ply << "4 0 30 1 31\n";
+  }
+  const Program_run strips = run("details -i " + path("strips.ply") + " -o " + path("out.ply") + " --report " + path("r.json"));
+  ASSERT_EQ(strips.exit_code, 0) << strips.output;
+  EXPECT_NE(strips.output.find("triangle strips"), std::string::npos) << strips.output;
+  EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["normal_source"], "estimated");
 }
 
 TEST_F(Cli, bad_files_and_options_give_one_clear_line_and_no_output)
@@ -190,6 +234,56 @@ TEST_F(Cli, render_and_demo_write_pictures)
                        "scale_0.6.png", "scale_1.2.ply", "enhance_2.0.png", "enhance_3.0.ply", "edit_linear.png",
                        "edit_quadric.ply", "edit_cubic.png", "edit_stretch.png", "edit_stretch_upsampled.ply"})
     EXPECT_TRUE(fs::is_regular_file(dir / "demo" / f)) << f;
+}
+
+/// Pixels of the picture's model part (above the legend strip) near the flag colour (255, 0, 200) under any
+/// shading, and pixels there in the green-to-yellow half of the sequential map (values above its lowest).
+std::pair<std::size_t, std::size_t> flagged_and_coloured_pixels(const std::string& png)
+{
+  int width = 0, height = 0, channels = 0;
+  unsigned char* rgb = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()), int(png.size()), &width,
+                                             &height, &channels, 3);
+  if(!rgb) return {0, 0};
+  std::size_t flagged = 0, coloured = 0;
+  const int legend = std::max(20, height / 25);
+  for(int p = 0; p < width * (height - legend); ++p) {
+    const int r = rgb[3 * p], g = rgb[3 * p + 1], b = rgb[3 * p + 2];
+    flagged += r > 60 && g < 20 && b > 0.6 * r && b < 0.95 * r;
+    coloured += std::max({r, g, b}) - std::min({r, g, b}) > 40 && g > 50;
+  }
+  stbi_image_free(rgb);
+  return {flagged, coloured};
+}
+
+// Colour maps that never collapse: 1 % new points of an up-sampling stay visible, and a property that is zero
+// on 98.5 % of the points still colours the others (the 2nd-98th percentile range once made both blank).
+TEST_F(Cli, pictures_show_a_few_new_points_and_a_change_of_a_few_points)
+{
+  const std::size_t n = 4000;
+  const auto s = CGAL_ext::shapes::bumpy_sphere<Kernel>(n, 1.0, 0.02);
+  {
+    std::ofstream out(path("flags.ply"));
+    out << "ply\nformat ascii 1.0\nelement vertex " << n << "\nproperty double x\nproperty double y\nproperty double z\n"
+        << "property double nx\nproperty double ny\nproperty double nz\nproperty double inserted\nproperty double displacement\nend_header\n";
+    out.precision(17);
+    for(std::size_t i = 0; i < n; ++i)
+      out << s.points[i] << " " << s.normals[i] << " " << (i % 100 == 0 ? 1 : 0) << " " << (i % 67 == 0 ? 0.01 * double(i % 5) : 0.0) << "\n";
+  }
+  ASSERT_EQ(run("render -i " + path("flags.ply") + " -o " + path("new.png") + " --color-by inserted --width 400 --height 400").exit_code, 0);
+  ASSERT_EQ(run("render -i " + path("flags.ply") + " -o " + path("moved.png") + " --color-by displacement --width 400 --height 400").exit_code, 0);
+  ASSERT_EQ(run("render -i " + path("flags.ply") + " -o " + path("plain.png") + " --color-by none --width 400 --height 400").exit_code, 0);
+  const auto [flagged, mapped] = flagged_and_coloured_pixels(contents(path("new.png")));
+  const auto [unflagged, coloured] = flagged_and_coloured_pixels(contents(path("moved.png")));
+  const auto [none, grey] = flagged_and_coloured_pixels(contents(path("plain.png")));
+  std::printf("1 %% flagged: %zu flag pixels; 1.5 %% changed: %zu coloured pixels; plain: %zu\n", flagged, coloured, grey);
+  // About 20 of the 40 flagged points face the camera, each a disc at least 2 pixels in radius.
+  EXPECT_GT(flagged, 20u * 9);
+  EXPECT_EQ(none + grey, 0u);
+  // 48 of the 60 changed points have a non-zero value (the others are 0.01 * 0), about half of them face the
+  // camera; each covers a few pixels.
+  EXPECT_GT(coloured, 24u * 3);
+  EXPECT_EQ(unflagged, 0u);
+  (void)mapped; // the flag picture's splat edges blend pink into grey
 }
 
 TEST_F(Cli, scale_moves_the_region_only_and_matches_the_library)

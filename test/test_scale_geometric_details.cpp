@@ -1,4 +1,5 @@
 #include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/refit_normals.h>
 #include <CGAL_ext/scale_geometric_details.h>
 
 #include "test_support.h"
@@ -10,7 +11,9 @@
 
 #include <boost/property_map/property_map.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <map>
 #include <limits>
 
@@ -182,6 +185,53 @@ TEST(ScaleGeometricDetails, FlatPatchBumpsScaleByTheFactor)
       EXPECT_GT(patch.centre_amplitude_and_height(bulging).second, 2 * height);
     }
   }
+}
+
+// The output's normals follow the new shape: after s = 0, refit_normals gives the normals of the flattened
+// patch (its surface z(x, y) is what is left of the bumps: fitted here by the bump pattern's least-squares
+// amplitude), where the input's normals lean up to 11 degrees.
+TEST(ScaleGeometricDetails, RefittedNormalsFollowTheFlattenedSurface)
+{
+  const Bumpy_patch patch;
+  const auto roi = patch.interior();
+  std::vector<Point> points = patch.points;
+  std::vector<Vector> normals;
+  const double w = 2 * CGAL_PI / 8;
+  auto surface_normal = [w](double a, const Point& p) {
+    const double zx = a * w * std::cos(w * p.x()) * std::sin(w * p.y()), zy = a * w * std::sin(w * p.x()) * std::cos(w * p.y());
+    return Vector(-zx, -zy, 1) / std::sqrt(zx * zx + zy * zy + 1);
+  };
+  for(const Point& p : points) normals.push_back(surface_normal(patch.amplitude, p));
+  ASSERT_TRUE(scale_geometric_details(points, 10, roi, 0.0, settings_for(Detail_order::quadric)));
+  const double left = patch.centre_amplitude_and_height(points).first;
+  const std::vector<Vector> before = normals;
+  std::vector<std::size_t> moved;
+  for(std::size_t i = 0; i < points.size(); ++i)
+    if(points[i] != patch.points[i]) moved.push_back(i);
+  std::vector<std::size_t> all(points.size());
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  const std::size_t refitted = refit_normals(all, moved, 18,
+    CGAL::parameters::point_map(CGAL::make_property_map(points)).normal_map(CGAL::make_property_map(normals)));
+  EXPECT_GE(refitted, moved.size());
+  auto degrees = [](const Vector& a, const Vector& b) {
+    return std::acos(std::clamp(a * b / std::sqrt(a.squared_length() * b.squared_length()), -1.0, 1.0)) * 180 / CGAL_PI;
+  };
+  std::vector<double> error, stale;
+  for(std::size_t i = 0; i < points.size(); ++i)
+    if(std::abs(points[i].x()) < 10 && std::abs(points[i].y()) < 10) {
+      error.push_back(degrees(normals[i], surface_normal(left, points[i])));
+      stale.push_back(degrees(before[i], surface_normal(left, points[i])));
+    }
+  std::sort(error.begin(), error.end());
+  std::sort(stale.begin(), stale.end());
+  std::printf("s = 0: normal error median %.2f, 95th %.2f, max %.2f degrees (input normals: median %.2f, max %.2f)\n",
+              error[error.size() / 2], error[error.size() * 95 / 100], error.back(), stale[stale.size() / 2], stale.back());
+  EXPECT_LT(error[error.size() * 95 / 100], 3.0);
+  EXPECT_GT(stale[stale.size() / 2], 3 * error[error.size() / 2]);
+  // Outside the moved points and their neighbours, normals are untouched.
+  std::size_t untouched = 0;
+  for(std::size_t i = 0; i < points.size(); ++i) untouched += normals[i] == before[i];
+  EXPECT_EQ(untouched, points.size() - refitted);
 }
 
 TEST(ScaleGeometricDetails, BorderAnchoringByOrderKeepsACurvedRegionInShape)

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <iterator>
+#include <tuple>
 
 namespace {
 
@@ -195,6 +196,64 @@ TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
                                                    std::back_inserter(inserted), sphere.np());
   EXPECT_GT(result.spacing, 0.0);
   EXPECT_LT(inserted.size(), sphere.points.size() / 100);
+}
+
+TEST(UpsamplePointSet, TwoDensitiesGetAlmostNothingAndAStretchOnlyItsOwnGaps)
+{
+  // A plane sampled at two densities: x < 0 a jittered grid of spacing 1, x > 0 one of spacing 2.5. The
+  // sparse half is not a hole: with local spacings almost nothing is added (one global spacing, that of the
+  // dense half, fills the whole sparse half).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+  Oriented_points plane;
+  for(const auto& [x0, x1, h] : {std::tuple{-40.0, 0.0, 1.0}, std::tuple{0.0, 40.0, 2.5}})
+    for(double x = x0 + h / 2; x < x1; x += h)
+      for(double y = -40 + h / 2; y < 40; y += h) {
+        plane.points.emplace_back(x + h * jitter(rng), y + h * jitter(rng), 0);
+        plane.normals.emplace_back(0, 0, 1);
+      }
+  Inserted local, global;
+  CGAL_ext::upsample_point_set(plane.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(local), plane.np());
+  CGAL_ext::Upsampling_settings one_spacing;
+  one_spacing.detection.spacing = 1.15; // about the dense half's mean distance to 6 neighbours
+  CGAL_ext::upsample_point_set(plane.indices(), one_spacing, std::back_inserter(global), plane.np());
+  // Where the densities meet, the sparse side's first columns see the dense side in their neighbourhoods and
+  // get a few points (a grading, about one per point of the seam); nothing anywhere else.
+  std::size_t off_seam = 0;
+  for(const auto& [p, n] : local) off_seam += p.x() < -1 || p.x() > 6;
+  std::printf("two densities, %zu points: %zu new with local spacings (%zu off the seam), %zu with one spacing\n",
+              plane.points.size(), local.size(), off_seam, global.size());
+  EXPECT_EQ(off_seam, 0u);
+  EXPECT_LT(local.size(), plane.points.size() / 50);
+  EXPECT_GT(global.size(), plane.points.size() / 3);
+
+  // Stretch both halves' middle strip |y| < 10 to three times its width along y; everything moves (a rigid
+  // shift beyond the strip), but only the strip grew sparser than it was. With the spacings before the
+  // stretch, the fill stays in the strip and restores both densities.
+  std::vector<double> before(plane.points.size());
+  CGAL_ext::compute_local_spacing(plane.indices(), CGAL::make_property_map(before), plane.points_only());
+  Oriented_points stretched = plane;
+  for(Point& p : stretched.points) {
+    const double y = p.y() < -10 ? p.y() - 20 : p.y() > 10 ? p.y() + 20 : 3 * p.y();
+    p = Point(p.x(), y, 0);
+  }
+  Inserted filled;
+  const auto everything = stretched.indices();
+  CGAL_ext::upsample_point_set(stretched.indices(), everything, CGAL::make_property_map(before), CGAL_ext::Upsampling_settings(),
+                               std::back_inserter(filled), stretched.np());
+  std::size_t dense = 0, sparse = 0, outside = 0;
+  for(const auto& [p, n] : filled) {
+    if(std::abs(p.y()) > 31) ++outside;
+    else (p.x() < 0 ? dense : sparse) += 1;
+  }
+  std::printf("stretched strip: %zu new in the dense half, %zu in the sparse half, %zu outside the strip\n", dense, sparse, outside);
+  // The strip tripled: twice as many points missing as it had, 2 x 40 x 20 in the dense half, 2 x 16 x 8 in
+  // the sparse one.
+  EXPECT_GT(dense, 1600u * 6 / 10);
+  EXPECT_LT(dense, 1600u * 14 / 10);
+  EXPECT_GT(sparse, 256u * 6 / 10);
+  EXPECT_LT(sparse, 256u * 14 / 10);
+  EXPECT_LE(outside, (dense + sparse) / 50);
 }
 
 TEST(UpsamplePointSet, SequentialAndParallelAgree)

@@ -29,20 +29,23 @@ namespace CGAL_ext {
 
   Around each point, the neighbours are projected onto its tangent plane; the principal axes `e1`, `e2` of
   their covariance split the plane into four quarters around `+e1`, `-e1`, `+e2`, `-e2`. A quarter with no
-  sample within `2 h` (h the spacing) is *sparse*. A sparse direction is a hole boundary only if samples
+  sample within `2 h` (h the point's spacing) is *sparse*. A sparse direction is a hole boundary only if samples
   appear again along it (within 30 degrees) no farther than `max_hole_size` spacings: an open border, with
   nothing beyond it, is left alone.
+
+  By default h is local (`compute_local_spacing`): an adaptively or randomly sampled surface is measured
+  against its own density around each point, so its sparser parts are not taken for holes.
 */
 struct Sparse_direction_settings
 {
-  double spacing = 0;        ///< target spacing h; 0 = the median over points of their mean distance to 6 neighbours
+  double spacing = 0;        ///< target spacing h everywhere; 0 = each point's local spacing (`compute_local_spacing`)
   double max_hole_size = 6;  ///< in spacings, > 2: the widest gap that is a hole
 
   void validate() const
   {
     if(!(spacing >= 0) || !std::isfinite(spacing)) {
       std::ostringstream os;
-      os << "sparse directions: spacing must be > 0 (or 0 for the sampling's typical spacing), got " << spacing;
+      os << "sparse directions: spacing must be > 0 (or 0 for each point's local spacing), got " << spacing;
       throw Invalid_input(os.str());
     }
     if(!(max_hole_size > 2) || !std::isfinite(max_hole_size))
@@ -56,7 +59,7 @@ struct Sparse_direction_settings
 */
 struct Sparse_direction_summary
 {
-  double spacing = 0;                ///< the spacing used
+  double spacing = 0;                ///< the spacing used (local spacings: their median)
   std::size_t sparse_points = 0;     ///< points with at least one sparse direction (hole or open border)
   std::size_t hole_boundary_points = 0; ///< points with a sparse direction across which samples reappear
 };
@@ -86,27 +89,51 @@ double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
   return mean[mean.size() / 2];
 }
 
+/// Every point's local spacing: the median, over the point and its 15 nearest neighbours, of their mean
+/// distance to their 6 nearest neighbours. The median over a neighbourhood follows a change of density (an
+/// adaptive mesh, a random sampling) but not one point's luck; at a hole's rim it is that of the rim's side.
+template <typename ConcurrencyTag>
+std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tree& tree)
+{
+  const std::size_t n = std::size_t(positions.rows()), k = std::min<std::size_t>(6, n - 1),
+                    around = std::min<std::size_t>(16, n);
+  std::vector<double> mean(n, 0.0), spacing(n);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), k + 1, [&](int j, double d2) {
+      if(std::size_t(j) != i) mean[i] += std::sqrt(d2) / double(k);
+    });
+  });
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    thread_local std::vector<double> near;
+    near.clear();
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), around, [&](int j, double) { near.push_back(mean[std::size_t(j)]); });
+    std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
+    spacing[i] = near[near.size() / 2];
+  });
+  return spacing;
+}
+
 /// The hole gaps of the points `rows` (all when null; doc/upsampling.md, "Finding holes"): for each sparse
-/// quarter of a point's tangent plane, the first sample that reappears along it within `max_gap`, if any.
+/// quarter of a point's tangent plane (empty within twice the point's `spacing`), the first sample that
+/// reappears along it within `max_hole_size` spacings, if any. `spacing` has one entry per row of `positions`.
 /// `sparse` receives the examined points with a sparse quarter, increasing. Gaps come out ordered by point,
 /// then quarter, so any thread count gives the same list.
 template <typename ConcurrencyTag>
 std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
-                                std::size_t k, double spacing, double max_gap, const std::vector<int>* rows,
-                                std::vector<int>& sparse)
+                                std::size_t k, const std::vector<double>& spacing, double max_hole_size,
+                                const std::vector<int>* rows, std::vector<int>& sparse)
 {
   const std::size_t n = rows ? rows->size() : std::size_t(positions.rows());
-  // Enough candidates to see across a gap of max_gap: about the samples of that disc, counted in spacings (so
-  // the same sampling in other units finds the same holes).
-  const double gap_in_spacings = max_gap / spacing;
+  // Enough candidates to see across a gap of max_hole_size spacings: about the samples of that disc.
   const std::size_t reach = std::min<std::size_t>(std::size_t(positions.rows()),
-                                                  std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * gap_in_spacings * gap_in_spacings))));
-  const double empty_radius = 2 * spacing, cos_cone = std::cos(30 * 3.14159265358979323846 / 180);
+                                                  std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_hole_size * max_hole_size))));
+  const double cos_cone = std::cos(30 * 3.14159265358979323846 / 180);
   std::vector<std::array<int, 4>> across(n);
   std::vector<char> is_sparse(n, 0);
   for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
     across[r].fill(-1);
     const std::size_t i = rows ? std::size_t((*rows)[r]) : r;
+    const double empty_radius = 2 * spacing[i], max_gap = max_hole_size * spacing[i];
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
     thread_local std::vector<char> same_sheet; // whether a sample across a gap may continue this point's surface
@@ -191,12 +218,66 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&); \
+  EXTERN template std::vector<double> local_spacings<Tag>(const Matrix_n3&, const Position_tree&); \
   EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, \
-                                                       std::size_t, double, double, const std::vector<int>*, \
-                                                       std::vector<int>&);
+                                                       std::size_t, const std::vector<double>&, double, \
+                                                       const std::vector<int>*, std::vector<int>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES)
 
+inline double median(std::vector<double> values)
+{
+  std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(values.size() / 2), values.end());
+  return values[values.size() / 2];
+}
+
+/// `given` at every point when it is > 0, otherwise the local spacings, where a point among coincident copies
+/// (zero spacing) takes the median. Throws when most points coincide: then no spacing can be measured.
+template <typename ConcurrencyTag>
+std::vector<double> spacings(const Matrix_n3& positions, const Position_tree& tree, double given, const char* who)
+{
+  if(given > 0) return std::vector<double>(std::size_t(positions.rows()), given);
+  std::vector<double> spacing = local_spacings<ConcurrencyTag>(positions, tree);
+  const double typical = median(spacing);
+  if(!(typical > 0)) throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
+  for(double& h : spacing)
+    if(!(h > 0)) h = typical;
+  return spacing;
+}
+
 } // namespace internal
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  The local spacing of every point: the median, over the point and its 15 nearest neighbours, of their mean
+  distance to their 6 nearest neighbours (the measure of `CGAL::compute_average_spacing`, taken locally, with a
+  median against single points). Hole detection and up-sampling measure gaps against it; an edit passes the
+  spacing its points had before it to `upsample_point_set`, so that only what the edit stretched is filled.
+
+  \tparam SpacingMap a model of `WritablePropertyMap` with value type `double`
+
+  \param points the points (at least 2)
+  \param spacing_map receives each point's local spacing
+  \param np `point_map`, `geom_traits`
+  \return the median of the local spacings.
+  \throws Invalid_input for fewer than 2 points or non-finite coordinates.
+*/
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SpacingMap,
+          typename NamedParameters = CGAL::parameters::Default_named_parameters>
+double compute_local_spacing(const PointRange& points, SpacingMap spacing_map,
+                             const NamedParameters& np = CGAL::parameters::default_values())
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  constexpr const char* who = "compute_local_spacing";
+  const internal::Spatial_point_cloud cloud =
+    internal::make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
+  if(cloud.size() < 2) throw Invalid_input(std::string(who) + ": a spacing needs at least 2 points");
+  const internal::Position_tree tree(cloud.positions, ConcurrencyTag());
+  const std::vector<double> spacing = internal::local_spacings<ConcurrencyTag>(cloud.positions, tree);
+  const std::vector<int> row_of = cloud.spatial_index();
+  std::size_t i = 0;
+  for(const auto& item : points) put(spacing_map, item, spacing[std::size_t(row_of[i++])]);
+  return internal::median(spacing);
+}
 
 /*!
   \ingroup PkgCGALExtAlgorithms
@@ -237,12 +318,11 @@ Sparse_direction_summary detect_sparse_directions(const PointRange& points, unsi
   const internal::Matrix_n3 normals = internal::gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
   const internal::Position_tree tree(cloud.positions, ConcurrencyTag());
   Sparse_direction_summary summary;
-  summary.spacing = settings.spacing > 0 ? settings.spacing : internal::typical_spacing<ConcurrencyTag>(cloud.positions, tree);
-  if(!(summary.spacing > 0))
-    throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
+  const std::vector<double> spacing = internal::spacings<ConcurrencyTag>(cloud.positions, tree, settings.spacing, who);
+  summary.spacing = internal::median(spacing);
   std::vector<int> sparse;
-  const std::vector<internal::Hole_gap> gaps = internal::hole_gaps<ConcurrencyTag>(
-    cloud.positions, normals, tree, k, summary.spacing, settings.max_hole_size * summary.spacing, nullptr, sparse);
+  const std::vector<internal::Hole_gap> gaps =
+    internal::hole_gaps<ConcurrencyTag>(cloud.positions, normals, tree, k, spacing, settings.max_hole_size, nullptr, sparse);
   summary.sparse_points = sparse.size();
 
   // The nearest gap of each point gives its direction.

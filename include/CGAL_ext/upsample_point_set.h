@@ -14,6 +14,7 @@
 #include <CGAL/boost/graph/named_params_helper.h>
 #include <CGAL/tags.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iterator>
@@ -50,7 +51,7 @@ struct Upsampling_settings
 struct Upsampling_result
 {
   bool completed = false;     ///< false when the callback cancelled (nothing was written)
-  double spacing = 0;         ///< the target spacing used
+  double spacing = 0;         ///< the target spacing used (local spacings: their median)
   std::size_t inserted = 0;   ///< new points written to the output
   std::size_t rounds = 0;     ///< detection rounds that inserted points
   std::size_t hole_boundary_points = 0; ///< input points on hole boundaries (first round)
@@ -71,8 +72,8 @@ public:
   {
     return Key((long long)std::floor(p.x() / m_cell), (long long)std::floor(p.y() / m_cell), (long long)std::floor(p.z() / m_cell));
   }
-  /// Whether a point of the set lies within `cell` of `p`.
-  bool near(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points) const
+  /// Whether a point of the set lies within `radius` (at most `cell`) of `p`.
+  bool near(const Eigen::Vector3d& p, double radius, const std::vector<Eigen::Vector3d>& points) const
   {
     const Key c = key(p);
     for(long long dx = -1; dx <= 1; ++dx)
@@ -81,7 +82,7 @@ public:
           const auto it = m_members.find(Key(std::get<0>(c) + dx, std::get<1>(c) + dy, std::get<2>(c) + dz));
           if(it == m_members.end()) continue;
           for(int m : it->second)
-            if((points[std::size_t(m)] - p).norm() < m_cell) return true;
+            if((points[std::size_t(m)] - p).norm() < radius) return true;
         }
     return false;
   }
@@ -159,9 +160,16 @@ inline bool continues_surface(const Matrix_n3& samples, const Matrix_n3& normals
 
 namespace internal {
 
-template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename OutputIterator, typename NamedParameters>
-Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexRange* region, const Upsampling_settings& settings,
-                                          OutputIterator output, const NamedParameters& np)
+/// Stands for "no spacing map": the spacing comes from the settings or the points themselves.
+struct No_spacing_map {};
+
+/// With a spacing map, the points whose local spacing exceeds theirs by this factor are the stretched ones.
+constexpr double stretched_spacing = 1.25;
+
+template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename SpacingMap, typename OutputIterator,
+          typename NamedParameters>
+Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexRange* region, const SpacingMap& spacing_map,
+                                          const Upsampling_settings& settings, OutputIterator output, const NamedParameters& np)
 {
   using CGAL::parameters::choose_parameter;
   using CGAL::parameters::get_parameter;
@@ -182,10 +190,23 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   const Position_tree input_tree(cloud.positions, ConcurrencyTag());
 
   Upsampling_result result;
-  const double h = settings.detection.spacing > 0 ? settings.detection.spacing
-                                                  : typical_spacing<ConcurrencyTag>(cloud.positions, input_tree);
-  if(!(h > 0)) throw Invalid_input(std::string(who) + ": the points coincide (zero spacing); give a spacing");
-  result.spacing = h;
+  // The spacing each input point should have: the caller's (what it had before an edit), the settings', or
+  // its local spacing. New points take the one interpolated along their gap.
+  std::vector<double> all_spacing;
+  if constexpr(std::is_same<SpacingMap, No_spacing_map>::value) {
+    all_spacing = spacings<ConcurrencyTag>(cloud.positions, input_tree, settings.detection.spacing, who);
+  } else {
+    all_spacing.resize(cloud.size());
+    const std::vector<int> row_of = cloud.spatial_index();
+    std::size_t i = 0;
+    for(const auto& item : points) {
+      const double h = double(get(spacing_map, item));
+      if(!(h > 0) || !std::isfinite(h))
+        throw Invalid_input(std::string(who) + ": the spacing of point " + std::to_string(i) + " is not a positive number");
+      all_spacing[std::size_t(row_of[i++])] = h;
+    }
+  }
+  result.spacing = median(all_spacing);
   Progress progress(callback);
 
   // All samples so far: the input first, then the new ones (rows n..).
@@ -196,29 +217,41 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   // the first round, only the points that were sparse and the new points are examined again.
   std::vector<int> examine, sparse;
   if(region) examine = rows_of_indices(*region, cloud.spatial_index(), who, "region");
+  if constexpr(!std::is_same<SpacingMap, No_spacing_map>::value) {
+    // Only what grew sparser than it was: a region point whose local spacing is now more than 25 % above the
+    // given one (an edit stretched it). A part that moved rigidly, or a sampling's own irregular gaps, stay.
+    const std::vector<double> now = local_spacings<ConcurrencyTag>(cloud.positions, input_tree);
+    examine.erase(std::remove_if(examine.begin(), examine.end(),
+                                 [&](int row) { return !(now[std::size_t(row)] > stretched_spacing * all_spacing[std::size_t(row)]); }),
+                  examine.end());
+  }
   for(std::size_t round = 0; round < settings.max_rounds; ++round) {
     progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
     if(!progress.report(0.0)) return {};
     const Position_tree tree(all, ConcurrencyTag());
-    const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, h, settings.detection.max_hole_size * h,
+    const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, settings.detection.max_hole_size,
                                                                  round == 0 && !region ? nullptr : &examine, sparse);
     if(round == 0) {
       std::vector<char> boundary(n, 0);
       for(const Hole_gap& g : gaps) boundary[std::size_t(g.from)] = 1;
       result.hole_boundary_points = std::size_t(std::count(boundary.begin(), boundary.end(), 1));
     }
-    // Candidates along every gap at the target spacing; a candidate is kept only at least half a spacing from
-    // every sample and from the candidates kept before it.
-    Cell_set kept(0.5 * h);
+    // Candidates along every gap at the target spacing (interpolated between the gap's ends); a candidate is
+    // kept only at least half a spacing from every sample and from the candidates kept before it.
+    double widest = 0;
+    for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
+    Cell_set kept(0.5 * widest);
     std::vector<Eigen::Vector3d> round_points, round_normals;
+    std::vector<double> round_spacing;
     for(const Hole_gap& g : gaps) {
       const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
       const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
-      const int steps = int(std::lround((b - a).norm() / h));
+      const double ha = all_spacing[std::size_t(g.from)], hb = all_spacing[std::size_t(g.across)];
+      const int steps = int(std::lround((b - a).norm() / (0.5 * (ha + hb))));
       for(int s = 1; s < steps; ++s) {
-        const double t = double(s) / steps;
+        const double t = double(s) / steps, h = (1 - t) * ha + t * hb;
         const Eigen::Vector3d x = a + t * (b - a);
-        bool crowded = kept.near(x, round_points);
+        bool crowded = kept.near(x, 0.5 * h, round_points);
         if(!crowded)
           tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1, [&](int, double d2) { crowded = d2 < 0.25 * h * h; });
         if(crowded) continue;
@@ -226,24 +259,25 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
         round_points.push_back(x);
         Eigen::Vector3d normal = (1 - t) * na + t * nb;
         round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
+        round_spacing.push_back(h);
       }
     }
     if(round_points.empty()) break;
     ++result.rounds;
 
     // Relaxation (Jacobi steps, so the result does not depend on the thread count): repulsion in the tangent
-    // plane from every sample closer than 1.5 spacings, then back onto the surface of the input samples.
-    const double radius = 1.5 * h;
+    // plane from every sample closer than 1.5 spacings (the moving point's), then back onto the surface of the
+    // input samples.
     // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
     Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
     std::vector<char> settled(round_points.size(), 1);
-    const double stable_squared_move = 0.0625 * h * h; // a quarter spacing
     for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
       for(std::size_t m = 0; m < round_points.size(); ++m) moving.row(Eigen::Index(m)) = round_points[m].transpose();
       const Position_tree moving_tree(moving, ConcurrencyTag());
       std::vector<Eigen::Vector3d> moved(round_points.size()), turned(round_points.size());
       for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
         Eigen::Vector3d x = round_points[m], normal = round_normals[m];
+        const double h = round_spacing[m], radius = 1.5 * h;
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
           auto repel = [&push, &x, radius](const Matrix_n3* from) {
@@ -268,7 +302,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
           // does, and the point is dropped rather than written off the surface.
           Eigen::Vector3d again = x, again_normal = normal;
           project_onto_surface(cloud.positions, input_tree, 2 * k, h, again, again_normal);
-          settled[m] = (again - x).squaredNorm() <= stable_squared_move;
+          settled[m] = (again - x).squaredNorm() <= 0.0625 * h * h; // a quarter spacing
         }
         moved[m] = x;
         turned[m] = normal;
@@ -284,14 +318,17 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
     for(std::size_t m = 0; m < round_points.size(); ++m)
       if(keep[m]) {
         round_points[kept_count] = round_points[m];
-        round_normals[kept_count++] = round_normals[m];
+        round_normals[kept_count] = round_normals[m];
+        round_spacing[kept_count++] = round_spacing[m];
       }
     round_points.resize(kept_count);
     round_normals.resize(kept_count);
+    round_spacing.resize(kept_count);
     examine = sparse;
     for(std::size_t m = 0; m < round_points.size(); ++m) examine.push_back(int(n + new_points.size() + m));
     new_points.insert(new_points.end(), round_points.begin(), round_points.end());
     new_normals.insert(new_normals.end(), round_normals.begin(), round_normals.end());
+    all_spacing.insert(all_spacing.end(), round_spacing.begin(), round_spacing.end());
     all.conservativeResize(Eigen::Index(n + new_points.size()), 3);
     all_normals.conservativeResize(all.rows(), 3);
     for(std::size_t m = 0; m < new_points.size(); ++m) {
@@ -326,17 +363,25 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   `settings.max_rounds` times). Open borders, with nothing within `max_hole_size` beyond them, never grow.
   Input points are not moved.
 
+  Spacings are local: unless `settings.detection.spacing` sets one everywhere, every point is measured
+  against its own local spacing (`compute_local_spacing`), so the sparser parts of an adaptively or randomly
+  sampled surface are not filled; a new point takes the spacing of its gap's ends.
+
   \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
           unit normal (the input points are not repeated, so every output point is a new one).
 
   \param points the points, with normals (`normal_map`, required)
-  \param settings target spacing (0: the sampling's typical spacing, see `Sparse_direction_settings`), largest hole, neighbours,
-         relaxation
+  \param settings target spacing (0: each point's local spacing, see `Sparse_direction_settings`), largest hole,
+         neighbours, relaxation
   \param output receives the new points
   \param np `point_map`, `normal_map`, `callback` (false cancels; nothing is then written), `geom_traits`
 
   An overload takes `region`, the indices of the points whose gaps may be filled (say, the points an edit
   moved): gaps are looked for from those points only, so a sampling's own gaps elsewhere stay as they are.
+  Another also takes `spacing_map` (a `ReadablePropertyMap` to `double`): the spacing each point should have,
+  such as its local spacing before an edit (`compute_local_spacing` on the unedited points); then gaps are
+  looked for only from the region's points whose local spacing now exceeds it by more than 25 % (what the
+  edit stretched), and filled at that spacing (doc/upsampling.md, "Local spacing").
 
   \return the spacing used, the number of new points and rounds; converts to `false` (and nothing is
           written) when the callback cancelled.
@@ -349,7 +394,7 @@ Upsampling_result upsample_point_set(const PointRange& points, const Upsampling_
                                      const NamedParameters& np = CGAL::parameters::default_values())
 {
   return internal::upsample_point_set_impl<ConcurrencyTag>(points, static_cast<const std::vector<std::size_t>*>(nullptr),
-                                                           settings, output, np);
+                                                           internal::No_spacing_map(), settings, output, np);
 }
 
 /// \cond SKIP_IN_MANUAL
@@ -358,7 +403,16 @@ template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename Po
 Upsampling_result upsample_point_set(const PointRange& points, const IndexRange& region, const Upsampling_settings& settings,
                                      OutputIterator output, const NamedParameters& np = CGAL::parameters::default_values())
 {
-  return internal::upsample_point_set_impl<ConcurrencyTag>(points, &region, settings, output, np);
+  return internal::upsample_point_set_impl<ConcurrencyTag>(points, &region, internal::No_spacing_map(), settings, output, np);
+}
+
+template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename IndexRange,
+          typename SpacingMap, typename OutputIterator, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+Upsampling_result upsample_point_set(const PointRange& points, const IndexRange& region, const SpacingMap& spacing_map,
+                                     const Upsampling_settings& settings, OutputIterator output,
+                                     const NamedParameters& np = CGAL::parameters::default_values())
+{
+  return internal::upsample_point_set_impl<ConcurrencyTag>(points, &region, spacing_map, settings, output, np);
 }
 /// \endcond
 
