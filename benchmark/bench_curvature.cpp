@@ -1,11 +1,12 @@
 // Benchmark of mean-curvature estimation (issue: curvature, mean shift and SSPs): CGAL's Monge jet fitting and
 // the closed-form fit, on CGAL's scans and a 1M-point sampling of the armadillo, sequentially and in parallel,
-// beside CGAL's jet_estimate_normals in the same run. Then normal estimation for scans without normals
+// beside CGAL's jet_estimate_normals in the same run; CGAL's Monge path and the closed form against the
+// analytic curvature of a sphere, a cylinder and a torus, time beside accuracy. Then normal estimation for scans without normals
 // (issue: raw million-point scans): CGAL_ext::estimate_oriented_normals against CGAL's jet_estimate_normals +
 // mst_orient_normals, time and the fraction of normals pointing away from the mesh's, on every model under
 // DATA/meshes (vertices, and 100k samples of the surface) and on 1M samples of the armadillo.
 // Usage: bench_curvature [--quick] [--data DIR] [--out DIR] [--reps N]
-// Writes DIR/curvature_results.{csv,md} and DIR/normals_results.{csv,md}.
+// Writes DIR/curvature_results.{csv,md}, DIR/curvature_accuracy.csv and DIR/normals_results.{csv,md}.
 #include "bench_support.h"
 #include "cli_support.h"
 #include "point_io.h"
@@ -19,9 +20,11 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <numeric>
+#include <random>
 #include <tuple>
 
 namespace fs = std::filesystem;
@@ -74,6 +77,82 @@ void bench_model(const std::string& name, const Point_cloud& cloud, int reps, st
     CGAL::jet_estimate_normals<Tag>(idx, 18, CGAL::parameters::point_map(CGAL::make_property_map(points)).normal_map(CGAL::make_property_map(normals)));
   });
   add("CGAL jet_estimate_normals", 18, jet, 0.0);
+}
+
+struct Accuracy_row
+{
+  std::string shape, method;
+  std::size_t points;
+  Stats time;
+  double median_error, p95_error; // |H - H_true| / |H_true|
+};
+
+/// Samples of analytic surfaces with exact outward normals and their mean curvature (positive where the surface
+/// bends away from the normal): a unit sphere, a cylinder of radius 0.5 and height 4 (H = 1; points within 0.2 of
+/// its open ends are not scored) and a torus R = 1, r = 0.4 (H = (R + 2 r cos v) / (2 r (R + r cos v))),
+/// sampled uniformly by area.
+struct Analytic_shape
+{
+  std::string name;
+  Point_cloud cloud;
+  std::vector<double> curvature; // NaN: not scored
+};
+
+std::vector<Analytic_shape> analytic_shapes(std::size_t n)
+{
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double pi = 3.14159265358979323846;
+  std::vector<Analytic_shape> shapes(3);
+  shapes[0].name = "sphere r 1";
+  shapes[1].name = "cylinder r 0.5";
+  shapes[2].name = "torus R 1, r 0.4";
+  for(std::size_t i = 0; i < n; ++i) {
+    const double z = 1 - 2 * unit(rng), phi = 2 * pi * unit(rng), s = std::sqrt(1 - z * z);
+    shapes[0].cloud.points.emplace_back(s * std::cos(phi), s * std::sin(phi), z);
+    shapes[0].cloud.normals.emplace_back(s * std::cos(phi), s * std::sin(phi), z);
+    shapes[0].curvature.push_back(1.0);
+    const double a = 2 * pi * unit(rng), h = 4 * unit(rng) - 2;
+    shapes[1].cloud.points.emplace_back(0.5 * std::cos(a), 0.5 * std::sin(a), h);
+    shapes[1].cloud.normals.emplace_back(std::cos(a), std::sin(a), 0);
+    shapes[1].curvature.push_back(std::abs(h) < 1.8 ? 1.0 : std::nan(""));
+  }
+  const double R = 1, r = 0.4;
+  while(shapes[2].cloud.points.size() < n) {
+    const double u = 2 * pi * unit(rng), v = 2 * pi * unit(rng);
+    if(unit(rng) * (R + r) > R + r * std::cos(v)) continue; // area element (R + r cos v)
+    const double ring = R + r * std::cos(v);
+    shapes[2].cloud.points.emplace_back(ring * std::cos(u), ring * std::sin(u), r * std::sin(v));
+    shapes[2].cloud.normals.emplace_back(std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v));
+    shapes[2].curvature.push_back((R + 2 * r * std::cos(v)) / (2 * r * ring));
+  }
+  return shapes;
+}
+
+/// CGAL's mean-curvature path (CGAL::Monge_via_jet_fitting, through `Curvature_fitting::monge_jet_fitting`) and
+/// the closed-form fit at the same k = 15, in parallel: time and error against the analytic curvature.
+void bench_accuracy(std::size_t n, int reps, std::vector<Accuracy_row>& rows)
+{
+  for(const Analytic_shape& shape : analytic_shapes(n)) {
+    std::vector<std::size_t> idx(n);
+    std::iota(idx.begin(), idx.end(), std::size_t(0));
+    const auto np = CGAL::parameters::point_map(CGAL::make_property_map(shape.cloud.points))
+                      .normal_map(CGAL::make_property_map(shape.cloud.normals));
+    for(const auto& [method, fitting] : {std::pair{"CGAL Monge_via_jet_fitting", CGAL_ext::Curvature_fitting::monge_jet_fitting},
+                                         std::pair{"CGAL_ext closed form", CGAL_ext::Curvature_fitting::closed_form}}) {
+      std::vector<double> H(n);
+      const Stats time = measure(reps, [&] {
+        CGAL_ext::estimate_mean_curvature<CGAL::Parallel_tag>(idx, 15, fitting, CGAL::make_property_map(H), np);
+      });
+      std::vector<double> error;
+      for(std::size_t i = 0; i < n; ++i)
+        if(!std::isnan(shape.curvature[i])) error.push_back(std::abs(H[i] - shape.curvature[i]) / std::abs(shape.curvature[i]));
+      std::sort(error.begin(), error.end());
+      rows.push_back({shape.name, method, n, time, error[error.size() / 2], error[error.size() * 95 / 100]});
+      std::printf("%-18s %-28s %8zu pts  %8.3f s  relative error median %.2e, 95th %.2e\n", shape.name.c_str(), method, n,
+                  time.median, rows.back().median_error, rows.back().p95_error);
+    }
+  }
 }
 
 struct Normals_row
@@ -188,6 +267,23 @@ int main(int argc, char** argv)
   for(const Row& r : rows) {
     std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %u | %s | %.3f | %.3f-%.3f | %.2e | %.0f |\n", r.model.c_str(), r.points,
                   r.method.c_str(), r.k, r.mode.c_str(), r.time.median, r.time.min, r.time.max, r.error, r.peak_mib);
+    md << buf;
+  }
+
+  std::vector<Accuracy_row> accuracy;
+  bench_accuracy(quick ? 20000 : 200000, reps, accuracy);
+  std::ofstream accuracy_csv(out / "curvature_accuracy.csv");
+  accuracy_csv << "shape,points,method,k,median_s,min_s,max_s,median_relative_error,p95_relative_error\n";
+  for(const Accuracy_row& r : accuracy)
+    accuracy_csv << "\"" << r.shape << "\"," << r.points << ",\"" << r.method << "\",15," << r.time.median << "," << r.time.min
+                 << "," << r.time.max << "," << r.median_error << "," << r.p95_error << "\n";
+  md << "\n## Against the analytic curvature, beside CGAL's Monge_via_jet_fitting\n\n"
+     << "Random samples (uniform by area) with exact normals, k = 15 for both, parallel; error |H - H_true| / |H_true| "
+        "(the cylinder without its ends).\n\n"
+     << "| shape | points | method | median s | median error | 95th pct error |\n|---|---:|---|---:|---:|---:|\n";
+  for(const Accuracy_row& r : accuracy) {
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %.3f | %.2e | %.2e |\n", r.shape.c_str(), r.points, r.method.c_str(),
+                  r.time.median, r.median_error, r.p95_error);
     md << buf;
   }
   std::printf("wrote %s and %s\n", (out / "curvature_results.md").string().c_str(), (out / "curvature_results.csv").string().c_str());

@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 
 #include <cmath>
+#include <algorithm>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -409,6 +410,74 @@ TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
   }
   EXPECT_LE(other_leg[1], 0.10) << "geodesic";
   EXPECT_GT(other_leg[0], 2 * other_leg[1]) << "euclidean " << other_leg[0] << ", geodesic " << other_leg[1];
+}
+
+// The strength field and the propagated rotations against their closed forms on the U tube (region: both legs
+// above z = 0.7, handle: the top of the +x leg above z = 0.9, turned 1 radian about y). Euclidean: d0, d1 by
+// brute force over the sample points, f = 3 t^2 - 2 t^3 with t = d0 / (d0 + d1), to rounding. Geodesic: the
+// distances along the tube's surface, d0 = z - 0.7 on either leg, d1 = 0.9 - z on the handle's leg and
+// z + pi 0.25 + 0.9 on the other (down, round the bend, up); the graph's paths zigzag a little longer. The
+// rotation is nlerp(identity, q, f): its angle is 2 atan2(f sin(1/2), 1 - f + f cos(1/2)). (Break tried:
+// beta(t) = t misses the Euclidean strengths by 0.096 and the geodesic ones beyond the bend by 0.065.)
+TEST(DetailPreservingDeformation, StrengthAndPropagatedRotationFollowTheirClosedForms)
+{
+  const auto tube = u_tube(0.25, 0.1, 1.0, 0.02);
+  const std::size_t n = tube.points.size();
+  std::vector<std::size_t> all(n), handle;
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  for(std::size_t i = 0; i < n; ++i)
+    if(tube.points[i].x() > 0 && tube.points[i].z() > 0.9) handle.push_back(i);
+  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(tube.points)).normal_map(CGAL::make_property_map(tube.normals));
+  const double angle = 1.0;
+  const auto [R, shift] = turn_about(Eigen::Vector3d(0.25, 0, 0.95), Eigen::Vector3d(0, 1, 0), angle);
+  auto beta = [](double t) { return 3 * t * t - 2 * t * t * t; };
+  for(auto distance : {CGAL_ext::Strength_distance::euclidean, CGAL_ext::Strength_distance::geodesic}) {
+    Settings settings;
+    settings.strength_distance = distance;
+    Deformation d(all, settings, np);
+    for(std::size_t i = 0; i < n; ++i)
+      if(tube.points[i].z() >= 0.7) d.insert_roi_point(i);
+    d.insert_handle_points(d.create_handle_group(), handle);
+    d.set_handle_transform(0, R, shift);
+    ASSERT_TRUE(d.deform());
+    const std::size_t count = d.number_of_sample_points();
+    double worst_strength = 0, worst_angle = 0, worst_other_leg = 0;
+    std::size_t checked = 0;
+    for(std::size_t s = 0; s < count; ++s) {
+      if(!d.is_roi_sample_point(s) || d.is_handle_sample_point(s)) continue;
+      const Eigen::Vector3d p = d.sample_position(s);
+      double expected;
+      if(distance == CGAL_ext::Strength_distance::euclidean) {
+        double d0 = INFINITY, d1 = INFINITY;
+        for(std::size_t o = 0; o < count; ++o) {
+          const double to = (d.sample_position(o) - p).norm();
+          if(!d.is_roi_sample_point(o)) d0 = std::min(d0, to);
+          else if(d.is_handle_sample_point(o)) d1 = std::min(d1, to);
+        }
+        expected = beta(d0 / (d0 + d1));
+        worst_strength = std::max(worst_strength, std::abs(d.strength(s, 0) - expected));
+      } else {
+        const double d0 = p.z() - 0.7, d1 = p.x() > 0 ? std::max(0.0, 0.9 - p.z()) : p.z() + CGAL_PI * 0.25 + 0.9;
+        expected = beta(std::clamp(d0 / (d0 + d1), 0.0, 1.0));
+        (p.x() > 0 ? worst_strength : worst_other_leg) =
+          std::max(p.x() > 0 ? worst_strength : worst_other_leg, std::abs(d.strength(s, 0) - expected));
+      }
+      const double f = d.strength(s, 0);
+      const double expected_angle = 2 * std::atan2(f * std::sin(angle / 2), 1 - f + f * std::cos(angle / 2));
+      worst_angle = std::max(worst_angle, std::abs(Eigen::AngleAxisd(d.propagated_rotation(s)).angle() - expected_angle));
+      ++checked;
+    }
+    std::printf("%s: %zu region sample points; strength off its closed form by at most %.2g (other leg %.2g), "
+                "rotation angle by %.2g\n", distance == CGAL_ext::Strength_distance::euclidean ? "euclidean" : "geodesic",
+                checked, worst_strength, worst_other_leg, worst_angle);
+    EXPECT_GT(checked, 20u);
+    EXPECT_LT(worst_angle, 1e-9);
+    if(distance == CGAL_ext::Strength_distance::euclidean) EXPECT_LT(worst_strength, 1e-12);
+    else {
+      EXPECT_LT(worst_strength, 0.1);   // the handle's leg: the graph's paths are a little longer than the surface's
+      EXPECT_LT(worst_other_leg, 0.02); // beyond the bend: f stays near 0 (Euclidean distances would give ~0.08)
+    }
+  }
 }
 
 TEST(DetailPreservingDeformation, InteractiveStepsEqualAFreshSolve)

@@ -1,4 +1,5 @@
 #include <CGAL_ext/compute_mean_shift_modes.h>
+#include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/generated_shapes.h>
 
 #include "test_support.h"
@@ -62,6 +63,65 @@ TEST(MeanShift, CubeModesStayOnTheirFace)
     EXPECT_GT(run.result.mean_iterations, 1.0);
     EXPECT_LE(run.result.max_iterations, settings.max_iterations);
   }
+}
+
+// Against a brute-force mean shift: with k = n - 1 every sample is a candidate of every mode, so the modes
+// are those of the textbook joint spatial-range mean shift over all samples, with the features
+// (x / h_s, n / h_r, c H / h_r), H the closed-form curvature on the same neighbours and the scales the run
+// reports. Each mode is also a fixed point: one more step over all samples moves it by less than 1e-9.
+// (Break tried: a range kernel of exp(-dr2) instead of exp(-dr2 / 2) misses by 3.4 bandwidths.)
+TEST(MeanShift, ModesAreFixedPointsOfABruteForceMeanShift)
+{
+  const auto s = shapes::bumpy_sphere<Kernel>(150, 1.0, 0.08, 2.0);
+  const std::size_t n = s.points.size();
+  const unsigned k = unsigned(n - 1);
+  Mean_shift_settings settings;
+  settings.tolerance = 1e-12;
+  settings.max_iterations = 2000;
+  const Outcome run = modes_of(s, settings, k);
+  ASSERT_TRUE(run.result);
+  std::vector<std::size_t> idx(n);
+  std::iota(idx.begin(), idx.end(), std::size_t(0));
+  std::vector<double> H(n);
+  ASSERT_TRUE(estimate_mean_curvature(idx, k, Curvature_fitting::closed_form, CGAL::make_property_map(H),
+                                      CGAL::parameters::point_map(CGAL::make_property_map(s.points))
+                                        .normal_map(CGAL::make_property_map(s.normals))));
+  const double hs = run.result.spatial_bandwidth, hr = run.result.range_bandwidth, c = run.result.curvature_scale;
+  using Row = Eigen::Matrix<double, 1, 7>;
+  std::vector<Row> features(n);
+  for(std::size_t i = 0; i < n; ++i)
+    features[i] << s.points[i].x() / hs, s.points[i].y() / hs, s.points[i].z() / hs, s.normals[i].x() / hr,
+      s.normals[i].y() / hr, s.normals[i].z() / hr, c * H[i] / hr;
+  auto step = [&](const Row& mode) {
+    Row sum = Row::Zero();
+    double weights = 0;
+    for(const Row& q : features) {
+      const double w = std::exp(-0.5 * ((mode.head<3>() - q.head<3>()).squaredNorm() + (mode.tail<4>() - q.tail<4>()).squaredNorm()));
+      sum += w * q;
+      weights += w;
+    }
+    return Row(sum / weights);
+  };
+  double worst_match = 0, worst_shift = 0;
+  for(std::size_t i = 0; i < n; ++i) {
+    Row reference = features[i];
+    for(int it = 0; it < 2000; ++it) {
+      const Row next = step(reference);
+      const double moved = (next - reference).norm();
+      reference = next;
+      if(moved < 1e-13) break;
+    }
+    const Mode& m = run.modes[i];
+    Row mode;
+    mode << m.position.x() / hs, m.position.y() / hs, m.position.z() / hs, m.normal.x() / hr, m.normal.y() / hr,
+      m.normal.z() / hr, c * m.mean_curvature / hr;
+    worst_match = std::max(worst_match, (mode - reference).norm());
+    worst_shift = std::max(worst_shift, (step(mode) - mode).norm());
+  }
+  std::printf("mean shift on %zu points: modes within %.2g bandwidths of the brute-force ones, one more step moves "
+              "them by at most %.2g\n", n, worst_match, worst_shift);
+  EXPECT_LT(worst_match, 1e-6);
+  EXPECT_LT(worst_shift, 1e-9);
 }
 
 TEST(MeanShift, AutomaticScalesFollowTheSpacingAndCurvature)

@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -73,7 +74,7 @@ protected:
 
 } // namespace
 
-TEST_F(Cli, details_writes_every_property_in_input_order_and_matches_the_library)
+TEST_F(Cli, details_wiring_every_property_in_input_order_as_the_library_computes_it_and_the_relief)
 {
   const std::string in = write_sphere_ply("in.ply");
   const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --order cubic --lambda 0.3 --mu 1.8 -k 12 --png " +
@@ -104,6 +105,11 @@ TEST_F(Cli, details_writes_every_property_in_input_order_and_matches_the_library
     EXPECT_NEAR(std::sqrt(dx[*it] * dx[*it] + dy[*it] * dy[*it] + dz[*it] * dz[*it]), std::abs(magnitude[i]), 1e-12);
     EXPECT_NEAR(along_normal[*it], details[i] * input.normal(*(input.begin() + std::ptrdiff_t(i))), 1e-12);
   }
+  // Beyond the wiring, an independent oracle: the written delta . n follows the sphere's known bump height.
+  const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.02);
+  std::vector<double> written;
+  for(auto it = output.begin(); it != output.end(); ++it) written.push_back(along_normal[*it]);
+  EXPECT_GT(pearson(written, shape.bump_height), 0.8);
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
   const auto report = nlohmann::json::parse(contents(path("report.json")));
   EXPECT_EQ(report["points"], 3000);
@@ -286,7 +292,7 @@ TEST_F(Cli, pictures_show_a_few_new_points_and_a_change_of_a_few_points)
   (void)mapped; // the flag picture's splat edges blend pink into grey
 }
 
-TEST_F(Cli, scale_moves_the_region_only_and_matches_the_library)
+TEST_F(Cli, scale_wiring_moves_the_region_only_as_the_library_does)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   { std::ofstream(path("anchors.txt")) << "# anchors\n0\n\n1 # the first two points\n"; }
@@ -336,6 +342,24 @@ TEST_F(Cli, scale_moves_the_region_only_and_matches_the_library)
   for(auto it = same.begin(); it != same.end(); ++it, ++i)
     EXPECT_LT(std::sqrt(CGAL::squared_distance(same.point(*it), input.point(*(input.begin() + std::ptrdiff_t(i))))), 1e-9);
   EXPECT_EQ(nlohmann::json::parse(contents(path("e.json")))["roi_points"], 3000);
+
+  // An independent oracle for enhance: the sphere's bumps (known height field) come out twice as high at s = 2.
+  ASSERT_EQ(run("enhance -i " + in + " -o " + path("e2.ply") + " -s 2").exit_code, 0);
+  CGAL::Point_set_3<Point> enhanced;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("e2.ply"), enhanced));
+  const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.02);
+  auto amplitude = [&](const CGAL::Point_set_3<Point>& set) {
+    std::vector<double> radius;
+    for(auto it = set.begin(); it != set.end(); ++it) radius.push_back(std::sqrt((set.point(*it) - CGAL::ORIGIN).squared_length()));
+    const double mean = std::accumulate(radius.begin(), radius.end(), 0.0) / double(radius.size());
+    double rh = 0, hh = 0;
+    for(std::size_t m = 0; m < radius.size(); ++m) {
+      rh += (radius[m] - mean) * shape.bump_height[m];
+      hh += shape.bump_height[m] * shape.bump_height[m];
+    }
+    return rh / hh;
+  };
+  EXPECT_NEAR(amplitude(enhanced) / amplitude(input), 2.0, 0.3);
 }
 
 TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
@@ -393,7 +417,7 @@ TEST_F(Cli, curvature_of_a_sphere_is_one_over_its_radius)
   EXPECT_NE(bad.output.find("at least 5"), std::string::npos) << bad.output;
 }
 
-TEST_F(Cli, simplify_writes_surfels_that_cover_every_point_once_and_match_the_library)
+TEST_F(Cli, simplify_wiring_surfels_cover_every_point_once_as_the_library_makes_them)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   const Program_run r = run("simplify -i " + in + " -o " + path("ssp.ply") + " --max-cluster-size 20 --clusters " +
@@ -450,7 +474,7 @@ TEST_F(Cli, simplify_writes_surfels_that_cover_every_point_once_and_match_the_li
   expect_only({"in.ply", "ssp.ply", "clusters.ply", "ssp.png", "ssp.json"});
 }
 
-TEST_F(Cli, details_on_mean_shift_neighbourhoods_match_the_library)
+TEST_F(Cli, details_wiring_mean_shift_neighbourhoods_as_the_library)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --neighbors mean-shift --report " + path("r.json"));
@@ -474,7 +498,7 @@ TEST_F(Cli, details_on_mean_shift_neighbourhoods_match_the_library)
   EXPECT_NE(bad.output.find("delaunay"), std::string::npos) << bad.output;
 }
 
-TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
+TEST_F(Cli, edit_wiring_json_as_the_library_does_and_handles_on_their_transform)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   {
@@ -517,6 +541,22 @@ TEST_F(Cli, edit_by_json_moves_the_region_as_the_library_does)
     return std::vector<Point>(points.points().begin(), points.points().end());
   };
   EXPECT_LT(max_distance(std::vector<Point>(output.points().begin(), output.points().end()), library_edit(settings)), 1e-12);
+  // Beyond the wiring: handle points end on their transform, the fixed part does not move.
+  {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Vector3d t = Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2);
+    double handle_error = 0, fixed_motion = 0;
+    auto in_it = input.begin();
+    for(auto it = output.begin(); it != output.end(); ++it, ++in_it) {
+      const Point& p = input.point(*in_it);
+      const Eigen::Vector3d target = R * Eigen::Vector3d(p.x(), p.y(), p.z()) + t;
+      const Point& q = output.point(*it);
+      if(status.first[*it] == 2) handle_error = std::max(handle_error, (Eigen::Vector3d(q.x(), q.y(), q.z()) - target).norm());
+      if(status.first[*it] == 0) fixed_motion = std::max(fixed_motion, std::sqrt(CGAL::squared_distance(p, q)));
+    }
+    EXPECT_LT(handle_error, 1e-12);
+    EXPECT_EQ(fixed_motion, 0.0);
+  }
   std::size_t marked_roi = 0, marked_handles = 0;
   for(auto i : output) {
     marked_roi += status.first[i] >= 1;
