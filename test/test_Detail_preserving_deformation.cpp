@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -362,6 +363,23 @@ CGAL_ext::shapes::Oriented_sample<Kernel> u_tube(double spread, double radius, d
   return out;
 }
 
+/// An edit of a U tube: the region above z = 0.7, the handle group `handle` under (R, shift), strengths by
+/// `distance`. `all` indexes the tube's points.
+std::unique_ptr<Deformation> u_tube_edit(const std::vector<std::size_t>& all, const CGAL_ext::shapes::Oriented_sample<Kernel>& tube,
+                                         const std::vector<std::size_t>& handle, CGAL_ext::Strength_distance distance,
+                                         const Eigen::Matrix3d& R, const Eigen::Vector3d& shift)
+{
+  Settings settings;
+  settings.strength_distance = distance;
+  auto d = std::make_unique<Deformation>(
+    all, settings, CGAL::parameters::point_map(CGAL::make_property_map(tube.points)).normal_map(CGAL::make_property_map(tube.normals)));
+  for(std::size_t i : all)
+    if(tube.points[i].z() >= 0.7) d->insert_roi_point(i);
+  d->insert_handle_points(d->create_handle_group(), handle);
+  d->set_handle_transform(0, R, shift);
+  return d;
+}
+
 } // namespace
 
 TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
@@ -374,7 +392,6 @@ TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
   const std::size_t n = tube.points.size();
   std::vector<std::size_t> all(n);
   std::iota(all.begin(), all.end(), std::size_t(0));
-  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(tube.points)).normal_map(CGAL::make_property_map(tube.normals));
   Eigen::Vector3d handle_centre = Eigen::Vector3d::Zero();
   std::vector<std::size_t> handle;
   for(std::size_t i = 0; i < n; ++i)
@@ -386,13 +403,8 @@ TEST(DetailPreservingDeformation, GeodesicStrengthDoesNotLeakIntoANearbyLeg)
   const auto [R, shift] = turn_about(handle_centre, Eigen::Vector3d(0, 1, 0), 60 * CGAL_PI / 180, Eigen::Vector3d(0.2, 0, 0.1));
   double other_leg[2], handle_moved = 0;
   for(auto distance : {CGAL_ext::Strength_distance::euclidean, CGAL_ext::Strength_distance::geodesic}) {
-    Settings settings;
-    settings.strength_distance = distance;
-    Deformation d(all, settings, np);
-    for(std::size_t i = 0; i < n; ++i)
-      if(tube.points[i].z() >= 0.7) d.insert_roi_point(i);
-    d.insert_handle_points(d.create_handle_group(), handle);
-    d.set_handle_transform(0, R, shift);
+    const auto edit = u_tube_edit(all, tube, handle, distance, R, shift);
+    Deformation& d = *edit;
     ASSERT_TRUE(d.deform());
     d.diffuse();
     double moved = 0;
@@ -427,18 +439,12 @@ TEST(DetailPreservingDeformation, StrengthAndPropagatedRotationFollowTheirClosed
   std::iota(all.begin(), all.end(), std::size_t(0));
   for(std::size_t i = 0; i < n; ++i)
     if(tube.points[i].x() > 0 && tube.points[i].z() > 0.9) handle.push_back(i);
-  const auto np = CGAL::parameters::point_map(CGAL::make_property_map(tube.points)).normal_map(CGAL::make_property_map(tube.normals));
   const double angle = 1.0;
   const auto [R, shift] = turn_about(Eigen::Vector3d(0.25, 0, 0.95), Eigen::Vector3d(0, 1, 0), angle);
   auto beta = [](double t) { return 3 * t * t - 2 * t * t * t; };
   for(auto distance : {CGAL_ext::Strength_distance::euclidean, CGAL_ext::Strength_distance::geodesic}) {
-    Settings settings;
-    settings.strength_distance = distance;
-    Deformation d(all, settings, np);
-    for(std::size_t i = 0; i < n; ++i)
-      if(tube.points[i].z() >= 0.7) d.insert_roi_point(i);
-    d.insert_handle_points(d.create_handle_group(), handle);
-    d.set_handle_transform(0, R, shift);
+    const auto edit = u_tube_edit(all, tube, handle, distance, R, shift);
+    Deformation& d = *edit;
     ASSERT_TRUE(d.deform());
     const std::size_t count = d.number_of_sample_points();
     double worst_strength = 0, worst_angle = 0, worst_other_leg = 0;
