@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up, builds in Release and runs the whole benchmark harness on CGAL's real scans and on 100k, 1M
 # and 4M-point samplings of the armadillo surface; writes benchmark/RESULTS.md, benchmark/results.csv,
-# benchmark/scaling.png and each stage's *_results.{md,csv}. About 25 minutes on 2 cores.
+# benchmark/scaling.png and each stage's *_results.{md,csv}. About 30 minutes on 2 cores.
 # Usage: scripts/run_benchmarks.sh [--quick]
 #   --quick: small sizes, one repetition, results under build/benchmark/quick (what CI runs so the harness
 #            cannot rot; the committed figures are never overwritten by it).

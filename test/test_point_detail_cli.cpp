@@ -362,6 +362,39 @@ TEST_F(Cli, scale_wiring_moves_the_region_only_as_the_library_does)
   EXPECT_NEAR(amplitude(enhanced) / amplitude(input), 2.0, 0.3);
 }
 
+// An independent oracle for scale: the sphere's bumps (known height field h) in the middle of a cap scaled by
+// s = 2 grow by about 2. The cap's own bulge changes too, so the amplitude is the coefficient of h in a
+// least-squares fit of the radial deviation by 1, z and h over the cap's middle. These bumps are fine (4
+// spacings): the smooth surface the border spans (s = 0) keeps about a quarter of them, so they grow by
+// 0.26 + 2 x 0.74 = 1.74.
+TEST_F(Cli, scale_doubles_bumps_of_known_height)
+{
+  const std::string in = write_sphere_ply("in.ply", 6000);
+  ASSERT_EQ(run("scale -i " + in + " -o " + path("s2.ply") + " -s 2 --roi sphere:0,0,1,1.0").exit_code, 0);
+  CGAL::Point_set_3<Point> input, output;
+  ASSERT_TRUE(CGAL::IO::read_point_set(in, input));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("s2.ply"), output));
+  const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(6000, 1.0, 0.02);
+  auto amplitude = [&](const CGAL::Point_set_3<Point>& set) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    std::size_t m = 0;
+    for(auto it = set.begin(); it != set.end(); ++it, ++m) {
+      const Point& p = set.point(*it);
+      if(shape.points[m].z() < 0.85) continue;
+      const Eigen::Vector3d row(1, shape.points[m].z(), shape.bump_height[m]);
+      normal += row * row.transpose();
+      rhs += row * (std::sqrt((p - CGAL::ORIGIN).squared_length()) - 1);
+    }
+    return Eigen::Vector3d(normal.ldlt().solve(rhs))(2);
+  };
+  const double before = amplitude(input), after = amplitude(output);
+  std::printf("scale -s 2: bump amplitude %.4f -> %.4f (x %.3f)\n", before, after, after / before);
+  EXPECT_NEAR(before, 1.0, 0.02);
+  EXPECT_GT(after / before, 1.6);
+  EXPECT_LT(after / before, 2.2);
+}
+
 TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
 {
   const std::string in = write_sphere_ply("in.ply", 500);
