@@ -16,6 +16,8 @@
 
 #include <CGAL/Point_set_3.h>
 
+#include <boost/property_map/function_property_map.hpp>
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -23,6 +25,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -399,6 +402,15 @@ const std::vector<Row>& catalogue()
        settings.detection.spacing = -1;
        std::vector<std::pair<Point, Vector>> inserted;
        EXPECT_INVALID_INPUT(upsample_point_set(set, settings, std::back_inserter(inserted), set.parameters()), "spacing");
+       // A spacing map (the spacings before an edit) with a value that is not a positive number.
+       std::vector<double> before(set.size(), 0.01);
+       before[3] = 0;
+       std::vector<std::size_t> all(set.size());
+       std::iota(all.begin(), all.end(), std::size_t(0));
+       EXPECT_INVALID_INPUT(upsample_point_set(set, all, boost::make_function_property_map<Point_set::Index, double>(
+                                                            [&](Point_set::Index i) { return before[std::size_t(i)]; }),
+                                               Upsampling_settings(), std::back_inserter(inserted), set.parameters()),
+                            "the spacing of point 3 is not a positive number");
      }},
     {"diffuse_into_another_point_set", [] {
        Point_set set = sphere();
