@@ -1,8 +1,14 @@
 #!/usr/bin/env python3
-"""Checks that every measured figure README.md quotes in its benchmark headlines comes from a committed result
-file of the harness: each number with a decimal point, or of three digits or more, in the table's "ours" column
-must appear in benchmark/RESULTS.md or one of benchmark/*_results.md, to the digits quoted (0.97 matches
-0.970 or 0.9712; thousands separators are ignored).
+"""Checks that every measured figure README.md and the manual quote from the benchmark comes from a committed
+result file of the harness: each number with a decimal point, or of three digits or more, in README's headline
+table ("ours" column) and between the markers
+
+    <!-- figures from benchmark/ -->  ...  <!-- end of figures from benchmark/ -->
+
+in doc/*.md must appear in benchmark/RESULTS.md or one of benchmark/*_results.md, to the digits quoted (0.97
+matches 0.970 or 0.9712; thousands separators are ignored). The ends of a range ("0.05-0.17 s") are figures
+like any other; a ratio the text derives from figures ("1.4 times", "2x"), a size ("416k", "1.66M"), code and
+links are exempt.
 
 Usage: scripts/check_quoted_figures.py [REPOSITORY]   (exit status 1 and the missing figures when one is not found)
 """
@@ -12,11 +18,16 @@ import re
 import sys
 
 NUMBER = re.compile(r"(?<![\w.])\d[\d,]*(?:\.\d+)?")
+EXEMPT = re.compile(r"\s*(?:times\b|x\b|×)|[kM]\b")  # a ratio ("2.5 times", "3x") or a size ("416k", "1.66M")
+BLOCK = re.compile(r"<!-- figures from benchmark/ -->(.*?)<!-- end of figures from benchmark/ -->", re.S)
+CODE_OR_LINK = re.compile(r"`[^`]*`|\]\([^)]*\)")
 
 
-def numbers(text):
+def numbers(text, skip_ratios=False):
     found = set()
     for match in NUMBER.finditer(text):
+        if skip_ratios and EXEMPT.match(text, match.end()):
+            continue
         token = match.group(0).rstrip(",")
         value = token.replace(",", "")
         if "." in value or len(value) >= 3:
@@ -55,6 +66,14 @@ def main():
         for decimals in range(5):
             available.add(f"{round(float(value), decimals):.{decimals}f}")
     missing = []
+    for page in sorted(glob.glob(os.path.join(root, "doc", "*.md"))):
+        with open(page) as f:
+            blocks = BLOCK.findall(f.read())
+        for block in blocks:
+            for line in block.splitlines():
+                for value in sorted(numbers(CODE_OR_LINK.sub("", line), skip_ratios=True)):
+                    if value not in available:
+                        missing.append(f"{value} (doc/{os.path.basename(page)}: {line.strip()[:70]})")
     for cells in rows:
         if len(cells) < 2:
             continue
@@ -62,11 +81,11 @@ def main():
             if value not in available:
                 missing.append(f"{value} ({cells[0]})")
     if missing:
-        print("check_quoted_figures.py: README.md quotes figures that no committed result file holds:", file=sys.stderr)
+        print("check_quoted_figures.py: README.md or doc/ quotes figures that no committed result file holds:", file=sys.stderr)
         for m in missing:
             print("  " + m, file=sys.stderr)
         sys.exit(1)
-    print(f"check_quoted_figures.py: every figure of README.md's {len(rows)} headline rows is in benchmark/")
+    print(f"check_quoted_figures.py: every figure of README.md's {len(rows)} headline rows and of doc/'s marked blocks is in benchmark/")
 
 
 if __name__ == "__main__":
