@@ -390,6 +390,7 @@ struct Manipulate_command
     r["order"] = detail.order;
     r["neighbors"] = detail.neighbors;
     r["roi_points"] = result.region_size;
+    r["computed_points"] = result.computed_points;
     r["anchors"] = result.anchor_count;
     r["default_anchors"] = result.default_anchors;
     if(!enhance) r["region_deviation"] = deviation;

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <random>
 
 using namespace CGAL_ext;
 
@@ -99,6 +100,56 @@ TEST(EnhanceGeometricDetails, FactorOneReturnsTheInputAndTheOutsideNeverMoves)
   }
 }
 
+// A small region of a large model is enhanced on its surroundings only (settings.flow_margin): the result
+// agrees with the whole model's computation to a bound that shrinks e-fold every 5 radii of margin.
+TEST(EnhanceGeometricDetails, ASmallRegionOfALargeModelNeedsOnlyItsSurroundings)
+{
+  // A bumpy 300 x 300 sheet, its samples jittered (a perfect lattice leaves neighbour ties to the kd-tree).
+  auto sheet = shapes::bumpy_grid<Kernel>(300, 300, 1.0, 0.3, 6.0);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  for(Point& p : sheet.points) p = Point(p.x() + jitter(random), p.y() + jitter(random), p.z());
+  std::vector<std::size_t> all(sheet.points.size()), disk;
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  for(std::size_t i = 0; i < sheet.points.size(); ++i)
+    if(std::hypot(sheet.points[i].x(), sheet.points[i].y()) < 15) disk.push_back(i);
+  auto np = [&](std::vector<Point>& moved) {
+    return CGAL::parameters::point_map(CGAL::make_property_map(moved)).normal_map(CGAL::make_property_map(sheet.normals));
+  };
+  Detail_enhancement_settings whole_model;
+  whole_model.flow_margin = 0;
+  std::vector<Point> reference = sheet.points;
+  const auto r0 = enhance_geometric_details(all, 10, disk, 2.0, whole_model, np(reference));
+  ASSERT_TRUE(r0);
+  EXPECT_EQ(r0.computed_points, sheet.points.size());
+  double rms = 0;
+  for(std::size_t i : disk) rms += CGAL::squared_distance(reference[i], sheet.points[i]);
+  rms = std::sqrt(rms / double(disk.size()));
+  std::vector<Point> local;
+  double previous = std::numeric_limits<double>::infinity();
+  for(double margin : {10.0, 20.0, 40.0}) {
+    Detail_enhancement_settings surroundings;
+    surroundings.flow_margin = margin;
+    local = sheet.points;
+    const auto r1 = enhance_geometric_details(all, 10, disk, 2.0, surroundings, np(local));
+    ASSERT_TRUE(r1);
+    EXPECT_LT(r1.computed_points, sheet.points.size() / 2);
+    EXPECT_GT(r1.computed_points, 2 * disk.size());
+    double worst = 0;
+    for(std::size_t i : disk) worst = std::max(worst, std::sqrt(CGAL::squared_distance(local[i], reference[i])));
+    std::printf("[ enhance ] %zu of %zu points around a %zu-point region at a margin of %.0f radii: largest difference "
+                "%.2e of the displacement RMS\n", r1.computed_points, sheet.points.size(), disk.size(), margin, worst / rms);
+    EXPECT_LT(worst, previous);
+    previous = worst;
+  }
+  EXPECT_LT(previous, 1e-5 * rms);
+  for(std::size_t i = 0; i < local.size(); ++i) {
+    if(std::hypot(sheet.points[i].x(), sheet.points[i].y()) >= 15) {
+      ASSERT_EQ(local[i], sheet.points[i]);
+    }
+  }
+}
+
 TEST(EnhanceGeometricDetails, BadInputIsAClearError)
 {
   std::vector<Point> points = sphere.points;
@@ -111,6 +162,9 @@ TEST(EnhanceGeometricDetails, BadInputIsAClearError)
   Detail_enhancement_settings bad_flow;
   bad_flow.flow.fidelity = 0;
   EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, bad_flow); }).find("fidelity"), std::string::npos);
+  Detail_enhancement_settings bad_margin;
+  bad_margin.flow_margin = -1;
+  EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, bad_margin); }).find("flow_margin"), std::string::npos);
   EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, Detail_filter{},
                                                     CGAL::parameters::normal_map(boost::make_function_property_map<Point>([&](const Point&) { return Vector(0, 0, 0); }))); }).find("normal"), std::string::npos);
   EXPECT_EQ(points, sphere.points);

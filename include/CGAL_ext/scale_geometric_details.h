@@ -73,6 +73,7 @@ struct Detail_manipulation_result
 {
   bool completed = false;
   std::size_t region_size = 0;       ///< points of the region of interest
+  std::size_t computed_points = 0;   ///< points the Laplacian (and for enhancement the normals and base surface) used
   std::size_t anchor_count = 0;      ///< anchors used (given or default)
   bool default_anchors = false;      ///< whether the anchors were chosen by the function
   Least_squares_statistics least_squares;
@@ -136,6 +137,7 @@ Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap p
   result.completed = true;
   result.region_size = region.roi.size();
   result.anchor_count = anchors_local.size();
+  result.computed_points = region.cloud.size();
   return result;
 }
 

@@ -112,8 +112,6 @@ class Detail_least_squares
 #endif
 
 public:
-  /// Up to this many unknowns, CHOLMOD also tries its AMD order and keeps whichever factors cheaper.
-  static constexpr std::size_t small_system = 8000;
   /// Diagonal shift of a normal matrix that is singular to rounding (its diagonal is scaled to 1).
   static constexpr double singular_shift = 1e-12;
 
@@ -431,16 +429,19 @@ try {
   m_main = std::make_unique<Main_factor>();
   cholmod_common& common = m_main->cholmod();
   common.print = 0; // a rounding-negative pivot is handled below, not printed
-  // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL). That order wins on
-  // large regions (17 % fewer flops than AMD at 40k unknowns), AMD on the few thousand unknowns of an edit's
-  // sample points (2 to 4 times fewer flops on the benchmark's scans): small systems try both and keep the
-  // cheaper, at the price of one AMD analysis.
-  common.nmethods = n <= small_system ? 2 : 1;
+  // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL); CHOLMOD also tries
+  // AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 % fewer flops than AMD on a
+  // 40k-point quadric region of the bunny, AMD 2-4 times fewer on an edit's sample points and 1.5 times fewer
+  // on a 100k-point region around the tip of the armadillo's arm (1.8e11 flops against 2.7e11; the halves of
+  // a curved region cut across its longest extent meet along a long curve). One AMD analysis costs about 5 %
+  // of such a factorisation (doc/detail_scaling.md, "The solver").
+  common.nmethods = 2;
   common.method[0].ordering = CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
   // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
   m_main->analyzePattern(normal);
   check_cholmod("analysing the normal matrix");
+  const bool amd_order = common.selected == 1;
   // N + shift I, not N (N has a unit diagonal here): with the cubic order and no anchors, the region's smoothest
   // modes are almost free and N is singular to rounding, so LL^T of N itself can meet a non-positive pivot (and
   // Eigen's simplicial LDL^T, the other way, took 452 s against 16 s on 97k unknowns). The refinement solves
@@ -464,7 +465,11 @@ try {
     m_statistics.method += " (CHOLMOD LL^T of N + 1e-12 I met a non-positive pivot)";
 #endif
   }
+#ifdef CGAL_EXT_USE_CHOLMOD
+  m_statistics.method += m_main && amd_order ? ", AMD order" : ", geometric nested dissection";
+#else
   m_statistics.method += ", geometric nested dissection";
+#endif
   m_statistics.factor_seconds = seconds_since(factor_start);
   m_factored = true;
 } catch(const std::bad_alloc&) {

@@ -147,7 +147,8 @@ template <typename PointRange, typename NormalMap>
 Matrix_n3 gather_normals(const PointRange& points, NormalMap normal_map,
                          const Spatial_point_cloud& cloud, const char* who)
 {
-  Matrix_n3 in_order(Eigen::Index(cloud.size()), 3);
+  // The cloud may hold a part of the points (a region's surroundings): every normal is read and checked.
+  Matrix_n3 in_order(Eigen::Index(std::distance(std::begin(points), std::end(points))), 3);
   std::size_t i = 0;
   for(const auto& item : points) {
     const auto& v = get(normal_map, item);
@@ -161,7 +162,7 @@ Matrix_n3 gather_normals(const PointRange& points, NormalMap normal_map,
     }
     in_order.row(Eigen::Index(i++)) = n / len;
   }
-  Matrix_n3 sorted(in_order.rows(), 3);
+  Matrix_n3 sorted(Eigen::Index(cloud.size()), 3);
   for(std::size_t s = 0; s < cloud.size(); ++s)
     sorted.row(Eigen::Index(s)) = in_order.row(cloud.input_index[s]);
   return sorted;

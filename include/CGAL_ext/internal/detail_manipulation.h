@@ -58,6 +58,54 @@ Region make_region(const PointRange& points, PointMap point_map, unsigned int k,
   return region;
 }
 
+/// The region among the points near it only: those within `margin` neighbourhood radii of a region point
+/// (the radius: the median distance of a region point to its k-th nearest region point), in the cloud's
+/// order, so that a small region of a large model costs what its surroundings cost. The region keeps its
+/// points in the same order, so local anchor indices stay valid. Returns `region` itself when the
+/// surroundings would hold most of the cloud, or too few points for `min_points`.
+template <typename ConcurrencyTag>
+Region region_surroundings(Region region, std::size_t k, double margin, std::size_t min_points)
+{
+  const std::size_t n = region.cloud.size(), m = region.roi.size();
+  if(!(margin > 0) || m == n || m <= k) return region;
+  Matrix_n3 roi_positions(Eigen::Index(m), 3);
+  for(std::size_t r = 0; r < m; ++r) roi_positions.row(Eigen::Index(r)) = region.cloud.positions.row(region.roi[r]);
+  // The neighbourhood radius, from up to 2,000 of the region's points.
+  const std::size_t stride = std::max<std::size_t>(1, m / 2000);
+  Matrix_n3 probes(Eigen::Index((m + stride - 1) / stride), 3);
+  for(Eigen::Index q = 0; q < probes.rows(); ++q) probes.row(q) = roi_positions.row(q * Eigen::Index(stride));
+  const Neighbor_graph probe_neighbors = k_nearest_samples<ConcurrencyTag>(roi_positions, probes, k + 1);
+  std::vector<double> radii(std::size_t(probes.rows()));
+  for(std::size_t q = 0; q < radii.size(); ++q)
+    radii[q] = (roi_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm();
+  std::nth_element(radii.begin(), radii.begin() + std::ptrdiff_t(radii.size() / 2), radii.end());
+  const double reach = margin * radii[radii.size() / 2];
+  if(!(reach > 0) || !std::isfinite(reach)) return region;
+
+  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(roi_positions, region.cloud.positions, 1);
+  std::vector<int> kept;
+  for(std::size_t i = 0; i < n; ++i)
+    if((region.cloud.positions.row(Eigen::Index(i)) - roi_positions.row(*nearest.begin(i))).squaredNorm() <= reach * reach)
+      kept.push_back(int(i));
+  if(4 * kept.size() > 3 * n || kept.size() < min_points) return region;
+
+  Region local;
+  local.cloud.positions.resize(Eigen::Index(kept.size()), 3);
+  local.cloud.input_index.resize(kept.size());
+  local.row_of.assign(region.row_of.size(), -1);
+  local.in_roi.assign(kept.size(), 0);
+  for(std::size_t s = 0; s < kept.size(); ++s) {
+    local.cloud.positions.row(Eigen::Index(s)) = region.cloud.positions.row(kept[s]);
+    local.cloud.input_index[s] = region.cloud.input_index[std::size_t(kept[s])];
+    local.row_of[std::size_t(local.cloud.input_index[s])] = int(s);
+    if(region.in_roi[std::size_t(kept[s])]) {
+      local.roi.push_back(int(s));
+      local.in_roi[s] = 1;
+    }
+  }
+  return local;
+}
+
 /// The anchors' positions in `roi` (local indices); throws if one is not in the region.
 inline std::vector<int> local_anchor_indices(const std::vector<int>& roi, const std::vector<int>& anchor_rows,
                                              const std::vector<int>& input_index, const char* who)
@@ -167,7 +215,7 @@ void write_region(PointRange& points, PointMap point_map, const Spatial_point_cl
                   const Matrix_n3& displacement)
 {
   using Point = typename boost::property_traits<PointMap>::value_type;
-  std::vector<int> local_of_input(cloud.size(), -1);
+  std::vector<int> local_of_input(std::size_t(std::distance(std::begin(points), std::end(points))), -1);
   for(std::size_t r = 0; r < roi.size(); ++r) local_of_input[std::size_t(cloud.input_index[std::size_t(roi[r])])] = int(r);
   std::size_t i = 0;
   for(auto& item : points) {
