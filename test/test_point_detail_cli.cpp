@@ -802,7 +802,7 @@ TEST_F(Cli, upsample_fills_a_hole_and_edit_upsample_fills_a_stretch)
   EXPECT_GT(double(count), 0.75 * double(removed));
   EXPECT_LT(double(count), 1.25 * double(removed));
   // The hole is covered: no place in it is much farther than one grid spacing from a point (2.6 before; the
-  // fill leaves 1.09, doc/upsampling.md "Measured").
+  // fill leaves 1.09).
   double farthest = 0;
   for(double x = 11.5; x <= 17.5; x += 0.1)
     for(double y = 11.5; y <= 17.5; y += 0.1) {
