@@ -31,6 +31,36 @@ TEST(DetectSparseDirections, HoleRimsPointIntoTheHoleAndOpenBordersAreNotHoles)
               .hole_boundary_points, 0u);
 }
 
+TEST(DetectSparseDirections, ARandomSamplingsOwnGapsAreNoHolesButAHoleTwiceAsWideIs)
+{
+  // Density 1 on [0, 60]^2, with and without a hole of radius 3 around the centre. A fifth of the points of a
+  // random sampling have a quarter empty within two local spacings; with local spacings a gap must also be twice
+  // as wide as the gaps typical around it, which leaves 5 of these 3,600 points (and 6 on the hole's rim).
+  for(const double hole : {0.0, 3.0}) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uniform(0, 60);
+    Oriented_points plane;
+    for(int i = 0; i < 3600; ++i) {
+      const double x = uniform(rng), y = uniform(rng);
+      if(std::hypot(x - 30, y - 30) < hole) continue;
+      plane.points.emplace_back(x, y, 0);
+      plane.normals.emplace_back(0, 0, 1);
+    }
+    std::vector<Vector> direction(plane.points.size());
+    const auto summary = CGAL_ext::detect_sparse_directions(plane.indices(), 10, CGAL_ext::Sparse_direction_settings(),
+                                                            CGAL::make_property_map(direction), plane.np());
+    std::size_t on_rim = 0;
+    for(std::size_t i = 0; i < plane.points.size(); ++i)
+      on_rim += direction[i].squared_length() > 0 && std::hypot(plane.points[i].x() - 30, plane.points[i].y() - 30) < hole + 2;
+    std::printf("random plane, hole of radius %g: %zu hole-boundary points, %zu of them on its rim\n", hole,
+                summary.hole_boundary_points, on_rim);
+    EXPECT_LT(summary.hole_boundary_points - on_rim, plane.points.size() / 100);
+    if(hole > 0) {
+      EXPECT_GE(on_rim, 3u);
+    }
+  }
+}
+
 TEST(DetectSparseDirections, MissingNormalsAndBadSettingsAreClearErrors)
 {
   const Oriented_points plane = plane_with_hole(2.6);

@@ -207,6 +207,58 @@ TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
   EXPECT_LT(inserted.size(), sphere.points.size() / 100);
 }
 
+TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOwnStandard)
+{
+  // A random sampling has wide gaps of its own: a fifth of its points have a tangent-plane quarter empty within
+  // two local spacings, and measured against that alone (as before) the sphere below got 22 % new points and
+  // the plane 23 %. Against twice the gaps typical around each point, almost nothing is added.
+  std::mt19937 rng(1);
+  std::normal_distribution<double> gauss;
+  Oriented_points sphere;
+  for(int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d v = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    sphere.points.emplace_back(v.x(), v.y(), v.z());
+    sphere.normals.emplace_back(v.x(), v.y(), v.z());
+  }
+  Inserted on_sphere;
+  CGAL_ext::upsample_point_set(sphere.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_sphere), sphere.np());
+
+  // A random sampling of a plane (density 1) with a hole of radius 4: the hole is twice as wide as the
+  // sampling's own gaps, so it is filled, to about the covering the sampling has elsewhere.
+  const double radius = 4;
+  std::uniform_real_distribution<double> uniform(0, 80);
+  Oriented_points plane;
+  for(int i = 0; i < 6400; ++i) {
+    const double x = uniform(rng), y = uniform(rng);
+    if(std::hypot(x - 40, y - 40) < radius) continue;
+    plane.points.emplace_back(x, y, 0);
+    plane.normals.emplace_back(0, 0, 1);
+  }
+  Inserted on_plane;
+  CGAL_ext::upsample_point_set(plane.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_plane), plane.np());
+  std::size_t in_hole = 0;
+  for(const auto& [p, n] : on_plane) in_hole += std::hypot(p.x() - 40, p.y() - 40) < radius + 0.5;
+  auto disc = [&](double cx, double cy) {
+    std::vector<Eigen::Vector3d> surface;
+    for(double x = cx - radius; x <= cx + radius; x += 0.1)
+      for(double y = cy - radius; y <= cy + radius; y += 0.1)
+        if(std::hypot(x - cx, y - cy) <= radius) surface.emplace_back(x, y, 0);
+    return surface;
+  };
+  const double before = covering_radius(plane.points, disc(40, 40)), after = covering_radius(with(plane.points, on_plane), disc(40, 40));
+  double elsewhere = 0;
+  for(const auto& [cx, cy] : {std::pair{20.0, 20.0}, std::pair{60.0, 20.0}, std::pair{20.0, 60.0}, std::pair{60.0, 60.0}})
+    elsewhere = std::max(elsewhere, covering_radius(plane.points, disc(cx, cy)));
+  std::printf("random sphere, %zu points: %zu new; random plane, %zu points: %zu new, %zu in the hole (about 50 missing), "
+              "covering radius in the hole %.2f -> %.2f, in discs of its size elsewhere up to %.2f\n",
+              sphere.points.size(), on_sphere.size(), plane.points.size(), on_plane.size(), in_hole, before, after, elsewhere);
+  EXPECT_LT(on_sphere.size(), sphere.points.size() / 100);
+  EXPECT_LT(on_plane.size() - in_hole, plane.points.size() / 50);
+  EXPECT_GT(in_hole, 25u);
+  EXPECT_LT(after, 0.5 * before);
+  EXPECT_LT(after, 1.25 * elsewhere);
+}
+
 TEST(UpsamplePointSet, TwoDensitiesGetAlmostNothingAndAStretchOnlyItsOwnGaps)
 {
   // A plane sampled at two densities: x < 0 a jittered grid of spacing 1, x > 0 one of spacing 2.5. The
@@ -226,14 +278,15 @@ TEST(UpsamplePointSet, TwoDensitiesGetAlmostNothingAndAStretchOnlyItsOwnGaps)
   CGAL_ext::Upsampling_settings one_spacing;
   one_spacing.detection.spacing = 1.15; // about the dense half's mean distance to 6 neighbours
   CGAL_ext::upsample_point_set(plane.indices(), one_spacing, std::back_inserter(global), plane.np());
-  // Where the densities meet, the sparse side's first columns see the dense side in their neighbourhoods and
-  // get a few points (a grading, about one per point of the seam); nothing anywhere else.
+  // Where the densities meet, the sparse side's first columns see the dense side in their neighbourhoods (a
+  // smaller local spacing), but their gaps are no wider than their surroundings': a few points at most, on the
+  // seam; nothing anywhere else.
   std::size_t off_seam = 0;
   for(const auto& [p, n] : local) off_seam += p.x() < -1 || p.x() > 6;
   std::printf("two densities, %zu points: %zu new with local spacings (%zu off the seam), %zu with one spacing\n",
               plane.points.size(), local.size(), off_seam, global.size());
   EXPECT_EQ(off_seam, 0u);
-  EXPECT_LT(local.size(), plane.points.size() / 50);
+  EXPECT_LT(local.size(), plane.points.size() / 100);
   EXPECT_GT(global.size(), plane.points.size() / 3);
 
   // Stretch both halves' middle strip |y| < 10 to three times its width along y; everything moves (a rigid

@@ -34,7 +34,10 @@ namespace CGAL_ext {
   nothing beyond it, is left alone.
 
   By default h is local (`compute_local_spacing`): an adaptively or randomly sampled surface is measured
-  against its own density around each point, so its sparser parts are not taken for holes.
+  against its own density around each point, so its sparser parts are not taken for holes. A local-spacing
+  quarter must also be empty within twice the largest quarter gap typical around the point (the median over it
+  and its 15 nearest neighbours): the wide gaps that a random or anisotropic sampling has everywhere are not
+  holes either (doc/upsampling.md, "Random samplings").
 */
 struct Sparse_direction_settings
 {
@@ -113,15 +116,91 @@ std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tr
   return spacing;
 }
 
+/// The principal axis, in the tangent plane of `normal`, of the tangent offsets `offset(0)`, ..., `offset(count - 1)`
+/// to a point's nearest neighbours (from their covariance); not finite when they span no direction.
+template <typename OffsetOf>
+Eigen::Vector3d principal_tangent_axis(std::size_t count, const OffsetOf& offset, const Eigen::Vector3d& normal)
+{
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for(std::size_t m = 0; m < count; ++m) covariance += offset(m) * offset(m).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(covariance);
+  const Eigen::Vector3d axis = eigen.eigenvectors().col(2);
+  return (axis - axis.dot(normal) * normal).normalized();
+}
+
+/// Each point's largest quarter gap: over the four quarters of its tangent plane around the principal axes of its
+/// k nearest projected neighbours, the largest distance to the nearest neighbour within the quarter (the
+/// smallest empty radius under which the point has no sparse quarter); a quarter with none among the 24
+/// nearest counts the farthest of them.
+template <typename ConcurrencyTag>
+std::vector<double> largest_quarter_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree, std::size_t k)
+{
+  const std::size_t n = std::size_t(positions.rows()), count = std::min<std::size_t>(std::max<std::size_t>(k, 24) + 1, n);
+  std::vector<double> gap(n, 0.0);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    thread_local std::vector<Eigen::Vector3d> offsets;
+    offsets.clear();
+    const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
+      if(std::size_t(j) == i) return;
+      Eigen::Vector3d d = positions.row(j).transpose() - p;
+      offsets.push_back(d - d.dot(normal) * normal);
+    });
+    const Eigen::Vector3d a = principal_tangent_axis(std::min(k, offsets.size()), [&](std::size_t m) { return offsets[m]; }, normal);
+    if(!a.allFinite()) return;
+    const Eigen::Vector3d b = normal.cross(a);
+    double farthest = 0;
+    for(const Eigen::Vector3d& d : offsets) farthest = std::max(farthest, d.norm());
+    double largest = 0;
+    for(const Eigen::Vector3d& d : {a, Eigen::Vector3d(-a), b, Eigen::Vector3d(-b)}) {
+      double nearest = farthest;
+      for(const Eigen::Vector3d& o : offsets) {
+        const double length = o.norm();
+        if(length > 0 && o.dot(d) > std::sqrt(0.5) * length) nearest = std::min(nearest, length);
+      }
+      largest = std::max(largest, nearest);
+    }
+    gap[i] = largest;
+  });
+  return gap;
+}
+
+/// The radius within which an empty quarter makes each point sparse: twice its spacing; when the spacings are
+/// local (`against_surroundings`), also at least twice the largest quarter gap typical around the point (the
+/// median over it and its 15 nearest neighbours). A random or anisotropic sampling has wide gaps everywhere
+/// (a fifth of a random sampling's points have a quarter empty within two local spacings): only a gap twice as
+/// wide as its surroundings' is taken for a hole (doc/upsampling.md, "Random samplings").
+template <typename ConcurrencyTag>
+std::vector<double> empty_radii(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree, std::size_t k,
+                                const std::vector<double>& spacing, bool against_surroundings)
+{
+  const std::size_t n = std::size_t(positions.rows());
+  std::vector<double> radius(n);
+  for(std::size_t i = 0; i < n; ++i) radius[i] = 2 * spacing[i];
+  if(!against_surroundings) return radius;
+  const std::vector<double> gap = largest_quarter_gaps<ConcurrencyTag>(positions, normals, tree, k);
+  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    thread_local std::vector<double> around;
+    around.clear();
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), std::min<std::size_t>(16, n),
+                 [&](int j, double) { around.push_back(gap[std::size_t(j)]); });
+    std::nth_element(around.begin(), around.begin() + std::ptrdiff_t(around.size() / 2), around.end());
+    radius[i] = std::max(radius[i], 2 * around[around.size() / 2]);
+  });
+  return radius;
+}
+
 /// The hole gaps of the points `rows` (all when null; doc/upsampling.md, "Finding holes"): for each sparse
-/// quarter of a point's tangent plane (empty within twice the point's `spacing`), the first sample that
-/// reappears along it within `max_hole_size` spacings, if any. `spacing` has one entry per row of `positions`.
+/// quarter of a point's tangent plane (empty within the point's `empty_radius`), the first sample that
+/// reappears along it within `max_hole_size` spacings, if any. `spacing` and `empty_radius` have one entry per
+/// row of `positions`.
 /// `sparse` receives the examined points with a sparse quarter, increasing. Gaps come out ordered by point,
 /// then quarter, so any thread count gives the same list.
 template <typename ConcurrencyTag>
 std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
-                                std::size_t k, const std::vector<double>& spacing, double max_hole_size,
-                                const std::vector<int>* rows, std::vector<int>& sparse)
+                                std::size_t k, const std::vector<double>& spacing, const std::vector<double>& empty_radius,
+                                double max_hole_size, const std::vector<int>* rows, std::vector<int>& sparse)
 {
   const std::size_t n = rows ? rows->size() : std::size_t(positions.rows());
   // Enough candidates to see across a gap of max_hole_size spacings: about the samples of that disc.
@@ -133,7 +212,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
   for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
     across[r].fill(-1);
     const std::size_t i = rows ? std::size_t((*rows)[r]) : r;
-    const double empty_radius = 2 * spacing[i], max_gap = max_hole_size * spacing[i];
+    const double empty_within = empty_radius[i], max_gap = max_hole_size * spacing[i];
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
     thread_local std::vector<char> same_sheet; // whether a sample across a gap may continue this point's surface
@@ -156,32 +235,23 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
     // looks empty among them.
     gather(std::min(reach, std::max<std::size_t>(k, 16) + 1));
     const bool all_quarters_seen = [&] {
-      Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-      for(std::size_t m = 0; m < std::min(k, candidates.size()); ++m) c += candidates[m].second * candidates[m].second.transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> e;
-      e.computeDirect(c);
-      Eigen::Vector3d a = e.eigenvectors().col(2);
-      a = (a - a.dot(normal) * normal).normalized();
+      const Eigen::Vector3d a =
+        principal_tangent_axis(std::min(k, candidates.size()), [&](std::size_t m) { return candidates[m].second; }, normal);
       if(!a.allFinite()) return false;
       const Eigen::Vector3d b = normal.cross(a);
       int seen = 0;
       for(const Eigen::Vector3d& d : {a, Eigen::Vector3d(-a), b, Eigen::Vector3d(-b)})
         for(const auto& candidate : candidates) {
           const double length = candidate.second.norm();
-          if(length > 0 && length < empty_radius && candidate.second.dot(d) > std::sqrt(0.5) * length) { ++seen; break; }
+          if(length > 0 && length < empty_within && candidate.second.dot(d) > std::sqrt(0.5) * length) { ++seen; break; }
         }
       return seen == 4;
     }();
     if(all_quarters_seen) return;
     gather(reach);
     // Principal axes of the k nearest projected neighbours.
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    const std::size_t near = std::min(k, candidates.size());
-    for(std::size_t m = 0; m < near; ++m) covariance += candidates[m].second * candidates[m].second.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-    eigen.computeDirect(covariance);
-    Eigen::Vector3d e1 = eigen.eigenvectors().col(2);
-    e1 = (e1 - e1.dot(normal) * normal).normalized();
+    const Eigen::Vector3d e1 =
+      principal_tangent_axis(std::min(k, candidates.size()), [&](std::size_t m) { return candidates[m].second; }, normal);
     if(!e1.allFinite()) return;
     const Eigen::Vector3d e2 = normal.cross(e1);
     const std::array<Eigen::Vector3d, 4> directions{e1, Eigen::Vector3d(-e1), e2, Eigen::Vector3d(-e2)};
@@ -194,8 +264,8 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
         const double length = offset.norm();
         if(!(length > 0)) continue;
         const double along = offset.dot(d) / length;
-        if(length < empty_radius && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
-        if(length >= empty_radius && length < best && along > cos_cone && same_sheet[c]) {
+        if(length < empty_within && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
+        if(length >= empty_within && length < best && along > cos_cone && same_sheet[c]) {
           best = length;
           across[r][std::size_t(q)] = j;
         }
@@ -219,9 +289,11 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
 #define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&); \
   EXTERN template std::vector<double> local_spacings<Tag>(const Matrix_n3&, const Position_tree&); \
+  EXTERN template std::vector<double> empty_radii<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, std::size_t, \
+                                                       const std::vector<double>&, bool); \
   EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, \
-                                                       std::size_t, const std::vector<double>&, double, \
-                                                       const std::vector<int>*, std::vector<int>&);
+                                                       std::size_t, const std::vector<double>&, const std::vector<double>&, \
+                                                       double, const std::vector<int>*, std::vector<int>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES)
 
 inline double median(std::vector<double> values)
@@ -320,9 +392,11 @@ Sparse_direction_summary detect_sparse_directions(const PointRange& points, unsi
   Sparse_direction_summary summary;
   const std::vector<double> spacing = internal::spacings<ConcurrencyTag>(cloud.positions, tree, settings.spacing, who);
   summary.spacing = internal::median(spacing);
+  const std::vector<double> empty_radius =
+    internal::empty_radii<ConcurrencyTag>(cloud.positions, normals, tree, k, spacing, settings.spacing == 0);
   std::vector<int> sparse;
-  const std::vector<internal::Hole_gap> gaps =
-    internal::hole_gaps<ConcurrencyTag>(cloud.positions, normals, tree, k, spacing, settings.max_hole_size, nullptr, sparse);
+  const std::vector<internal::Hole_gap> gaps = internal::hole_gaps<ConcurrencyTag>(
+    cloud.positions, normals, tree, k, spacing, empty_radius, settings.max_hole_size, nullptr, sparse);
   summary.sparse_points = sparse.size();
 
   // The nearest gap of each point gives its direction.

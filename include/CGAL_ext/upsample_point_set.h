@@ -225,11 +225,24 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
                                  [&](int row) { return !(now[std::size_t(row)] > stretched_spacing * all_spacing[std::size_t(row)]); }),
                   examine.end());
   }
+  // Each sample's empty radius in its spacings (see `empty_radii`): new samples take the one interpolated along
+  // their gap, so a hole in a random sampling is filled to its surroundings' own standard.
+  std::vector<double> all_empty_factor;
+  {
+    const std::vector<double> radius = empty_radii<ConcurrencyTag>(
+      cloud.positions, input_normals, input_tree, k, all_spacing,
+      std::is_same<SpacingMap, No_spacing_map>::value && settings.detection.spacing == 0);
+    all_empty_factor.resize(n);
+    for(std::size_t i = 0; i < n; ++i) all_empty_factor[i] = radius[i] / all_spacing[i];
+  }
   for(std::size_t round = 0; round < settings.max_rounds; ++round) {
+    std::vector<double> empty_radius(all.rows());
+    for(std::size_t i = 0; i < empty_radius.size(); ++i) empty_radius[i] = all_empty_factor[i] * all_spacing[i];
     progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
     if(!progress.report(0.0)) return {};
     const Position_tree tree(all, ConcurrencyTag());
-    const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, settings.detection.max_hole_size,
+    const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, empty_radius,
+                                                                 settings.detection.max_hole_size,
                                                                  round == 0 && !region ? nullptr : &examine, sparse);
     if(round == 0) {
       std::vector<char> boundary(n, 0);
@@ -242,7 +255,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
     for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
     Cell_set kept(0.5 * widest);
     std::vector<Eigen::Vector3d> round_points, round_normals;
-    std::vector<double> round_spacing;
+    std::vector<double> round_spacing, round_empty_factor;
     for(const Hole_gap& g : gaps) {
       const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
       const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
@@ -260,6 +273,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
         Eigen::Vector3d normal = (1 - t) * na + t * nb;
         round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
         round_spacing.push_back(h);
+        round_empty_factor.push_back((1 - t) * all_empty_factor[std::size_t(g.from)] + t * all_empty_factor[std::size_t(g.across)]);
       }
     }
     if(round_points.empty()) break;
@@ -319,16 +333,19 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
       if(keep[m]) {
         round_points[kept_count] = round_points[m];
         round_normals[kept_count] = round_normals[m];
+        round_empty_factor[kept_count] = round_empty_factor[m];
         round_spacing[kept_count++] = round_spacing[m];
       }
     round_points.resize(kept_count);
     round_normals.resize(kept_count);
     round_spacing.resize(kept_count);
+    round_empty_factor.resize(kept_count);
     examine = sparse;
     for(std::size_t m = 0; m < round_points.size(); ++m) examine.push_back(int(n + new_points.size() + m));
     new_points.insert(new_points.end(), round_points.begin(), round_points.end());
     new_normals.insert(new_normals.end(), round_normals.begin(), round_normals.end());
     all_spacing.insert(all_spacing.end(), round_spacing.begin(), round_spacing.end());
+    all_empty_factor.insert(all_empty_factor.end(), round_empty_factor.begin(), round_empty_factor.end());
     all.conservativeResize(Eigen::Index(n + new_points.size()), 3);
     all_normals.conservativeResize(all.rows(), 3);
     for(std::size_t m = 0; m < new_points.size(); ++m) {
@@ -365,7 +382,8 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
 
   Spacings are local: unless `settings.detection.spacing` sets one everywhere, every point is measured
   against its own local spacing (`compute_local_spacing`), so the sparser parts of an adaptively or randomly
-  sampled surface are not filled; a new point takes the spacing of its gap's ends.
+  sampled surface are not filled, and a gap must also be twice as wide as the gaps typical around it (see
+  `Sparse_direction_settings`); a new point takes the spacing of its gap's ends.
 
   \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
           unit normal (the input points are not repeated, so every output point is a new one).
