@@ -27,8 +27,9 @@ EDITING_COLUMNS = {
     "scaling": ["model", "order", "solver", "points", "ssps", "roi_ssps", "preprocess_s", "editing_ssps_s",
                 "drag_median_s", "drag_min_s", "drag_max_s", "cg_iterations"],
     "arap": ["model", "method", "preprocess_s", "deform_s", "hausdorff_to_sre_arap", "detail_change",
-             "handle_error", "ssps", "stretch_p99"],
-    "cactus": ["turn_degrees", "method", "hausdorff_to_sre_arap"],
+             "handle_error", "ssps", "stretch_p99", "hausdorff_to_sre_arap_1000_iterations"],
+    "cactus": ["turn_degrees", "method", "hausdorff_to_sre_arap", "hausdorff_to_converged_sre_arap",
+               "hausdorff_to_converged_original_arap"],
     "diffusion": ["model", "encoding", "detail_change", "largest_stretch", "diffusion_s"],
     "ssp_quality": ["model", "sample_points", "ssps", "drag_median_s", "hausdorff_to_every_point_result"],
 }
