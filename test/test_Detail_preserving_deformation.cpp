@@ -609,8 +609,9 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleApproachesItsFixedPointWithMo
   // The tentacle's tip bent by 70 degrees (7 steps of 10): ARAP converges slowly, so 3 iterations per step
   // land far from the fixed point, but every further iteration must bring the sample points closer to it (the
   // alternation minimises one energy; a variant that rotated the details instead drifted away with more
-  // iterations). The fixed point: iterations until no sample point moves more than 1e-7 of the region.
-  const Tentacle t(1500);
+  // iterations). The reference: 100 iterations per step (on 1,500 points they land 1e-4 of the diagonal from
+  // the fixed point, where no iteration moves a sample point more than 1e-7 of the region).
+  const Tentacle t(1000);
   const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
   auto solve = [&](unsigned iterations, double tolerance) {
     Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
@@ -621,14 +622,14 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleApproachesItsFixedPointWithMo
     EXPECT_TRUE(d->deform());
     return d;
   };
-  const auto fixed_point = solve(2000, 1e-7);
+  const auto reference = solve(100, 0);
   double previous = INFINITY;
-  for(const unsigned iterations : {3u, 10u, 30u, 100u}) {
+  for(const unsigned iterations : {3u, 10u, 30u}) {
     const auto d = solve(iterations, 0);
     double distance = 0;
     for(std::size_t s = 0; s < d->number_of_sample_points(); ++s)
-      distance = std::max(distance, (d->deformed_sample_position(s) - fixed_point->deformed_sample_position(s)).norm());
-    std::printf("as rigid as possible, 70 degrees, %u iterations per step: %.4f of the diagonal from the fixed point\n", iterations,
+      distance = std::max(distance, (d->deformed_sample_position(s) - reference->deformed_sample_position(s)).norm());
+    std::printf("as rigid as possible, 70 degrees, %u iterations per step: %.4f of the diagonal from 100\n", iterations,
                 distance / t.diagonal);
     EXPECT_LT(distance, 0.7 * previous) << iterations << " iterations";
     previous = distance;

@@ -210,8 +210,8 @@ TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
 TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOwnStandard)
 {
   // A random sampling has wide gaps of its own: a fifth of its points have a tangent-plane quarter empty within
-  // two local spacings, and measured against that alone (as before) the sphere below got 22 % new points and
-  // the plane 23 %. Against twice the gaps typical around each point, almost nothing is added.
+  // two local spacings, and measured against that alone (as before) random samplings of a sphere and of a plane
+  // like these got 22-23 % new points. Against twice the gaps typical around each point, almost nothing is added.
   std::mt19937 rng(1);
   std::normal_distribution<double> gauss;
   Oriented_points sphere;
