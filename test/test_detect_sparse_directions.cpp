@@ -37,15 +37,7 @@ TEST(DetectSparseDirections, ARandomSamplingsOwnGapsAreNoHolesButAHoleTwiceAsWid
   // random sampling have a quarter empty within two local spacings; with local spacings a gap must also be twice
   // as wide as the gaps typical around it, which leaves 5 of these 3,600 points (and 6 on the hole's rim).
   for(const double hole : {0.0, 3.0}) {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> uniform(0, 60);
-    Oriented_points plane;
-    for(int i = 0; i < 3600; ++i) {
-      const double x = uniform(rng), y = uniform(rng);
-      if(std::hypot(x - 30, y - 30) < hole) continue;
-      plane.points.emplace_back(x, y, 0);
-      plane.normals.emplace_back(0, 0, 1);
-    }
+    const Oriented_points plane = random_plane_with_hole(60, hole, 11);
     std::vector<Vector> direction(plane.points.size());
     const auto summary = CGAL_ext::detect_sparse_directions(plane.indices(), 10, CGAL_ext::Sparse_direction_settings(),
                                                             CGAL::make_property_map(direction), plane.np());

@@ -45,6 +45,22 @@ inline Oriented_points plane_with_hole(double hole)
   return out;
 }
 
+/// A random (uniform) sampling of density 1 of the square [0, side]^2 (z = 0, side^2 draws) without the samples
+/// inside a disc of radius `hole` around its centre.
+inline Oriented_points random_plane_with_hole(double side, double hole, unsigned int seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(0, side);
+  Oriented_points out;
+  for(int i = 0; i < int(side * side); ++i) {
+    const double x = uniform(rng), y = uniform(rng);
+    if(std::hypot(x - side / 2, y - side / 2) < hole) continue;
+    out.points.emplace_back(x, y, 0);
+    out.normals.emplace_back(0, 0, 1);
+  }
+  return out;
+}
+
 /// An open cylinder of radius 1 along z, rings `h` apart on z in [0, 6], then stretched threefold along its
 /// axis between z = 2 and z = 4 (so it ends at z = 10).
 inline Oriented_points stretched_cylinder(double h)
