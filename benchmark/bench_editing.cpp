@@ -313,35 +313,40 @@ double handle_error(const Point_cloud& cloud, const Edit_description& edit, cons
 
 /// Ours against CGAL's SRE_ARAP and ORIGINAL_ARAP (5 iterations, as an interactive user would run them), and,
 /// below 100k vertices, against SRE_ARAP after 1,000 iterations: ARAP converges slowly, and 5 iterations stop
-/// about 1.5 % of the diagonal from where 1,000 go on the armadillo scan (1,000 and 2,000: 0.26 %).
+/// about 1.5 % of the diagonal from where 1,000 go on the armadillo scan (1,000 and 2,000: 0.26 %). Ours also
+/// per drag: the median of `drags` drags through the same edit on a fresh deformation.
 void compare_with_arap(const std::string& name, const Point_cloud& cloud, const Mesh& mesh, const Edit_description& edit, int reps,
-                       bool quick)
+                       int drags, bool quick)
 {
   const double diagonal = diagonal_of(cloud.points);
   internal::Matrix_n3 sre_long;
   Stats pre{}, def{};
   if(!quick && mesh.number_of_vertices() <= 100000) sre_long = mesh_arap<CGAL::SRE_ARAP>(mesh, edit, 1000, pre, def, 1);
-  auto row = [&](const std::string& what, std::size_t ssps, double preprocess, double deform, const internal::Matrix_n3& result,
-                 const internal::Matrix_n3& sre) {
+  auto row = [&](const std::string& what, std::size_t ssps, double preprocess, double deform, double drag,
+                 const internal::Matrix_n3& result, const internal::Matrix_n3& sre) {
     const double distance = &result == &sre ? 0 : hausdorff(result, sre) / diagonal;
     const double to_long = sre_long.rows() ? hausdorff(result, sre_long) / diagonal : NAN;
     const double change = point_detail_change(cloud, edit, result), handle = handle_error(cloud, edit, result);
     const double stretch = stretch_quantile(cloud, edit, result, 0.99);
-    char percent[32] = "", samples[32] = "", percent_long[32] = ""; // blank for the reference itself, CGAL's sample points
+    // Blank for the reference itself, CGAL's sample points and drags.
+    char percent[32] = "", samples[32] = "", percent_long[32] = "", per_drag[32] = "";
     if(&result != &sre) std::snprintf(percent, sizeof percent, "%.2f %%", 100 * distance);
+    if(std::isfinite(drag)) std::snprintf(per_drag, sizeof per_drag, "%.1f", 1e3 * drag);
     if(ssps) std::snprintf(samples, sizeof samples, "%zu", ssps);
     if(std::isfinite(to_long)) std::snprintf(percent_long, sizeof percent_long, "%.2f %%", 100 * to_long);
-    say("| %s | %s | %s | %.3f | %.3f | %s | %s | %.3f | %.3f | %.2e |\n", name.c_str(), what.c_str(), samples, preprocess, deform,
-        percent, percent_long, change, stretch, handle);
+    say("| %s | %s | %s | %.3f | %.3f | %s | %s | %s | %.3f | %.3f | %.2e |\n", name.c_str(), what.c_str(), samples, preprocess,
+        deform, per_drag, percent, percent_long, change, stretch, handle);
     csv << "arap,\"" << name << "\",\"" << what << "\"," << preprocess << "," << deform << "," << distance << "," << change << ","
         << handle << "," << ssps << "," << stretch << ",";
     if(std::isfinite(to_long)) csv << to_long;
+    csv << ",";
+    if(std::isfinite(drag)) csv << drag;
     csv << "\n";
   };
   const internal::Matrix_n3 sre = mesh_arap<CGAL::SRE_ARAP>(mesh, edit, 5, pre, def, reps);
-  row("CGAL SRE_ARAP, 5 iterations", 0, pre.median, def.median, sre, sre);
+  row("CGAL SRE_ARAP, 5 iterations", 0, pre.median, def.median, NAN, sre, sre);
   const internal::Matrix_n3 original = mesh_arap<CGAL::ORIGINAL_ARAP>(mesh, edit, 5, pre, def, reps);
-  row("CGAL ORIGINAL_ARAP, 5 iterations", 0, pre.median, def.median, original, sre);
+  row("CGAL ORIGINAL_ARAP, 5 iterations", 0, pre.median, def.median, NAN, original, sre);
   using Rotation = CGAL_ext::Detail_rotation;
   using Distance = CGAL_ext::Strength_distance;
   struct Variant { const char* what; Rotation rotations; Distance distance; };
@@ -354,8 +359,9 @@ void compare_with_arap(const std::string& name, const Point_cloud& cloud, const 
     auto d = make_deformation(cloud, e);
     d->deform();
     d->diffuse();
+    const double drag = time_edit(cloud, e, 1, drags).drag.median;
     row(std::string(v.what) + ": preprocess, then deform + diffuse", d->number_of_sample_points(), d->statistics().preprocess_seconds,
-        d->statistics().deform_seconds + d->statistics().diffuse_seconds, deformed_points(*d), sre);
+        d->statistics().deform_seconds + d->statistics().diffuse_seconds, drag, deformed_points(*d), sre);
   }
 }
 
@@ -566,10 +572,10 @@ int main(int argc, char** argv)
   say("\n");
 
   say("## Against CGAL's mesh ARAP (same mesh, region, control vertices and targets)\n\n"
-      "| model | method | SSPs | preprocess s | deform s | Hausdorff to SRE_ARAP (of the diagonal) | to SRE_ARAP after 1,000 iterations | detail change | kNN edge stretch, 99th percentile | handle error (of the diagonal) |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+      "| model | method | SSPs | preprocess s | deform s | per drag ms (median) | Hausdorff to SRE_ARAP (of the diagonal) | to SRE_ARAP after 1,000 iterations | detail change | kNN edge stretch, 99th percentile | handle error (of the diagonal) |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for(const auto& [name, cloud, mesh] : models)
-    compare_with_arap(name, cloud, mesh, scan_edit(cloud, diagonal_of(cloud.points)), options.reps, quick);
+    compare_with_arap(name, cloud, mesh, scan_edit(cloud, diagonal_of(cloud.points)), options.reps, quick ? 5 : 20, quick);
   // At scale: the armadillo split twice and three times at its edges' midpoints (the same surface with 416k and
   // 1.7M vertices), one run each.
   // Models the benchmark did not tune on: a CAD part with sharp creases and a figure, split to 1.66M and 640k.
@@ -581,7 +587,7 @@ int main(int argc, char** argv)
     if(!CGAL::IO::read_polygon_mesh(file.string(), mesh)) throw std::runtime_error("cannot read " + file.string());
     const auto [split, vertices] = split_at_midpoints(mesh, read_point_cloud(file), levels);
     compare_with_arap(model + " split " + std::to_string(levels) + " times (" + std::to_string(vertices.points.size()) + " vertices)",
-                      vertices, split, scan_edit(vertices, diagonal_of(vertices.points)), 1, quick);
+                      vertices, split, scan_edit(vertices, diagonal_of(vertices.points)), 1, 20, quick);
   }
 
   say("\n## The Botsch-Sorkine cactus against CGAL's SRE_ARAP (alpha 0.02) and ORIGINAL_ARAP\n\n"
