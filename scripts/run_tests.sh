@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Sets everything up (Debian packages), builds, and runs every test: the test suite with ctest (Release,
 # examples included), the benchmark harness in its quick mode, that README's headline figures come from committed
-# result files, the API reference (no Doxygen warning allowed), the manual's pictures (into the build folder), the
-# same test suite built with AddressSanitizer and UndefinedBehaviorSanitizer, and each fuzz target for 30
-# seconds. Ends with the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); a
-# fresh clone with the compiler cache off took 22.5 minutes on 2 cores (doc/design.md, "Build time").
+# result files, that no internal header includes an algorithm header (scripts/include_layers.py), the API
+# reference (no Doxygen warning allowed), the manual's pictures (into the build folder), the same test suite
+# built with AddressSanitizer and UndefinedBehaviorSanitizer, and each fuzz target for 30 seconds. Ends with the
+# time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); a fresh clone with the
+# compiler cache off took 22.5 minutes on 2 cores (doc/design.md, "Build time").
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,6 +20,7 @@ timed_stage "release build" bash scripts/release_build.sh
 timed_stage "release tests" ctest --test-dir "$build" -j"$(nproc)" --output-on-failure
 timed_stage "quick benchmark" env BUILD_DIR="$build" bash scripts/run_benchmarks.sh --quick
 timed_stage "quoted figures" python3 scripts/check_quoted_figures.py
+timed_stage "include layers" python3 scripts/include_layers.py --check
 timed_stage "API reference" bash scripts/build_api_docs.sh
 timed_stage pictures env BUILD_DIR="$build" DOC_IMAGES_DIR="$build/doc_images" bash scripts/make_doc_images.sh
 bash scripts/run_sanitized_tests.sh # times "sanitized build" and "sanitized tests"
