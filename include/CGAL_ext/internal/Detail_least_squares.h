@@ -97,6 +97,9 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
   CHOLMOD's supernodal LL^T when available or Eigen's SimplicialLDLT, and each solve is followed by iterative
   refinement against the residual computed from A itself (not from the rounded N).
   Conjugate gradients: matrix-free products with A and A^T, Jacobi preconditioner, three columns in lockstep.
+  Preconditioned by a simpler operator B (`factor`'s `preconditioner_rows`, the region's rows of the linear
+  order for a large quadric region): the Cholesky path above factors alpha B^T B + S^T S instead of N, whose
+  fill is far smaller, and conjugate gradients on N use that factor as the preconditioner.
 
   Nothing fails silently: CHOLMOD's status is checked after its analysis, factorisation and every solve (it
   reports running out of memory there, where Eigen's wrapper does not), an allocation that fails anywhere
@@ -124,9 +127,12 @@ public:
   /// increasing), soft or, with `exact_anchors`, hard constraints, and the positions of the region's points
   /// (they give the elimination order).
   /// Throws `Numerical_failure` when the normal matrix cannot be factored.
+  /// With `preconditioner_rows` (rows like `A`'s, same columns; soft anchors only), the factor is that of
+  /// `alpha B^T B + S^T S` and `solve` runs conjugate gradients on N preconditioned by it.
   template <typename ConcurrencyTag>
   void factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& positions,
-              const Least_squares_settings& settings, bool exact_anchors = false);
+              const Least_squares_settings& settings, bool exact_anchors = false,
+              const Sparse_row_matrix* preconditioner_rows = nullptr);
 
   /// Displacements of the region's points for the wanted detail change `detail_change` (|R| x 3) and anchor
   /// displacements `anchor_displacement` (one row per anchor, in the order given to `factor`).
@@ -266,11 +272,11 @@ private:
     }
   }
 
-  template <typename ConcurrencyTag>
-  void conjugate_gradients(const Matrix_n3& b, double b_norm, Matrix_n3& u)
+  /// Conjugate gradients on N u = b, three columns in lockstep; `precondition(r)` returns M^-1 r.
+  template <typename ConcurrencyTag, typename Preconditioner>
+  void conjugate_gradients(const Matrix_n3& b, double b_norm, Matrix_n3& u, const Preconditioner& precondition)
   {
-    const Eigen::ArrayXd inverse_diagonal = m_diagonal.array().inverse();
-    Matrix_n3 r = b, z = (r.array().colwise() * inverse_diagonal).matrix(), p = z;
+    Matrix_n3 r = b, z = precondition(r), p = z;
     Eigen::RowVector3d rz = (r.array() * z.array()).colwise().sum();
     const Eigen::RowVector3d b_column = b.colwise().norm();
     const double tolerance = m_settings.tolerance;
@@ -293,7 +299,7 @@ private:
         u.col(c) += step * p.col(c);
         r.col(c) -= step * q.col(c);
       }
-      z = (r.array().colwise() * inverse_diagonal).matrix();
+      z = precondition(r);
       const Eigen::RowVector3d rz_next = (r.array() * z.array()).colwise().sum();
       for(int c = 0; c < 3; ++c) {
         const double beta = rz(c) > 0 ? rz_next(c) / rz(c) : 0.0;
@@ -306,7 +312,10 @@ private:
     m_statistics.relative_residual = (b - apply_normal<ConcurrencyTag>(u)).norm() / b_norm;
   }
 
+  bool iterative() const { return m_settings.solver == Linear_solver::conjugate_gradient || m_preconditioned; }
+
   Least_squares_settings m_settings;
+  bool m_preconditioned = false;   // the factor is the preconditioner's, and solves iterate
   Sparse_row_matrix m_A, m_At;     // the columns of the unknowns (without exact anchors: the whole region)
   std::vector<int> m_anchors;      // soft anchors, as rows of the unknowns
   std::size_t m_region_size = 0;   // |R|
@@ -328,10 +337,15 @@ private:
 
 template <typename ConcurrencyTag>
 void Detail_least_squares::factor(Sparse_row_matrix A, std::vector<int> anchors, const Matrix_n3& given_positions,
-                                  const Least_squares_settings& settings, bool exact_anchors)
+                                  const Least_squares_settings& settings, bool exact_anchors,
+                                  const Sparse_row_matrix* preconditioner_rows)
 try {
   if(given_positions.rows() != A.cols())
     throw Invalid_input("detail least squares: the operator needs one position per unknown");
+  if(preconditioner_rows && (exact_anchors || preconditioner_rows->cols() != A.cols() ||
+                             settings.solver != Linear_solver::cholesky))
+    throw Invalid_input("detail least squares: a preconditioner needs the Cholesky solver, soft anchors and the "
+                        "operator's columns");
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   m_settings = settings;
@@ -342,6 +356,7 @@ try {
   m_main.reset();
   m_fallback.reset();
   m_factored = false;
+  m_preconditioned = preconditioner_rows != nullptr;
   m_exact.clear();
   m_free.clear();
   Matrix_n3 free_positions;
@@ -385,8 +400,12 @@ try {
     return;
   }
 
-  // Upper triangle of A^T A, row-major: read as column-major it is the lower triangle the factorisations want.
-  Sparse_row_matrix upper = sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
+  // Upper triangle of A^T A (or B^T B), row-major: read as column-major it is the lower triangle the
+  // factorisations want.
+  Sparse_row_matrix upper = m_preconditioned
+                              ? sparse_product<ConcurrencyTag>(Sparse_row_matrix(preconditioner_rows->transpose()),
+                                                               *preconditioner_rows, {}, -1, true)
+                              : sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
   upper *= alpha;
   double* diagonal_value = upper.valuePtr();
   m_scale.resize(Eigen::Index(n));
@@ -466,10 +485,15 @@ try {
 #endif
   }
 #ifdef CGAL_EXT_USE_CHOLMOD
-  m_statistics.method += m_main && amd_order ? ", AMD order" : ", geometric nested dissection";
+  const std::string order_name = m_main && amd_order ? ", AMD order" : ", geometric nested dissection";
 #else
-  m_statistics.method += ", geometric nested dissection";
+  const std::string order_name = ", geometric nested dissection";
 #endif
+  m_statistics.method += order_name;
+  if(m_preconditioned) // the factor is the preconditioner's, and nothing is refined against it
+    m_statistics.method = std::string("conjugate gradients on N, preconditioned by the ") +
+                          (m_main ? "CHOLMOD supernodal LL^T" : "Eigen SimplicialLDLT") +
+                          " of the linear order's normal matrix + 1e-12 I" + order_name;
   m_statistics.factor_seconds = seconds_since(factor_start);
   m_factored = true;
 } catch(const std::bad_alloc&) {
@@ -490,9 +514,14 @@ try {
   m_statistics.iterations = 0;
   m_statistics.relative_residual = 0;
   if(b_norm > 0) {
-    if(m_settings.solver == Linear_solver::conjugate_gradient)
-      conjugate_gradients<ConcurrencyTag>(b, b_norm, u);
-    else
+    if(m_settings.solver == Linear_solver::conjugate_gradient) {
+      const Eigen::ArrayXd inverse_diagonal = m_diagonal.array().inverse();
+      conjugate_gradients<ConcurrencyTag>(b, b_norm, u, [&](const Matrix_n3& r) -> Matrix_n3 {
+        return (r.array().colwise() * inverse_diagonal).matrix();
+      });
+    } else if(m_preconditioned) {
+      conjugate_gradients<ConcurrencyTag>(b, b_norm, u, [&](const Matrix_n3& r) -> Matrix_n3 { return factor_solve(r); });
+    } else
       refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
   }
   if(!m_exact.empty()) {
@@ -503,8 +532,7 @@ try {
   }
   if(!u.allFinite())
     throw Numerical_failure("detail least squares: the solve produced non-finite values (" + system_size() + ")");
-  const double accepted = std::max(m_settings.accepted_residual, m_settings.solver == Linear_solver::conjugate_gradient
-                                                                    ? 2 * m_settings.tolerance : 0.0);
+  const double accepted = std::max(m_settings.accepted_residual, iterative() ? 2 * m_settings.tolerance : 0.0);
   if(!(m_statistics.relative_residual <= accepted)) {
     std::ostringstream os;
     os << "detail least squares: the solve's relative residual " << m_statistics.relative_residual
@@ -522,7 +550,8 @@ try {
   EXTERN template Sparse_row_matrix detail_operator_rows<Tag>(const Sparse_row_matrix&, const Detail_filter&, \
                                                               const std::vector<int>&); \
   EXTERN template void Detail_least_squares::factor<Tag>(Sparse_row_matrix, std::vector<int>, const Matrix_n3&, \
-                                                         const Least_squares_settings&, bool); \
+                                                         const Least_squares_settings&, bool, \
+                                                         const Sparse_row_matrix*); \
   EXTERN template Matrix_n3 Detail_least_squares::solve<Tag>(const Matrix_n3&, const Matrix_n3&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DETAIL_LEAST_SQUARES_INSTANCES)
 

@@ -195,14 +195,26 @@ Matrix_n3 solve_region_displacements(const Sparse_row_matrix& K, const Matrix_n3
 {
   const auto start = std::chrono::steady_clock::now();
   Sparse_row_matrix A = detail_operator_rows<ConcurrencyTag>(K, filter, roi);
-  const double operator_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Matrix_n3 region_positions(Eigen::Index(roi.size()), 3), region_change(Eigen::Index(roi.size()), 3);
   for(std::size_t r = 0; r < roi.size(); ++r) {
     region_positions.row(Eigen::Index(r)) = positions.row(roi[r]);
     region_change.row(Eigen::Index(r)) = detail_change.row(roi[r]);
   }
+  // A large quadric region: conjugate gradients preconditioned by the linear order, c1 K on the region, whose
+  // response c1 k matches the quadric's c1 k + c2 k^2 at the smooth end (Least_squares_settings).
+  Sparse_row_matrix B;
+  const bool preconditioned = filter.order == Detail_order::quadric && settings.solver == Linear_solver::cholesky &&
+                              roi.size() >= settings.preconditioned_from;
+  if(preconditioned) {
+    Detail_filter linear;
+    linear.order = Detail_order::linear;
+    linear.lambda = 1.0 / filter.coefficients().c1;
+    B = detail_operator_rows<ConcurrencyTag>(K, linear, roi);
+  }
+  const double operator_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Detail_least_squares system;
-  system.factor<ConcurrencyTag>(std::move(A), anchors_local, region_positions, settings);
+  system.factor<ConcurrencyTag>(std::move(A), anchors_local, region_positions, settings, false,
+                                preconditioned ? &B : nullptr);
   Matrix_n3 u = system.solve<ConcurrencyTag>(region_change, anchor_displacement);
   statistics = system.statistics();
   statistics.assembly_seconds += operator_seconds;
