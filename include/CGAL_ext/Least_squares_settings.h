@@ -74,7 +74,9 @@ struct Least_squares_statistics
   std::size_t unknowns = 0;          ///< points of the region of interest
   std::size_t anchors = 0;           ///< position constraints (soft, or exact and out of the unknowns)
   std::size_t operator_nonzeros = 0; ///< non-zeros of the ROI rows of `f(K)`
-  std::size_t normal_nonzeros = 0;   ///< non-zeros of the normal matrix (both triangles; 0 for conjugate gradients)
+  /// Non-zeros of the factored matrix (both triangles): the normal matrix, or with `preconditioned_from` the
+  /// preconditioner's; 0 for Jacobi conjugate gradients.
+  std::size_t normal_nonzeros = 0;
   double assembly_seconds = 0;       ///< building `f(K)` rows and, for Cholesky, the normal matrix
   double factor_seconds = 0;
   double solve_seconds = 0;          ///< last solve, refinement included
