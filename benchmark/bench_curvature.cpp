@@ -30,7 +30,7 @@
 namespace fs = std::filesystem;
 using namespace point_detail;
 
-namespace {
+namespace bench_curvature {
 
 struct Row
 {
@@ -228,9 +228,8 @@ void write_normals_results(const fs::path& out, const std::vector<Normals_row>& 
   }
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_curvature", 3);
@@ -304,3 +303,10 @@ int main(int argc, char** argv)
   std::printf("wrote %s\n", (out / "normals_results.md").string().c_str());
   return 0;
 }
+
+} // namespace bench_curvature
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_curvature::run(argc, argv); }
+#endif

@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 using namespace point_detail;
 namespace ci = CGAL_ext::internal;
 
-namespace {
+namespace bench_details {
 
 struct Row
 {
@@ -94,9 +94,8 @@ std::string machine_facts(int threads)
   return os.str();
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_details", 5);
@@ -142,3 +141,10 @@ int main(int argc, char** argv)
   std::printf("wrote %s and %s\n", (out / "details_results.md").string().c_str(), (out / "details_results.csv").string().c_str());
   return 0;
 }
+
+} // namespace bench_details
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_details::run(argc, argv); }
+#endif

@@ -34,7 +34,7 @@ namespace internal = CGAL_ext::internal;
 using Deformation = CGAL_ext::Detail_preserving_deformation<CGAL::Parallel_tag>;
 using Mesh = CGAL::Surface_mesh<Point>;
 
-namespace {
+namespace bench_editing {
 
 std::vector<std::string> lines; // the Markdown report, section by section
 std::ofstream csv;
@@ -502,9 +502,8 @@ void sample_point_quality(const std::string& name, const Point_cloud& cloud, con
   }
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_editing", 3);
@@ -619,3 +618,10 @@ int main(int argc, char** argv)
   std::printf("wrote %s and %s\n", (out / "editing_results.md").string().c_str(), (out / "editing_results.csv").string().c_str());
   return 0;
 }
+
+} // namespace bench_editing
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_editing::run(argc, argv); }
+#endif

@@ -26,7 +26,7 @@
 namespace fs = std::filesystem;
 using namespace point_detail;
 
-namespace {
+namespace bench_scaling {
 
 struct Case
 {
@@ -110,9 +110,8 @@ double base_surface_offset(const Point_cloud& cloud)
   return offset / std::sqrt(rms); // mean offset relative to the RMS offset (the size of the removed detail)
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_scaling", 3);
@@ -186,3 +185,10 @@ int main(int argc, char** argv)
   std::printf("wrote %s and %s\n", (out / "scaling_results.md").string().c_str(), (out / "scaling_results.csv").string().c_str());
   return 0;
 }
+
+} // namespace bench_scaling
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_scaling::run(argc, argv); }
+#endif

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using namespace point_detail;
 namespace internal = CGAL_ext::internal;
 
-namespace {
+namespace bench_simplification {
 
 struct Row
 {
@@ -127,9 +127,8 @@ void sweep_threshold(const std::string& name, const Point_cloud& input, std::vec
   }
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_simplification", 3);
@@ -176,3 +175,10 @@ int main(int argc, char** argv)
               (out / "simplification_results.csv").string().c_str());
   return 0;
 }
+
+} // namespace bench_simplification
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_simplification::run(argc, argv); }
+#endif

@@ -32,7 +32,7 @@ using Mesh = CGAL::Surface_mesh<Point>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<Mesh>>>;
 using Inserted = std::vector<std::pair<Point, Vector>>;
 
-namespace {
+namespace bench_upsampling {
 
 std::vector<std::string> lines;
 std::ofstream csv;
@@ -201,9 +201,8 @@ void bench(const std::string& name, const Point_cloud& input, const Mesh& mesh, 
   }
 }
 
-} // namespace
 
-int main(int argc, char** argv)
+int run(int argc, char** argv)
 {
   use_huge_pages(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_upsampling", 3);
@@ -241,3 +240,10 @@ int main(int argc, char** argv)
   std::printf("wrote %s\n", (options.out / "upsampling_results.md").string().c_str());
   return 0;
 }
+
+} // namespace bench_upsampling
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return bench_upsampling::run(argc, argv); }
+#endif

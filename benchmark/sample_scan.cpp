@@ -6,7 +6,9 @@
 
 #include <iostream>
 
-int main(int argc, char** argv)
+namespace sample_scan {
+
+int run(int argc, char** argv)
 {
   const bool without_normals = argc == 5 && std::string(argv[4]) == "--without-normals";
   if(argc != 4 && !without_normals) {
@@ -24,3 +26,10 @@ int main(int argc, char** argv)
   }
   return 0;
 }
+
+} // namespace sample_scan
+
+// The project links every benchmark from one library (benchmark/CMakeLists.txt); alone, this file is a program.
+#ifndef CGAL_EXT_BENCHMARK_LIBRARY
+int main(int argc, char** argv) { return sample_scan::run(argc, argv); }
+#endif

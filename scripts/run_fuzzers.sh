@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (ASan + UBSan) and runs each for SECONDS (default 30), as many at a
 # time as there are cores, from the committed seed corpus in fuzz/corpus/<target>. New corpus entries go to a scratch folder; a crash, leak or
-# undefined behaviour stops with its input saved under build-fuzz/findings/ and a non-zero exit.
+# undefined behaviour stops with its input saved under build-sanitize/findings/ and a non-zero exit.
 # Usage: scripts/run_fuzzers.sh [SECONDS] [TARGET...]   (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,15 +10,9 @@ seconds=${1:-30}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(fuzz_point_reader fuzz_edit_json fuzz_sel_def fuzz_region_spec)
-build=${FUZZ_BUILD_DIR:-build-fuzz}
-# The readers use no numerical core: header-only (no compiled instances) builds only what they need.
-fuzz_build() {
-  bash scripts/setup.sh &&
-    CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCGAL_EXT_BUILD_FUZZERS=ON \
-      -DCGAL_EXT_COMPILED_INSTANCES=OFF -DCGAL_EXT_BUILD_TESTS=OFF -DCGAL_EXT_BUILD_EXAMPLES=OFF \
-      -DCGAL_EXT_BUILD_BENCHMARKS=OFF >/dev/null &&
-    cmake --build "$build" -j"$(nproc)" --target "${targets[@]}"
-}
+build=${SANITIZE_BUILD_DIR:-build-sanitize}
+# The targets are part of the sanitized build: after scripts/run_sanitized_tests.sh there is nothing to build.
+fuzz_build() { bash scripts/sanitized_build.sh "${targets[@]}"; }
 # One target for SECONDS; its summary lines go to stdout, its log and any finding under $build/findings/.
 fuzz_one() {
   local target=$1 scratch status=0

@@ -1,20 +1,13 @@
 #!/usr/bin/env bash
 # Builds the library, the program and every test with AddressSanitizer and UndefinedBehaviorSanitizer
-# (-O1, line tables) and runs the test suite but for two parts left to the Release pass (below); any memory
-# error, leak or undefined behaviour fails it.
+# (scripts/sanitized_build.sh, which builds the fuzz targets too) and runs the test suite but for two parts
+# left to the Release pass (below); any memory error, leak or undefined behaviour fails it.
 # Usage: scripts/run_sanitized_tests.sh   (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/stage_timing.sh
 build=${SANITIZE_BUILD_DIR:-build-sanitize}
-sanitized_build() {
-  bash scripts/setup.sh &&
-    cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
-      -DCGAL_EXT_SANITIZE=ON -DCGAL_EXT_BUILD_EXAMPLES=OFF -DCGAL_EXT_BUILD_BENCHMARKS=OFF \
-      -DCGAL_EXT_TEST_WITHOUT_CHOLMOD=OFF -DCGAL_EXT_TEST_DETERMINISM=OFF >/dev/null &&
-    cmake --build "$build" -j"$(nproc)"
-}
-timed_stage "sanitized build" sanitized_build
+timed_stage "sanitized build" bash scripts/sanitized_build.sh
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Left to the Release pass: the installed-package test (it builds a separate consumer project without

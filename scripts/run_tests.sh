@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Sets everything up (Debian packages), builds, and runs every test: the test suite with ctest (Release,
-# examples included), the benchmark harness in its quick mode, that README's headline figures come from committed
-# result files, that no internal header includes an algorithm header (scripts/include_layers.py), the API
-# reference (no Doxygen warning allowed), the manual's pictures (into the build folder), the same test suite
-# built with AddressSanitizer and UndefinedBehaviorSanitizer, and each fuzz target for 30 seconds. Ends with the
-# time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); a fresh clone with the
-# compiler cache off took 22.5 minutes on 2 cores (doc/design.md, "Build time").
+# Sets everything up (Debian packages), builds, and runs every test: a Release build of the program, the
+# examples, the benchmarks and the tests that need it (examples, determinism reruns, the installed package, the
+# solver without CHOLMOD, real scans) with ctest, the benchmark harness in its quick mode, that README's headline
+# figures come from committed result files, that no internal header includes an algorithm header
+# (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into the
+# build folder), the unit tests of the library and the program built with AddressSanitizer and
+# UndefinedBehaviorSanitizer (each unit test runs once, there), and each fuzz target for 30 seconds. Ends with
+# the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/design.md,
+# "Build time", gives the figures of a fresh clone with the compiler cache off on 2 cores.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,6 +17,7 @@ mkdir -p "$build"
 export STAGE_TIMES="$PWD/$build/stage_times.tsv"
 : >"$STAGE_TIMES"
 run_start=$(date +%s.%N)
+export CGAL_EXT_UNIT_TESTS=OFF # the unit tests run in the sanitized pass (scripts/release_build.sh)
 timed_stage setup bash scripts/setup.sh
 timed_stage "release build" bash scripts/release_build.sh
 timed_stage "release tests" ctest --test-dir "$build" -j"$(nproc)" --output-on-failure

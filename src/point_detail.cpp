@@ -860,7 +860,10 @@ struct Demo_command
     // quadric order; the pictures are coloured by the displacement along the normal.
     const std::vector<std::size_t> middle = select_points(input.points, {parse_region_spec("sphere:-0.29,0,0.71,0.3")});
     const std::vector<std::size_t> whole = index_range(input.points.size());
-    for(const auto& [enhance, factor] : {std::pair{false, 0.6}, std::pair{false, 1.2}, std::pair{true, 2.0}, std::pair{true, 3.0}}) {
+    for(const auto& [enhance_binding, factor_binding] :
+        {std::pair{false, 0.6}, std::pair{false, 1.2}, std::pair{true, 2.0}, std::pair{true, 3.0}}) {
+      const bool enhance = enhance_binding; // C++17 lambdas cannot capture structured bindings
+      const double factor = factor_binding;
       const std::string what = enhance ? "enhance" : "scale";
       char stem[64];
       std::snprintf(stem, sizeof stem, "%s_%.1f", what.c_str(), factor);

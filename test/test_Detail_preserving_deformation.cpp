@@ -41,7 +41,7 @@ struct Tentacle
     diagonal = box.diagonal().norm();
   }
 
-  const auto np() const
+  auto np() const
   {
     return CGAL::parameters::point_map(CGAL::make_property_map(shape.points)).normal_map(CGAL::make_property_map(shape.normals));
   }
@@ -612,13 +612,13 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleApproachesItsFixedPointWithMo
   // iterations). The reference: 100 iterations per step (on 1,500 points they land 1e-4 of the diagonal from
   // the fixed point, where no iteration moves a sample point more than 1e-7 of the region).
   const Tentacle t(1000);
-  const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
+  const std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
   auto solve = [&](unsigned iterations, double tolerance) {
     Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
     settings.rigid_iterations = iterations;
     settings.rigid_tolerance = tolerance;
     auto d = t.edit(settings);
-    d->set_handle_transform(0, R, shift);
+    d->set_handle_transform(0, turn.first, turn.second);
     EXPECT_TRUE(d->deform());
     return d;
   };

@@ -482,7 +482,7 @@ const std::vector<Row>& catalogue()
     {"cli_out_of_memory", [] {
        // Under an address-space limit (ulimit -v, as batch systems impose) a run either writes what it writes
        // without one, byte for byte, or fails with one line naming the shortage, exit status 3 and no output.
-#ifdef __SANITIZE_ADDRESS__
+#if TEST_WITH_ADDRESS_SANITIZER
        GTEST_SKIP() << "AddressSanitizer reserves more address space than these limits allow";
 #else
        // Three quarters of a 30,000-point sphere, cubic order: its factorisation peaks near 540 MB.

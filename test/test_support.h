@@ -13,6 +13,18 @@
 #include <functional>
 #include <numeric>
 #include <string>
+
+// Built with AddressSanitizer: GCC says so with __SANITIZE_ADDRESS__, clang 14 through __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+#define TEST_WITH_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TEST_WITH_ADDRESS_SANITIZER 1
+#endif
+#endif
+#ifndef TEST_WITH_ADDRESS_SANITIZER
+#define TEST_WITH_ADDRESS_SANITIZER 0
+#endif
 #include <vector>
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
