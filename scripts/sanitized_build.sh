@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 build=${SANITIZE_BUILD_DIR:-build-sanitize}
-CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+cmake -S . -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCGAL_EXT_SANITIZE=ON -DCGAL_EXT_BUILD_FUZZERS=ON \
   -DCGAL_EXT_BUILD_EXAMPLES=OFF -DCGAL_EXT_BUILD_BENCHMARKS=OFF -DCGAL_EXT_UNIT_TESTS=ON \
   -DCGAL_EXT_TEST_WITHOUT_CHOLMOD=OFF -DCGAL_EXT_TEST_DETERMINISM=OFF >/dev/null

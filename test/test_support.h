@@ -13,6 +13,7 @@
 #include <functional>
 #include <numeric>
 #include <string>
+#include <vector>
 
 // Built with AddressSanitizer: GCC says so with __SANITIZE_ADDRESS__, clang 14 through __has_feature.
 #if defined(__SANITIZE_ADDRESS__)
@@ -25,7 +26,6 @@
 #ifndef TEST_WITH_ADDRESS_SANITIZER
 #define TEST_WITH_ADDRESS_SANITIZER 0
 #endif
-#include <vector>
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
