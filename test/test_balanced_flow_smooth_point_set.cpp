@@ -1,9 +1,14 @@
 #include <CGAL_ext/balanced_flow_smooth_point_set.h>
 #include <CGAL_ext/generated_shapes.h>
+#include <CGAL_ext/internal/balanced_flow.h>
+
+#include <Eigen/IterativeLinearSolvers>
 
 #include "bumpy_sphere_fixture.h"
 
 #include <gtest/gtest.h>
+
+#include <random>
 
 using namespace CGAL_ext;
 
@@ -47,3 +52,39 @@ TEST(BalancedFlow, ThinTubeKeepsItsThickness)
   EXPECT_LT(left_energy, 0.2 * bump_energy);
 }
 
+
+// The balance equation's BiCGSTAB runs its products and updates in parallel and still takes Eigen's steps:
+// the same iterate, bit for bit, on a non-symmetric diagonally dominant system like the flow's, with either
+// concurrency tag; a singular system that cannot reach the tolerance is an error, not a result.
+TEST(BalancedFlow, ParallelBiCGSTABTakesEigensStepsAndReportsFailure)
+{
+  const int n = 3000;
+  std::vector<Eigen::Triplet<double>> entries;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> weight(-1.0, 1.0);
+  std::uniform_int_distribution<int> column(0, n - 1);
+  for(int i = 0; i < n; ++i) {
+    entries.emplace_back(i, i, 1.005);
+    for(int e = 0; e < 10; ++e) entries.emplace_back(i, column(random), 0.099 * weight(random));
+  }
+  internal::Sparse_row_matrix M(n, n);
+  M.setFromTriplets(entries.begin(), entries.end());
+  Eigen::VectorXd rhs(n);
+  for(int i = 0; i < n; ++i) rhs[i] = weight(random);
+  Eigen::BiCGSTAB<internal::Sparse_row_matrix, Eigen::DiagonalPreconditioner<double>> eigen(M);
+  eigen.setTolerance(1e-8);
+  const Eigen::VectorXd expected = eigen.solve(rhs);
+  ASSERT_EQ(eigen.info(), Eigen::Success);
+  const Eigen::VectorXd parallel = internal::bicgstab_jacobi<CGAL::Parallel_if_available_tag>(M, rhs, 1e-8);
+  const Eigen::VectorXd sequential = internal::bicgstab_jacobi<CGAL::Sequential_tag>(M, rhs, 1e-8);
+  EXPECT_TRUE((parallel.array() == expected.array()).all());
+  EXPECT_TRUE((sequential.array() == expected.array()).all());
+  EXPECT_LE((M * parallel - rhs).norm(), 1e-8 * rhs.norm());
+
+  // Two equal rows and a right-hand side that asks them for different values.
+  internal::Sparse_row_matrix singular(2, 2);
+  std::vector<Eigen::Triplet<double>> ones{{0, 0, 1.0}, {0, 1, 1.0}, {1, 0, 1.0}, {1, 1, 1.0}};
+  singular.setFromTriplets(ones.begin(), ones.end());
+  EXPECT_THROW(internal::bicgstab_jacobi<CGAL::Sequential_tag>(singular, Eigen::Vector2d(1.0, -1.0), 1e-8),
+               Numerical_failure);
+}

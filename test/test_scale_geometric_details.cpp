@@ -278,6 +278,36 @@ TEST(ScaleGeometricDetails, RefittedNormalsFollowTheFlattenedSurface)
   EXPECT_EQ(untouched, points.size() - refitted);
 }
 
+// Refitting fits on the moved points' surroundings only (a box grown by a reach it checks), and gets what a fit
+// on the whole set gets, bit for bit: each fit sees the same neighbours. Checked against a refit of every point,
+// for a cap of a sphere and for points scattered over all of it (whose box is the whole set).
+TEST(ScaleGeometricDetails, RefitOnTheSurroundingsEqualsTheRefitOnTheWholeSet)
+{
+  const auto sphere = shapes::bumpy_sphere<Kernel>(20000, 1.0, 0.02, 4.0);
+  std::vector<std::size_t> all(sphere.points.size()), scattered;
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  for(std::size_t i = 0; i < all.size(); i += 97) scattered.push_back(i);
+  for(const std::vector<std::size_t>& moved : {cap_of_sphere(sphere.points, 0.8), scattered}) {
+    std::vector<Point> points = sphere.points;
+    for(std::size_t i : moved) points[i] = points[i] + 0.05 * sphere.normals[i];
+    std::vector<Vector> part = sphere.normals, whole = sphere.normals;
+    auto with = [&](std::vector<Vector>& normals) {
+      return CGAL::parameters::point_map(CGAL::make_property_map(points)).normal_map(CGAL::make_property_map(normals));
+    };
+    const std::size_t refitted = refit_normals(all, moved, 10, with(part));
+    ASSERT_EQ(refit_normals(all, all, 10, with(whole)), all.size());
+    std::size_t changed = 0, different = 0;
+    for(std::size_t i = 0; i < all.size(); ++i)
+      if(part[i] != sphere.normals[i]) {
+        ++changed;
+        different += part[i] != whole[i];
+      }
+    EXPECT_GT(refitted, moved.size());
+    EXPECT_EQ(changed, refitted);
+    EXPECT_EQ(different, 0u);
+  }
+}
+
 TEST(ScaleGeometricDetails, BorderAnchoringByOrderKeepsACurvedRegionInShape)
 {
   // A quarter of a sphere (2,500 points) scaled by 2: the automatic default keeps the largest displacement

@@ -14,6 +14,11 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -50,25 +55,94 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
   using Vector = typename NP_helper::Geom_traits::Vector_3;
   constexpr const char* who = "refit_normals";
-  const internal::Spatial_point_cloud cloud =
-    internal::make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
-  if(k < 6 || k > cloud.size())
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  const std::vector<SC_point> copy = internal::copy_points(points, NP_helper::get_const_point_map(points, np), who);
+  internal::check_spans_a_surface(copy, who);
+  const std::size_t n = copy.size();
+  if(k < 6 || k > n)
     throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) + " must be at least 6 (the fit has 6 "
-                        "coefficients) and at most the number of points (" + std::to_string(cloud.size()) + ")");
+                        "coefficients) and at most the number of points (" + std::to_string(n) + ")");
   if(!internal::has_given_normals<NamedParameters>(points))
     throw Invalid_input(std::string(who) + ": the points need normals (normal_map): they give the new normals their side");
-  const auto normal_map = NP_helper::get_normal_map(points, np);
-  const internal::Matrix_n3 normals = internal::gather_normals(points, normal_map, cloud, who);
-  const std::vector<int> row_of = cloud.spatial_index();
-  const std::vector<int> moved = internal::rows_of_indices(indices, row_of, who, "moved");
-  const internal::Position_tree tree(cloud.positions, ConcurrencyTag());
+  std::vector<int> identity(n);
+  std::iota(identity.begin(), identity.end(), 0);
+  const std::vector<int> moved = internal::rows_of_indices(indices, identity, who, "moved");
+  auto position = [&](std::size_t i) { return Eigen::RowVector3d(copy[i].x(), copy[i].y(), copy[i].z()); };
 
-  // The moved points and their neighbours.
-  std::vector<char> refit(cloud.size(), 0);
-  for(int row : moved) {
-    refit[std::size_t(row)] = 1;
-    tree.nearest(internal::Position_tree::point(cloud.positions, row), k, [&](int j, double) { refit[std::size_t(j)] = 1; });
+  // Only the moved points' surroundings take part (doc/design.md, "Refitted normals"): the points in their
+  // bounding box grown by a reach, in spatial order. The reach is checked after the fact: when each moved
+  // point's k nearest points in the surroundings lie within d of it and the box holds the ball of radius 3 d
+  // about it, those are its k nearest in the whole set, and so are the k nearest of each of them (within 2 d
+  // of them). Otherwise the whole set is used.
+  auto surroundings_within = [&](double reach) {
+    Eigen::RowVector3d low = position(std::size_t(moved.front())), high = low;
+    for(int i : moved) {
+      low = low.cwiseMin(position(std::size_t(i)));
+      high = high.cwiseMax(position(std::size_t(i)));
+    }
+    low.array() -= reach;
+    high.array() += reach;
+    std::vector<SC_point> kept;
+    std::vector<int> kept_index;
+    for(std::size_t i = 0; i < n; ++i) {
+      const Eigen::RowVector3d p = position(i);
+      if(!std::isfinite(reach) || ((p.array() >= low.array()).all() && (p.array() <= high.array()).all())) {
+        kept.push_back(copy[i]);
+        kept_index.push_back(int(i));
+      }
+    }
+    internal::Spatial_point_cloud cloud = internal::sort_spatially<ConcurrencyTag>(kept, who);
+    for(int& i : cloud.input_index) i = kept_index[std::size_t(i)];
+    return cloud;
+  };
+  double reach = std::numeric_limits<double>::infinity();
+  if(moved.size() >= k && moved.size() < n) {
+    // Twice the largest distance of up to 2,000 moved points to their k-th nearest moved point, times 3.
+    internal::Matrix_n3 moved_positions(Eigen::Index(moved.size()), 3);
+    for(std::size_t m = 0; m < moved.size(); ++m) moved_positions.row(Eigen::Index(m)) = position(std::size_t(moved[m]));
+    const std::size_t stride = std::max<std::size_t>(1, moved.size() / 2000);
+    internal::Matrix_n3 probes(Eigen::Index((moved.size() + stride - 1) / stride), 3);
+    for(Eigen::Index q = 0; q < probes.rows(); ++q) probes.row(q) = moved_positions.row(q * Eigen::Index(stride));
+    const internal::Neighbor_graph probe_neighbors = internal::k_nearest_samples<ConcurrencyTag>(moved_positions, probes, k);
+    double largest = 0;
+    for(std::size_t q = 0; q < std::size_t(probes.rows()); ++q)
+      largest = std::max(largest, (moved_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm());
+    reach = 6 * largest;
   }
+  internal::Spatial_point_cloud surroundings;
+  std::unique_ptr<internal::Position_tree> tree;
+  internal::Neighbor_graph neighbors;
+  std::vector<int> moved_rows;
+  for(;;) {
+    surroundings = surroundings_within(reach);
+    std::vector<int> surroundings_row(n, -1);
+    for(std::size_t r = 0; r < surroundings.size(); ++r) surroundings_row[std::size_t(surroundings.input_index[r])] = int(r);
+    moved_rows.clear();
+    for(int i : moved) moved_rows.push_back(surroundings_row[std::size_t(i)]);
+    tree = std::make_unique<internal::Position_tree>(surroundings.positions, ConcurrencyTag());
+    neighbors = internal::fixed_degree_graph(moved.size(), k);
+    std::vector<double> kth_distance(moved.size());
+    internal::for_range<ConcurrencyTag>(0, moved.size(), [&](std::size_t m) {
+      int* out = neighbors.indices.data() + m * k;
+      tree->nearest(internal::Position_tree::point(surroundings.positions, moved_rows[m]), k, [&](int j, double d2) {
+        *out++ = j;
+        kth_distance[m] = std::sqrt(d2);
+      });
+    });
+    if(!std::isfinite(reach)) break;
+    bool enough = true;
+    for(std::size_t m = 0; m < moved.size() && enough; ++m) enough = 3 * kth_distance[m] <= reach;
+    if(enough) break;
+    reach = std::numeric_limits<double>::infinity();
+  }
+  // Every normal is read and checked, those of the surroundings kept.
+  const auto normal_map = NP_helper::get_normal_map(points, np);
+  const internal::Matrix_n3 normals = internal::gather_normals(points, normal_map, surroundings, who);
+
+  // The moved points and their neighbours, as rows of the surroundings.
+  std::vector<char> refit(surroundings.size(), 0);
+  for(int row : moved_rows) refit[std::size_t(row)] = 1;
+  for(int j : neighbors.indices) refit[std::size_t(j)] = 1;
   std::vector<int> rows;
   for(std::size_t r = 0; r < refit.size(); ++r)
     if(refit[r]) rows.push_back(int(r));
@@ -76,17 +150,17 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   internal::Matrix_n3 fitted(Eigen::Index(rows.size()), 3);
   internal::for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t m) {
     const int row = rows[m];
-    const Eigen::Vector3d p = cloud.positions.row(row).transpose(), current = normals.row(row).transpose();
+    const Eigen::Vector3d p = surroundings.positions.row(row).transpose(), current = normals.row(row).transpose();
     thread_local std::vector<int> near;
     near.clear();
-    tree.nearest(internal::Position_tree::point(cloud.positions, row), k, [&](int j, double) { near.push_back(j); });
+    tree->nearest(internal::Position_tree::point(surroundings.positions, row), k, [&](int j, double) { near.push_back(j); });
     // The principal plane frames the fit: the old normal may be far from the new surface's (s = 0 on a bump).
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for(int j : near) mean += cloud.positions.row(j).transpose();
+    for(int j : near) mean += surroundings.positions.row(j).transpose();
     mean /= double(near.size());
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     for(int j : near) {
-      const Eigen::Vector3d d = cloud.positions.row(j).transpose() - mean;
+      const Eigen::Vector3d d = surroundings.positions.row(j).transpose() - mean;
       covariance += d * d.transpose();
     }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
@@ -94,17 +168,17 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     Eigen::Vector3d axis = eigen.eigenvectors().col(0);
     if(!axis.allFinite() || !(axis.squaredNorm() > 0)) axis = current;
     internal::Height_fit fit(p, axis.dot(current) < 0 ? Eigen::Vector3d(-axis) : axis);
-    fit.fit(int(near.size()), [&](int i) { return Eigen::Vector3d(cloud.positions.row(near[std::size_t(i)]).transpose()); });
+    fit.fit(int(near.size()), [&](int i) { return Eigen::Vector3d(surroundings.positions.row(near[std::size_t(i)]).transpose()); });
     Eigen::Vector3d n = fit.normal(p);
     if(!n.allFinite()) n = current.normalized();
     fitted.row(Eigen::Index(m)) = (n.dot(current) < 0 ? Eigen::Vector3d(-n) : n).transpose();
   });
 
-  std::vector<int> fitted_row(cloud.size(), -1);
-  for(std::size_t m = 0; m < rows.size(); ++m) fitted_row[std::size_t(rows[m])] = int(m);
+  std::vector<int> fitted_of(n, -1);
+  for(std::size_t m = 0; m < rows.size(); ++m) fitted_of[std::size_t(surroundings.input_index[std::size_t(rows[m])])] = int(m);
   std::size_t i = 0;
   for(const auto& item : points) {
-    const int m = fitted_row[std::size_t(row_of[i++])];
+    const int m = fitted_of[i++];
     if(m >= 0) put(normal_map, item, Vector(fitted(m, 0), fitted(m, 1), fitted(m, 2)));
   }
   return rows.size();

@@ -16,9 +16,9 @@
 #ifdef CGAL_EXT_CORE_DEFINITIONS
 #include <CGAL/Spatial_sort_traits_adapter_3.h>
 #include <CGAL/hilbert_sort.h>
+#endif
 
 #include <Eigen/Eigenvalues>
-#endif
 
 #include <algorithm>
 #include <climits>
@@ -68,7 +68,6 @@ inline std::string describe_point(std::size_t i, double x, double y, double z)
 template <typename ConcurrencyTag>
 Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who);
 
-#ifdef CGAL_EXT_CORE_DEFINITIONS
 /// Throws when three or more points all coincide or lie on one line: they sample no surface, and every
 /// tangent plane, normal and curvature of them is undefined.
 inline void check_spans_a_surface(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& points, const char* who)
@@ -91,6 +90,7 @@ inline void check_spans_a_surface(const std::vector<CGAL::Simple_cartesian<doubl
                         " points are collinear; they sample no surface");
 }
 
+#ifdef CGAL_EXT_CORE_DEFINITIONS
 template <typename ConcurrencyTag>
 Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who)
 {
@@ -115,19 +115,18 @@ Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<doub
 }
 #endif
 
-/// Copies and validates the points of `points` (in range order) and sorts them spatially.
-/// `who` names the calling algorithm in error messages.
-template <typename ConcurrencyTag, typename PointRange, typename PointMap>
-Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap point_map, const char* who)
+/// Copies and validates the points of `points`, in range order. `who` names the calling algorithm in error
+/// messages.
+template <typename PointRange, typename PointMap>
+std::vector<CGAL::Simple_cartesian<double>::Point_3> copy_points(const PointRange& points, PointMap point_map, const char* who)
 {
-  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
   const std::size_t n = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
   if(n == 0)
     throw Invalid_input(std::string(who) + ": the point range is empty");
   if(n >= std::size_t(INT_MAX))
     throw Invalid_input(std::string(who) + ": too many points (at most 2^31 - 2 are supported)");
 
-  std::vector<SC_point> copy;
+  std::vector<CGAL::Simple_cartesian<double>::Point_3> copy;
   copy.reserve(n);
   std::size_t i = 0;
   for(const auto& item : points) {
@@ -139,7 +138,15 @@ Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap 
     copy.emplace_back(x, y, z);
     ++i;
   }
-  return sort_spatially<ConcurrencyTag>(copy, who);
+  return copy;
+}
+
+/// Copies and validates the points of `points` (in range order) and sorts them spatially.
+/// `who` names the calling algorithm in error messages.
+template <typename ConcurrencyTag, typename PointRange, typename PointMap>
+Spatial_point_cloud make_spatial_point_cloud(const PointRange& points, PointMap point_map, const char* who)
+{
+  return sort_spatially<ConcurrencyTag>(copy_points(points, point_map, who), who);
 }
 
 /// Reads the caller's normals in the cloud's order, normalised. Throws on a zero or non-finite normal.

@@ -82,11 +82,23 @@ Region region_surroundings(Region region, std::size_t k, double margin, std::siz
   const double reach = margin * radii[radii.size() / 2];
   if(!(reach > 0) || !std::isfinite(reach)) return region;
 
-  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(roi_positions, region.cloud.positions, 1);
+  // Only the points in the region's bounding box grown by the reach can be that close: the others are not
+  // searched (on a region of a tenth of a large model, most of the points).
+  const Eigen::RowVector3d low = roi_positions.colwise().minCoeff().array() - reach;
+  const Eigen::RowVector3d high = roi_positions.colwise().maxCoeff().array() + reach;
+  std::vector<int> candidates;
+  for(std::size_t i = 0; i < n; ++i) {
+    const auto p = region.cloud.positions.row(Eigen::Index(i));
+    if((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) candidates.push_back(int(i));
+  }
+  Matrix_n3 candidate_positions(Eigen::Index(candidates.size()), 3);
+  for(std::size_t c = 0; c < candidates.size(); ++c)
+    candidate_positions.row(Eigen::Index(c)) = region.cloud.positions.row(candidates[c]);
+  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(roi_positions, candidate_positions, 1);
   std::vector<int> kept;
-  for(std::size_t i = 0; i < n; ++i)
-    if((region.cloud.positions.row(Eigen::Index(i)) - roi_positions.row(*nearest.begin(i))).squaredNorm() <= reach * reach)
-      kept.push_back(int(i));
+  for(std::size_t c = 0; c < candidates.size(); ++c)
+    if((candidate_positions.row(Eigen::Index(c)) - roi_positions.row(*nearest.begin(c))).squaredNorm() <= reach * reach)
+      kept.push_back(candidates[c]);
   if(4 * kept.size() > 3 * n || kept.size() < min_points) return region;
 
   Region local;
