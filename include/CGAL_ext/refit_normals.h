@@ -32,7 +32,8 @@ namespace CGAL_ext {
   neighbours (their fits see the moved points), becomes that of a degree-2 height function fitted to the point
   and its `k - 1` nearest neighbours over their principal plane, turned to the side of its current normal.
   The other normals are not touched. A region flattened by `s = 0` gets the normals of the flat surface (a
-  test checks within 3 degrees); one enhanced gets those of its sharper details.
+  test checks within 3 degrees); one enhanced gets those of its sharper details. The fits read only the moved
+  points' surroundings, so a small region of a large set costs what its surroundings cost.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`;
           both give the same result.
@@ -119,6 +120,7 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     for(std::size_t r = 0; r < surroundings.size(); ++r) surroundings_row[std::size_t(surroundings.input_index[r])] = int(r);
     moved_rows.clear();
     for(int i : moved) moved_rows.push_back(surroundings_row[std::size_t(i)]);
+    std::sort(moved_rows.begin(), moved_rows.end()); // queries in spatial order walk the tree's memory in order
     tree = std::make_unique<internal::Position_tree>(surroundings.positions, ConcurrencyTag());
     neighbors = internal::fixed_degree_graph(moved.size(), k);
     std::vector<double> kth_distance(moved.size());
