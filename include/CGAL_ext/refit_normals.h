@@ -98,16 +98,20 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   };
   double reach = std::numeric_limits<double>::infinity();
   if(moved.size() >= k && moved.size() < n) {
-    // Twice the largest distance of up to 2,000 moved points to their k-th nearest moved point, times 3.
+    // The first reach: three times twice the largest distance of up to 2,000 moved points to their k-th
+    // nearest moved point (twice: a margin for the moved points not probed).
     internal::Matrix_n3 moved_positions(Eigen::Index(moved.size()), 3);
-    for(std::size_t m = 0; m < moved.size(); ++m) moved_positions.row(Eigen::Index(m)) = position(std::size_t(moved[m]));
+    for(std::size_t m = 0; m < moved.size(); ++m)
+      moved_positions.row(Eigen::Index(m)) = position(std::size_t(moved[m]));
     const std::size_t stride = std::max<std::size_t>(1, moved.size() / 2000);
     internal::Matrix_n3 probes(Eigen::Index((moved.size() + stride - 1) / stride), 3);
     for(Eigen::Index q = 0; q < probes.rows(); ++q) probes.row(q) = moved_positions.row(q * Eigen::Index(stride));
-    const internal::Neighbor_graph probe_neighbors = internal::k_nearest_samples<ConcurrencyTag>(moved_positions, probes, k);
+    const internal::Neighbor_graph probe_neighbors =
+      internal::k_nearest_samples<ConcurrencyTag>(moved_positions, probes, k);
     double largest = 0;
     for(std::size_t q = 0; q < std::size_t(probes.rows()); ++q)
-      largest = std::max(largest, (moved_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm());
+      largest = std::max(largest,
+                         (moved_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm());
     reach = 6 * largest;
   }
   internal::Spatial_point_cloud surroundings;
@@ -115,9 +119,17 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   internal::Neighbor_graph neighbors;
   std::vector<int> moved_rows;
   for(;;) {
-    surroundings = surroundings_within(reach);
+    try {
+      surroundings = surroundings_within(reach);
+    } catch(const Invalid_input&) {
+      // The box's points lie on a line (the whole set was checked to span a surface): use the whole set.
+      if(!std::isfinite(reach)) throw;
+      reach = std::numeric_limits<double>::infinity();
+      continue;
+    }
     std::vector<int> surroundings_row(n, -1);
-    for(std::size_t r = 0; r < surroundings.size(); ++r) surroundings_row[std::size_t(surroundings.input_index[r])] = int(r);
+    for(std::size_t r = 0; r < surroundings.size(); ++r)
+      surroundings_row[std::size_t(surroundings.input_index[r])] = int(r);
     moved_rows.clear();
     for(int i : moved) moved_rows.push_back(surroundings_row[std::size_t(i)]);
     std::sort(moved_rows.begin(), moved_rows.end()); // queries in spatial order walk the tree's memory in order
@@ -155,7 +167,8 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     const Eigen::Vector3d p = surroundings.positions.row(row).transpose(), current = normals.row(row).transpose();
     thread_local std::vector<int> near;
     near.clear();
-    tree->nearest(internal::Position_tree::point(surroundings.positions, row), k, [&](int j, double) { near.push_back(j); });
+    tree->nearest(internal::Position_tree::point(surroundings.positions, row), k,
+                  [&](int j, double) { near.push_back(j); });
     // The principal plane frames the fit: the old normal may be far from the new surface's (s = 0 on a bump).
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for(int j : near) mean += surroundings.positions.row(j).transpose();
@@ -170,14 +183,16 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     Eigen::Vector3d axis = eigen.eigenvectors().col(0);
     if(!axis.allFinite() || !(axis.squaredNorm() > 0)) axis = current;
     internal::Height_fit fit(p, axis.dot(current) < 0 ? Eigen::Vector3d(-axis) : axis);
-    fit.fit(int(near.size()), [&](int i) { return Eigen::Vector3d(surroundings.positions.row(near[std::size_t(i)]).transpose()); });
+    fit.fit(int(near.size()),
+            [&](int i) { return Eigen::Vector3d(surroundings.positions.row(near[std::size_t(i)]).transpose()); });
     Eigen::Vector3d n = fit.normal(p);
     if(!n.allFinite()) n = current.normalized();
     fitted.row(Eigen::Index(m)) = (n.dot(current) < 0 ? Eigen::Vector3d(-n) : n).transpose();
   });
 
   std::vector<int> fitted_of(n, -1);
-  for(std::size_t m = 0; m < rows.size(); ++m) fitted_of[std::size_t(surroundings.input_index[std::size_t(rows[m])])] = int(m);
+  for(std::size_t m = 0; m < rows.size(); ++m)
+    fitted_of[std::size_t(surroundings.input_index[std::size_t(rows[m])])] = int(m);
   std::size_t i = 0;
   for(const auto& item : points) {
     const int m = fitted_of[i++];

@@ -16,18 +16,6 @@
 namespace CGAL_ext {
 namespace internal {
 
-/*
-  The base surface of the balanced flow (see Balanced_flow_settings for the model). With the normals n fixed
-  and x = p + h n, the curvature term n_i . (K x)_i is c_i + (K_n h)_i, where c = n . (K p) and
-  K_n[i][j] = K[i][j] (n_i . n_j). The flow dh/dt = -(c + K_n h - c_mean) - fidelity h is linear in h; it
-  reaches its balance where
-
-      (K_n + fidelity I) h = c_mean - c,     c_mean = W^m c,
-
-  which is solved directly (BiCGSTAB, Jacobi preconditioner). K_n + fidelity I is strictly diagonally dominant
-  (unit diagonal, off-diagonal row sums at most 1 in magnitude), so the balance exists, is unique, and the
-  iteration converges; integrating the flow in time would only approach the same state.
-*/
 /// `y = M x`, row-parallel; each row sums in storage order, as Eigen's own product does, so the result does
 /// not depend on the thread count.
 template <typename ConcurrencyTag>
@@ -47,8 +35,9 @@ void multiply_vector(const Sparse_row_matrix& M, const Eigen::VectorXd& x, Eigen
 /// BiCGSTAB with a Jacobi preconditioner from a zero start, step for step Eigen's `Eigen::BiCGSTAB` (same
 /// restart rule, tolerance on the relative residual, at most 2n iterations, the same arithmetic per entry, so
 /// the same bits), with its matrix products and vector updates row-parallel: Eigen's are single-threaded, and
-/// the products were three quarters of the flow's time (doc/design.md). The dot products stay Eigen's (their
-/// summation order fixes the result). Throws `Numerical_failure` when the tolerance is not reached.
+/// the products were three quarters of the flow's time (doc/design.md, "A region of a large model"). The dot
+/// products stay Eigen's (their summation order fixes the result). Throws `Numerical_failure` when the
+/// tolerance is not reached.
 template <typename ConcurrencyTag>
 Eigen::VectorXd bicgstab_jacobi(const Sparse_row_matrix& M, const Eigen::VectorXd& rhs, double tolerance)
 {
@@ -101,6 +90,18 @@ Eigen::VectorXd bicgstab_jacobi(const Sparse_row_matrix& M, const Eigen::VectorX
   return x;
 }
 
+/*
+  The base surface of the balanced flow (see Balanced_flow_settings for the model). With the normals n fixed
+  and x = p + h n, the curvature term n_i . (K x)_i is c_i + (K_n h)_i, where c = n . (K p) and
+  K_n[i][j] = K[i][j] (n_i . n_j). The flow dh/dt = -(c + K_n h - c_mean) - fidelity h is linear in h; it
+  reaches its balance where
+
+      (K_n + fidelity I) h = c_mean - c,     c_mean = W^m c,
+
+  which is solved directly (BiCGSTAB, Jacobi preconditioner). K_n + fidelity I is strictly diagonally dominant
+  (unit diagonal, off-diagonal row sums at most 1 in magnitude), so the balance exists, is unique, and the
+  iteration converges; integrating the flow in time would only approach the same state.
+*/
 /// `m` sweeps of neighbour averaging, `X <- W X = X - K X`, on the columns of X.
 template <typename ConcurrencyTag, typename Dense>
 Dense neighbor_average(const Sparse_row_matrix& K, Dense X, unsigned int sweeps)
