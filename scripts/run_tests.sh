@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Sets everything up (Debian packages), builds, and runs every test: a Release build of the program, the
 # examples, the benchmarks and the tests that need it (examples, determinism reruns, the installed package, the
-# solver without CHOLMOD, real scans) with ctest, beside them the benchmark harness in its quick mode, that README's headline
-# figures come from committed result files, that no internal header includes an algorithm header
-# (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into the
-# build folder), the unit tests of the library and the program built with AddressSanitizer and
+# solver without CHOLMOD, real scans) with ctest, beside them the benchmark harness in its quick mode, that
+# README's headline figures come from committed result files, that no internal header includes an algorithm
+# header (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into
+# the build folder), the unit tests of the library and the program built with AddressSanitizer and
 # UndefinedBehaviorSanitizer (each unit test runs once, there), and each fuzz target for 30 seconds. Ends with
 # the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/design.md,
 # "Build time", gives the figures of a fresh clone with the compiler cache off on 2 cores.
