@@ -76,6 +76,7 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   // about it, those are its k nearest in the whole set, and so are the k nearest of each of them (within 2 d
   // of them). Otherwise the whole set is used.
   auto surroundings_within = [&](double reach) {
+    if(!std::isfinite(reach)) return internal::sort_spatially<ConcurrencyTag>(copy, who);
     Eigen::RowVector3d low = position(std::size_t(moved.front())), high = low;
     for(int i : moved) {
       low = low.cwiseMin(position(std::size_t(i)));
@@ -87,7 +88,7 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     std::vector<int> kept_index;
     for(std::size_t i = 0; i < n; ++i) {
       const Eigen::RowVector3d p = position(i);
-      if(!std::isfinite(reach) || ((p.array() >= low.array()).all() && (p.array() <= high.array()).all())) {
+      if((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) {
         kept.push_back(copy[i]);
         kept_index.push_back(int(i));
       }
