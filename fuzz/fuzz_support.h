@@ -6,6 +6,8 @@
 
 #include "point_io.h"
 
+#include <CGAL/number_type_config.h>
+
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -30,7 +32,7 @@ inline const std::vector<point_detail::Point>& sphere_points()
 {
   static const std::vector<point_detail::Point> points = [] {
     std::vector<point_detail::Point> out;
-    const double golden = M_PI * (3 - std::sqrt(5.0));
+    const double golden = CGAL_PI * (3 - std::sqrt(5.0));
     for(int i = 0; i < 200; ++i) {
       const double z = 1 - 2 * (i + 0.5) / 200, r = std::sqrt(1 - z * z);
       out.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);

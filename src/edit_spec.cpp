@@ -5,6 +5,8 @@
 #include "cli_support.h"
 #include "region_spec.h"
 
+#include <CGAL/number_type_config.h>
+
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Geometry>
@@ -71,7 +73,7 @@ Eigen::Matrix3d rotation(const json& handle, const std::string& where)
     if(!r.contains("axis") || !r.contains("degrees")) throw Cli_error(where + ".rotation needs axis and degrees");
     const Eigen::Vector3d axis = vector3(r["axis"], where + ".rotation.axis");
     if(!(axis.norm() > 0)) throw Cli_error(where + ".rotation.axis must not be zero");
-    return Eigen::AngleAxisd(number(r["degrees"], where + ".rotation.degrees") * M_PI / 180, axis.normalized()).toRotationMatrix();
+    return Eigen::AngleAxisd(number(r["degrees"], where + ".rotation.degrees") * CGAL_PI / 180, axis.normalized()).toRotationMatrix();
   }
   if(handle.contains("quaternion")) {
     const json& q = handle["quaternion"];
@@ -124,6 +126,13 @@ std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesy
 
 } // namespace
 
+CGAL_ext::Detail_order detail_order(const std::string& name, const std::string& where)
+{
+  for(CGAL_ext::Detail_order order : {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric, CGAL_ext::Detail_order::cubic})
+    if(name == CGAL_ext::Detail_filter::order_name(order)) return order;
+  throw Cli_error(where + " must be \"linear\", \"quadric\" or \"cubic\", not \"" + name + "\"");
+}
+
 CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where)
 {
   if(name == "none") return CGAL_ext::Detail_rotation::none;
@@ -175,10 +184,7 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     check_keys(f, {"order", "lambda", "mu"}, file + ": filter");
     if(f.contains("order")) {
       const std::string order = f["order"].is_string() ? f["order"].get<std::string>() : "";
-      if(order == "linear") settings.filter.order = CGAL_ext::Detail_order::linear;
-      else if(order == "quadric") settings.filter.order = CGAL_ext::Detail_order::quadric;
-      else if(order == "cubic") settings.filter.order = CGAL_ext::Detail_order::cubic;
-      else throw Cli_error(file + ": filter.order must be \"linear\", \"quadric\" or \"cubic\"");
+      settings.filter.order = detail_order(order, file + ": filter.order");
     }
     if(f.contains("lambda")) settings.filter.lambda = number(f["lambda"], file + ": filter.lambda");
     if(f.contains("mu")) settings.filter.mu = number(f["mu"], file + ": filter.mu");

@@ -7,7 +7,7 @@
 
 #include "point_io.h"
 
-#include <CGAL_ext/Detail_preserving_deformation.h>
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
 
 #include <Eigen/Core>
 
@@ -33,6 +33,8 @@ struct Edit_description
   CGAL_ext::Detail_preserving_deformation_settings settings;
 };
 
+/// The transfer function named `linear`, `quadric` or `cubic`; throws Cli_error naming `where`.
+CGAL_ext::Detail_order detail_order(const std::string& name, const std::string& where);
 /// The detail rotations named `none`, `propagate` (the paper's) or `arap`; throws Cli_error naming `where`.
 CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where);
 

@@ -6,12 +6,12 @@
 
 using namespace CGAL_ext;
 
-TEST(Detail_filter, response_vanishes_at_zero_for_every_order)
+TEST(DetailFilter, ResponseVanishesAtZeroForEveryOrder)
 {
   for(Detail_order o : all_orders) EXPECT_EQ(Detail_filter({o, 0.3, 1.8}).response(0.0), 0.0);
 }
 
-TEST(Detail_filter, quadric_response_is_one_at_lambda_and_mu)
+TEST(DetailFilter, QuadricResponseIsOneAtLambdaAndMu)
 {
   const Detail_filter f{Detail_order::quadric, 0.8, 1.6};
   EXPECT_NEAR(f.response(0.8), 1.0, 1e-14);
@@ -19,13 +19,13 @@ TEST(Detail_filter, quadric_response_is_one_at_lambda_and_mu)
   EXPECT_GT(f.response(1.2), 1.0); // the pass band is amplified
 }
 
-TEST(Detail_filter, linear_response_is_k_over_lambda)
+TEST(DetailFilter, LinearResponseIsKOverLambda)
 {
   const Detail_filter f{Detail_order::linear, 0.3, 0};
   for(double k : {0.1, 0.5, 1.7}) EXPECT_NEAR(f.response(k), k / 0.3, 1e-14);
 }
 
-TEST(Detail_filter, cubic_response_matches_the_papers_polynomial)
+TEST(DetailFilter, CubicResponseMatchesThePapersPolynomial)
 {
   const double l = 0.3, m = 1.8;
   const Detail_filter f{Detail_order::cubic, l, m};
@@ -38,14 +38,14 @@ TEST(Detail_filter, cubic_response_matches_the_papers_polynomial)
   EXPECT_NEAR(f.response(m), 1.0, 1e-12);
 }
 
-TEST(Detail_filter, degree_follows_the_order)
+TEST(DetailFilter, DegreeFollowsTheOrder)
 {
   EXPECT_EQ(Detail_filter({Detail_order::linear}).degree(), 1);
   EXPECT_EQ(Detail_filter({Detail_order::quadric}).degree(), 2);
   EXPECT_EQ(Detail_filter({Detail_order::cubic}).degree(), 3);
 }
 
-TEST(Detail_filter, defaults_are_the_papers_quadric)
+TEST(DetailFilter, DefaultsAreThePapersQuadric)
 {
   const Detail_filter f;
   EXPECT_EQ(f.order, Detail_order::quadric);
@@ -54,7 +54,7 @@ TEST(Detail_filter, defaults_are_the_papers_quadric)
   EXPECT_NO_THROW(f.validate());
 }
 
-TEST(Detail_filter, invalid_lambda_or_mu_is_rejected_with_a_message)
+TEST(DetailFilter, InvalidLambdaOrMuIsRejectedWithAMessage)
 {
   EXPECT_THROW(Detail_filter({Detail_order::linear, 0.0, 0}).validate(), Invalid_input);
   EXPECT_THROW(Detail_filter({Detail_order::linear, -1.0, 0}).validate(), Invalid_input);

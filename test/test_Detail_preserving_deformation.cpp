@@ -4,6 +4,8 @@
 #include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/generated_shapes.h>
 
+#include <CGAL/number_type_config.h>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/SVD>
@@ -655,7 +657,7 @@ TEST(DetailPreservingDeformation, DiffusionOfASmoothBendIsContinuous)
       normals.row(j * side + i) << 0, 0, 1;
       samples.row((j / block) * blocks + i / block) += p / double(block * block);
     }
-  const double radius = side / (3.14159265358979323846 / 2);
+  const double radius = side / (CGAL_PI / 2);
   auto bent = [&](const Eigen::Vector3d& p) {
     const double angle = p.x() / radius;
     return Eigen::Vector3d(radius * std::sin(angle), p.y(), radius * (1 - std::cos(angle)));

@@ -217,6 +217,11 @@ const std::vector<Row>& catalogue()
        EXPECT_INVALID_INPUT(details_of(few, 10), "k = 10");
        std::vector<double> H(few.size());
        EXPECT_INVALID_INPUT(estimate_mean_curvature(few, 12, CGAL::make_property_map(H), few.parameters()), "k = 12");
+       // Editing: every point is its own sample point, fewer than the 10 neighbours of their Laplacian.
+       Detail_preserving_deformation<> d(few, {}, few.parameters());
+       d.insert_roi_points(indices_where(few, [](const Point&) { return true; }));
+       d.insert_handle_point(d.create_handle_group(), 0);
+       EXPECT_INVALID_INPUT(d.preprocess(), "sample_neighbors (10) must be less than the number of sample points (8)");
      }},
     {"nan_coordinate", [] {
        Point_set set = sphere();
@@ -564,17 +569,17 @@ const std::vector<Row>& catalogue()
   return rows;
 }
 
-class Bad_input : public ::testing::TestWithParam<std::size_t>
+class BadInput : public ::testing::TestWithParam<std::size_t>
 {};
 
 } // namespace
 
-TEST_P(Bad_input, gets_a_clear_error_or_the_documented_result) { catalogue()[GetParam()].check(); }
+TEST_P(BadInput, GetsAClearErrorOrTheDocumentedResult) { catalogue()[GetParam()].check(); }
 
-INSTANTIATE_TEST_SUITE_P(Catalogue, Bad_input, ::testing::Range<std::size_t>(0, catalogue().size()),
+INSTANTIATE_TEST_SUITE_P(Catalogue, BadInput, ::testing::Range<std::size_t>(0, catalogue().size()),
                          [](const ::testing::TestParamInfo<std::size_t>& info) { return std::string(catalogue()[info.param].id); });
 
-TEST(Bad_input_catalogue, has_at_least_30_rows_and_every_row_is_listed_in_the_manual)
+TEST(BadInputCatalogue, HasAtLeast30RowsAndEveryRowIsListedInTheManual)
 {
   EXPECT_GE(catalogue().size(), 30u);
   std::ifstream in(BAD_INPUT_DOC);

@@ -76,7 +76,7 @@ struct Address_indexed_map
 };
 } // namespace
 
-TEST(Geometric_details, interior_details_vanish_on_a_regular_grid_with_its_full_8_neighbourhood)
+TEST(GeometricDetails, InteriorDetailsVanishOnARegularGridWithItsFull8Neighbourhood)
 {
   const auto grid = shapes::bumpy_grid<Kernel>(21, 21, 0.1);
   for(Laplacian_weights w : {Laplacian_weights{}, Laplacian_weights{Laplacian_weighting::distance_power, -1.0}})
@@ -92,7 +92,7 @@ TEST(Geometric_details, interior_details_vanish_on_a_regular_grid_with_its_full_
     }
 }
 
-TEST(Geometric_details, filter_by_sparse_products_equals_the_explicit_matrix_polynomial)
+TEST(GeometricDetails, FilterBySparseProductsEqualsTheExplicitMatrixPolynomial)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(400, 1.0, 0.05, 4.0);
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> K;
@@ -115,7 +115,7 @@ TEST(Geometric_details, filter_by_sparse_products_equals_the_explicit_matrix_pol
   }
 }
 
-TEST(Geometric_details, normal_component_follows_the_bump_height_on_a_bumpy_sphere)
+TEST(GeometricDetails, NormalComponentFollowsTheBumpHeightOnABumpySphere)
 {
   // Bumps of a wavelength of about 4 average spacings: delta . n must follow the known height field.
   for(Detail_order o : all_orders) {
@@ -142,7 +142,7 @@ TEST(Geometric_details, normal_component_follows_the_bump_height_on_a_bumpy_sphe
 // On an irregular sampling, most of delta is tangential (the uniform Laplacian's drift toward the denser
 // side), so the paper's signed |delta| shows the sampling; its normal component still shows the relief. The
 // program's maps default to delta . n for this (doc/geometric_details.md, "Colour maps").
-TEST(Geometric_details, normal_component_shows_the_relief_of_a_random_sampling_better_than_the_signed_magnitude)
+TEST(GeometricDetails, NormalComponentShowsTheReliefOfARandomSamplingBetterThanTheSignedMagnitude)
 {
   // 20,000 points drawn at random from a fine Fibonacci sampling (nearly a Poisson sampling), bumps of a
   // wavelength of 8 of its average spacings.
@@ -173,7 +173,7 @@ TEST(Geometric_details, normal_component_shows_the_relief_of_a_random_sampling_b
   }
 }
 
-TEST(Geometric_details, oriented_magnitude_is_signed_by_the_normal)
+TEST(GeometricDetails, OrientedMagnitudeIsSignedByTheNormal)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.0, 4.0); // a plain sphere: p - mean(neighbours) points outwards
   const Details d = details_of(s, 10, Detail_filter{Detail_order::linear, 0.8, 1.6});
@@ -187,7 +187,7 @@ TEST(Geometric_details, oriented_magnitude_is_signed_by_the_normal)
   }
 }
 
-TEST(Geometric_details, estimated_normals_give_outward_magnitudes_when_none_are_given)
+TEST(GeometricDetails, EstimatedNormalsGiveOutwardMagnitudesWhenNoneAreGiven)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(5000, 1.0, 0.02, 4.0);
   const Details given = details_of(s, 10, Detail_filter{}), estimated = details_of(s, 10, Detail_filter{}, false);
@@ -204,7 +204,7 @@ TEST(Geometric_details, estimated_normals_give_outward_magnitudes_when_none_are_
   EXPECT_GE(double(same_sign) / double(compared), 0.99);
 }
 
-TEST(Geometric_details, same_result_through_Point_set_3_pairs_and_sequential_or_parallel)
+TEST(GeometricDetails, SameResultThroughPointSet3PairsAndSequentialOrParallel)
 {
   const auto s = shapes::bumpy_tube<Kernel>(6000);
   const Detail_settings settings(Detail_filter{Detail_order::cubic, 0.3, 1.8});
@@ -239,7 +239,7 @@ TEST(Geometric_details, same_result_through_Point_set_3_pairs_and_sequential_or_
   }
 }
 
-TEST(Geometric_details, Point_set_3_without_normals_gets_estimated_normals_even_through_its_parameters)
+TEST(GeometricDetails, PointSet3WithoutNormalsGetsEstimatedNormalsEvenThroughItsParameters)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(3000, 1.0, 0.0, 4.0);
   CGAL::Point_set_3<Point> ps; // no normal property
@@ -255,7 +255,7 @@ TEST(Geometric_details, Point_set_3_without_normals_gets_estimated_normals_even_
   }
 }
 
-TEST(Geometric_details, cancelled_run_leaves_the_outputs_untouched)
+TEST(GeometricDetails, CancelledRunLeavesTheOutputsUntouched)
 {
   const auto s = shapes::bumpy_sphere<Kernel>(150000);
   std::vector<std::size_t> indices(s.points.size());
@@ -270,7 +270,7 @@ TEST(Geometric_details, cancelled_run_leaves_the_outputs_untouched)
   for(const Vector& v : out) ASSERT_EQ(v, Vector(7, 7, 7));
 }
 
-TEST(Geometric_details, mean_shift_neighborhoods_keep_a_cube_faces_details_in_its_plane)
+TEST(GeometricDetails, MeanShiftNeighborhoodsKeepACubeFacesDetailsInItsPlane)
 {
   // With kNN rows, points near an edge average in the next face, so their detail points out of their face;
   // mean-shift rows keep one face (the modes' normals differ by sqrt 2 > one range bandwidth), and a detail
@@ -307,7 +307,7 @@ TEST(Geometric_details, mean_shift_neighborhoods_keep_a_cube_faces_details_in_it
   EXPECT_GT(double(same), 0.95 * double(interior));
 }
 
-TEST(Geometric_details, bad_input_throws_a_clear_error)
+TEST(GeometricDetails, BadInputThrowsAClearError)
 {
   std::vector<Point> pts = shapes::bumpy_sphere<Kernel>(50).points;
   std::vector<Vector> out(pts.size());

@@ -31,7 +31,7 @@ Sparse laplacian(const std::vector<Point>& pts, unsigned k, const Laplacian_weig
 }
 } // namespace
 
-TEST(Laplacian, rows_of_W_sum_to_one_and_constants_are_in_the_kernel)
+TEST(Laplacian, RowsOfWSumToOneAndConstantsAreInTheKernel)
 {
   const auto pts = random_points(2000, 1);
   for(Laplacian_weights w : {Laplacian_weights{}, Laplacian_weights{Laplacian_weighting::distance_power, -1.0}}) {
@@ -50,7 +50,7 @@ TEST(Laplacian, rows_of_W_sum_to_one_and_constants_are_in_the_kernel)
   }
 }
 
-TEST(Laplacian, graph_is_symmetrised_and_contains_every_k_nearest_neighbour)
+TEST(Laplacian, GraphIsSymmetrisedAndContainsEveryKNearestNeighbour)
 {
   const auto pts = random_points(500, 2);
   const unsigned k = 6;
@@ -69,7 +69,7 @@ TEST(Laplacian, graph_is_symmetrised_and_contains_every_k_nearest_neighbour)
   }
 }
 
-TEST(Laplacian, uniform_weights_are_inverse_valence_and_distance_weights_follow_the_power)
+TEST(Laplacian, UniformWeightsAreInverseValenceAndDistanceWeightsFollowThePower)
 {
   const auto pts = random_points(300, 3);
   const Sparse U = laplacian(pts, 8);
@@ -88,7 +88,7 @@ TEST(Laplacian, uniform_weights_are_inverse_valence_and_distance_weights_follow_
   }
 }
 
-TEST(Laplacian, exact_duplicates_keep_the_weights_finite)
+TEST(Laplacian, ExactDuplicatesKeepTheWeightsFinite)
 {
   auto pts = random_points(200, 4);
   pts.push_back(pts[7]);
@@ -99,7 +99,7 @@ TEST(Laplacian, exact_duplicates_keep_the_weights_finite)
   EXPECT_LT((D * ones).cwiseAbs().maxCoeff(), 1e-12);
 }
 
-TEST(Laplacian, same_matrix_through_Point_set_3_and_sequential_or_parallel)
+TEST(Laplacian, SameMatrixThroughPointSet3AndSequentialOrParallel)
 {
   const auto pts = random_points(3000, 5);
   CGAL::Point_set_3<Point> ps;
@@ -112,7 +112,7 @@ TEST(Laplacian, same_matrix_through_Point_set_3_and_sequential_or_parallel)
   EXPECT_EQ((A - C).norm(), 0.0);
 }
 
-TEST(Laplacian, cancelled_run_leaves_the_output_untouched)
+TEST(Laplacian, CancelledRunLeavesTheOutputUntouched)
 {
   const auto pts = random_points(200000, 6);
   Sparse K(3, 3);
@@ -124,7 +124,7 @@ TEST(Laplacian, cancelled_run_leaves_the_output_untouched)
   EXPECT_EQ(K.coeff(1, 1), 5.0);
 }
 
-TEST(Laplacian, bad_input_throws_a_clear_error)
+TEST(Laplacian, BadInputThrowsAClearError)
 {
   Sparse K;
   const std::vector<Point> empty;

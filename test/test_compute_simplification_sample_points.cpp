@@ -74,7 +74,7 @@ shapes::Oriented_sample<Kernel> half_bumpy_plane()
 {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> jitter(-0.3, 0.3);
-  const double w = 2 * 3.14159265358979323846 / 10, a = 2.0;
+  const double w = 2 * CGAL_PI / 10, a = 2.0;
   shapes::Oriented_sample<Kernel> s;
   s.average_spacing = 1;
   for(int j = 0; j < 60; ++j)

@@ -120,25 +120,25 @@ protected:
 
 } // namespace
 
-TEST_F(Determinism, details) { check("details", "details -i " + scan + " -o OUT --order cubic"); }
-TEST_F(Determinism, scale) { check("scale", "scale -i " + scan + " -o OUT -s 2.5 --order quadric --roi " + roi()); }
-TEST_F(Determinism, enhance) { check("enhance", "enhance -i " + scan + " -o OUT -s 1.5"); }
-TEST_F(Determinism, curvature) { check("curvature", "curvature -i " + scan + " -o OUT"); }
-TEST_F(Determinism, simplify) { check("simplify", "simplify -i " + scan + " -o OUT"); }
-TEST_F(Determinism, edit) { check("edit", "edit -i " + scan + " -o OUT --upsample --edit " + path("edit.json")); }
-TEST_F(Determinism, edit_as_rigid_as_possible)
+TEST_F(Determinism, Details) { check("details", "details -i " + scan + " -o OUT --order cubic"); }
+TEST_F(Determinism, Scale) { check("scale", "scale -i " + scan + " -o OUT -s 2.5 --order quadric --roi " + roi()); }
+TEST_F(Determinism, Enhance) { check("enhance", "enhance -i " + scan + " -o OUT -s 1.5"); }
+TEST_F(Determinism, Curvature) { check("curvature", "curvature -i " + scan + " -o OUT"); }
+TEST_F(Determinism, Simplify) { check("simplify", "simplify -i " + scan + " -o OUT"); }
+TEST_F(Determinism, Edit) { check("edit", "edit -i " + scan + " -o OUT --upsample --edit " + path("edit.json")); }
+TEST_F(Determinism, EditAsRigidAsPossible)
 {
   check("arap", "edit -i " + scan + " -o OUT --rotations arap --edit " + path("edit.json"));
 }
-TEST_F(Determinism, upsample)
+TEST_F(Determinism, Upsample)
 {
   // The stretched result of an edit (without its own up-sampling) is what this repairs.
   ASSERT_EQ(run("edit -i " + scan + " -o " + path("stretched.ply") + " --edit " + path("edit.json")).exit_code, 0);
   check("upsample", "upsample -i " + path("stretched.ply") + " -o OUT");
 }
-TEST_F(Determinism, render) { check("render", "render -i " + scan + " -o OUT", ".png"); }
+TEST_F(Determinism, Render) { check("render", "render -i " + scan + " -o OUT", ".png"); }
 
-TEST_F(Determinism, demo)
+TEST_F(Determinism, Demo)
 {
   // The demo has no scan input: it generates its tentacle, so this also checks the generator.
   std::vector<fs::path> runs;

@@ -38,7 +38,7 @@ Sample cylinder(double r, std::size_t rings = 60, std::size_t around = 100)
 {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> jitter(-0.3, 0.3);
-  const double pi = 3.14159265358979323846, step = 2 * pi * r / double(around);
+  const double pi = CGAL_PI, step = 2 * pi * r / double(around);
   Sample s;
   for(std::size_t j = 0; j < rings; ++j)
     for(std::size_t i = 0; i < around; ++i) {

@@ -67,7 +67,7 @@ std::size_t estimated_pointing_inwards(const Cloud& cloud)
 double angle_degrees(const Vector& a, const Vector& b)
 {
   const double c = a * b / std::sqrt(a.squared_length() * b.squared_length());
-  return std::acos(std::clamp(c, -1.0, 1.0)) * 180 / 3.14159265358979323846;
+  return std::acos(std::clamp(c, -1.0, 1.0)) * 180 / CGAL_PI;
 }
 
 /// Sorted angles (degrees) between the estimated and the exact normals of a sphere of radius 1 with bumps
@@ -89,7 +89,7 @@ std::vector<double> sphere_normal_errors(double amplitude, double wavelength)
 
 } // namespace
 
-TEST(Estimate_oriented_normals, jet_normals_are_the_surface_normals_and_point_outwards)
+TEST(EstimateOrientedNormals, JetNormalsAreTheSurfaceNormalsAndPointOutwards)
 {
   const std::vector<double> smooth = sphere_normal_errors(0.0, 8.0);
   EXPECT_LT(smooth[smooth.size() / 2], 0.01); // measured 0.0012
@@ -102,7 +102,7 @@ TEST(Estimate_oriented_normals, jet_normals_are_the_surface_normals_and_point_ou
   EXPECT_LT(bumpy.back(), 3.0);
 }
 
-TEST(Estimate_oriented_normals, every_component_is_oriented_outwards_even_a_cube_with_sharp_edges)
+TEST(EstimateOrientedNormals, EveryComponentIsOrientedOutwardsEvenACubeWithSharpEdges)
 {
   // Three components: CGAL::mst_orient_normals orients only the one holding the highest point.
   Cloud cloud;
@@ -113,7 +113,7 @@ TEST(Estimate_oriented_normals, every_component_is_oriented_outwards_even_a_cube
   EXPECT_EQ(estimated_pointing_inwards(cloud), 0u);
 }
 
-TEST(Estimate_oriented_normals, a_plate_thinner_than_the_neighbourhoods_is_oriented_outwards_on_both_faces)
+TEST(EstimateOrientedNormals, APlateThinnerThanTheNeighbourhoodsIsOrientedOutwardsOnBothFaces)
 {
   // A 1 x 1 x 0.04 box sampled 60 per side: 2.4 spacings thick, so every neighbourhood of a face reaches the
   // other. Weighted by 1 - |n_i . n_j| alone, the forest crosses between the faces (antiparallel normals weigh
@@ -126,13 +126,13 @@ TEST(Estimate_oriented_normals, a_plate_thinner_than_the_neighbourhoods_is_orien
   EXPECT_EQ(estimated_pointing_inwards(plate), 0u);
 }
 
-TEST(Estimate_oriented_normals, an_open_surface_faces_the_side_of_its_highest_point)
+TEST(EstimateOrientedNormals, AnOpenSurfaceFacesTheSideOfItsHighestPoint)
 {
   const auto grid = shapes::bumpy_grid<Kernel>(80, 60, 1.0, 0.8, 12.0);
   for(const Vector& n : estimated(grid.points)) EXPECT_GT(n.z(), 0.0);
 }
 
-TEST(Estimate_oriented_normals, the_spanning_forest_repairs_any_flips_and_counts_the_components)
+TEST(EstimateOrientedNormals, TheSpanningForestRepairsAnyFlipsAndCountsTheComponents)
 {
   Cloud cloud;
   append(cloud, shapes::bumpy_sphere<Kernel>(5000, 1.0, 0.02));
@@ -160,14 +160,14 @@ TEST(Estimate_oriented_normals, the_spanning_forest_repairs_any_flips_and_counts
   }
 }
 
-TEST(Estimate_oriented_normals, sequential_and_parallel_runs_give_the_same_normals)
+TEST(EstimateOrientedNormals, SequentialAndParallelRunsGiveTheSameNormals)
 {
   Cloud cloud;
   append(cloud, shapes::bumpy_tube<Kernel>(8000));
   EXPECT_EQ(estimated<CGAL::Sequential_tag>(cloud.points), estimated<CGAL::Parallel_if_available_tag>(cloud.points));
 }
 
-TEST(Estimate_oriented_normals, fills_a_Point_set_3_normal_map)
+TEST(EstimateOrientedNormals, FillsAPointSet3NormalMap)
 {
   const auto sphere = shapes::bumpy_sphere<Kernel>(2000, 2.0, 0.0);
   CGAL::Point_set_3<Point> ps;
@@ -178,7 +178,7 @@ TEST(Estimate_oriented_normals, fills_a_Point_set_3_normal_map)
     EXPECT_GT(ps.normal(*it) * (ps.point(*it) - CGAL::ORIGIN), 0.0);
 }
 
-TEST(Estimate_oriented_normals, bad_input_and_cancellation)
+TEST(EstimateOrientedNormals, BadInputAndCancellation)
 {
   const auto sphere = shapes::bumpy_sphere<Kernel>(500);
   std::vector<Vector> normals(sphere.points.size(), Vector(1, 2, 3));

@@ -79,7 +79,7 @@ protected:
 
 } // namespace
 
-TEST_F(Cli, details_wiring_every_property_in_input_order_as_the_library_computes_it_and_the_relief)
+TEST_F(Cli, DetailsWiringEveryPropertyInInputOrderAsTheLibraryComputesItAndTheRelief)
 {
   const std::string in = write_sphere_ply("in.ply");
   const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --order cubic --lambda 0.3 --mu 1.8 -k 12 --png " +
@@ -155,7 +155,7 @@ TEST_F(Cli, details_wiring_every_property_in_input_order_as_the_library_computes
   expect_only({"in.ply", "out.ply", "out.png", "report.json", "random.ply", "random_out.ply"});
 }
 
-TEST_F(Cli, normals_come_from_mesh_faces_or_are_estimated)
+TEST_F(Cli, NormalsComeFromMeshFacesOrAreEstimated)
 {
   // A bumpy grid as an OFF mesh with upward faces: its vertex normals are the faces' (about +z).
   const auto g = CGAL_ext::shapes::bumpy_grid<Kernel>(30, 30, 0.1, 0.01, 1.0);
@@ -225,7 +225,7 @@ TEST_F(Cli, normals_come_from_mesh_faces_or_are_estimated)
   EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["normal_source"], "estimated");
 }
 
-TEST_F(Cli, bad_files_and_options_give_one_clear_line_and_no_output)
+TEST_F(Cli, BadFilesAndOptionsGiveOneClearLineAndNoOutput)
 {
   const std::string in = write_sphere_ply("in.ply", 200);
   const std::string before = contents(in);
@@ -241,6 +241,7 @@ TEST_F(Cli, bad_files_and_options_give_one_clear_line_and_no_output)
     {"details -i " + in + " -o " + path("o.ply") + " --lambda 0", "lambda"},
     {"details -i " + in + " -o " + path("o.ply") + " --order cubic --lambda 0.8 --mu 0.5", "mu"},
     {"details -i " + in + " -o " + path("o.ply") + " -k 200", "-k 200"},
+    {"simplify -i " + in + " -o " + path("o.ply") + " -k 200", "-k 200"}, // -k: the same rule in every subcommand
     {"details -i " + in + " -o " + path("o.ply") + " --png " + path("o.png") + " --view sideways", "bad view"},
     {"render -i " + in + " -o " + path("o.png") + " --color-by curvature", "no property 'curvature'"},
   };
@@ -254,7 +255,7 @@ TEST_F(Cli, bad_files_and_options_give_one_clear_line_and_no_output)
   expect_only({"in.ply", "garbage.ply", "empty.xyz"});
 }
 
-TEST_F(Cli, render_and_demo_write_pictures)
+TEST_F(Cli, RenderAndDemoWritePictures)
 {
   const std::string in = write_sphere_ply("in.ply", 2000);
   ASSERT_EQ(run("details -i " + in + " -o " + path("d.ply")).exit_code, 0);
@@ -299,7 +300,7 @@ std::pair<std::size_t, std::size_t> flagged_and_coloured_pixels(const std::strin
 // Colour maps that never collapse: 0.1 % new points of an up-sampling stay visible, and a property that is zero
 // on 98.5 % of the points still colours the others (the 2nd-98th percentile range once made both blank). The
 // sphere is dense for its picture (splats of about one pixel), so flags show only because they are emphasized.
-TEST_F(Cli, pictures_show_a_few_new_points_and_a_change_of_a_few_points)
+TEST_F(Cli, PicturesShowAFewNewPointsAndAChangeOfAFewPoints)
 {
   const std::size_t n = 40000;
   const auto s = CGAL_ext::shapes::bumpy_sphere<Kernel>(n, 1.0, 0.02);
@@ -329,7 +330,7 @@ TEST_F(Cli, pictures_show_a_few_new_points_and_a_change_of_a_few_points)
   (void)mapped; // the flag picture's splat edges blend pink into grey
 }
 
-TEST_F(Cli, scale_wiring_moves_the_region_only_as_the_library_does)
+TEST_F(Cli, ScaleWiringMovesTheRegionOnlyAsTheLibraryDoes)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   { std::ofstream(path("anchors.txt")) << "# anchors\n0\n\n1 # the first two points\n"; }
@@ -404,7 +405,7 @@ TEST_F(Cli, scale_wiring_moves_the_region_only_as_the_library_does)
 // least-squares fit of the radial deviation by 1, z and h over the cap's middle. These bumps are fine (4
 // spacings): the smooth surface the border spans (s = 0) keeps about a quarter of them, so they grow by
 // 0.26 + 2 x 0.74 = 1.74.
-TEST_F(Cli, scale_doubles_bumps_of_known_height)
+TEST_F(Cli, ScaleDoublesBumpsOfKnownHeight)
 {
   const std::string in = write_sphere_ply("in.ply", 6000);
   ASSERT_EQ(run("scale -i " + in + " -o " + path("s2.ply") + " -s 2 --roi sphere:0,0,1,1.0").exit_code, 0);
@@ -432,7 +433,7 @@ TEST_F(Cli, scale_doubles_bumps_of_known_height)
   EXPECT_LT(after / before, 2.2);
 }
 
-TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
+TEST_F(Cli, RegionSpecsWithMistakesAreRejectedNamingTheBadToken)
 {
   const std::string in = write_sphere_ply("in.ply", 500);
   { std::ofstream(path("bad_index.txt")) << "3\nseven\n"; }
@@ -464,7 +465,7 @@ TEST_F(Cli, region_specs_with_mistakes_are_rejected_naming_the_bad_token)
   expect_only({"in.ply", "bad_index.txt", "far_index.txt"});
 }
 
-TEST_F(Cli, curvature_of_a_sphere_is_one_over_its_radius)
+TEST_F(Cli, CurvatureOfASphereIsOneOverItsRadius)
 {
   const std::string in = write_sphere_ply("in.ply", 4000);
   for(const char* fitting : {"monge", "closed-form"}) {
@@ -487,7 +488,7 @@ TEST_F(Cli, curvature_of_a_sphere_is_one_over_its_radius)
   EXPECT_NE(bad.output.find("at least 5"), std::string::npos) << bad.output;
 }
 
-TEST_F(Cli, simplify_wiring_surfels_cover_every_point_once_as_the_library_makes_them)
+TEST_F(Cli, SimplifyWiringSurfelsCoverEveryPointOnceAsTheLibraryMakesThem)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   const Program_run r = run("simplify -i " + in + " -o " + path("ssp.ply") + " --max-cluster-size 20 --clusters " +
@@ -560,7 +561,7 @@ TEST_F(Cli, simplify_wiring_surfels_cover_every_point_once_as_the_library_makes_
   expect_only({"in.ply", "ssp.ply", "clusters.ply", "ssp.png", "ssp.json"});
 }
 
-TEST_F(Cli, details_wiring_mean_shift_neighbourhoods_as_the_library)
+TEST_F(Cli, DetailsWiringMeanShiftNeighbourhoodsAsTheLibrary)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   const Program_run r = run("details -i " + in + " -o " + path("out.ply") + " --neighbors mean-shift --report " + path("r.json"));
@@ -584,7 +585,7 @@ TEST_F(Cli, details_wiring_mean_shift_neighbourhoods_as_the_library)
   EXPECT_NE(bad.output.find("delaunay"), std::string::npos) << bad.output;
 }
 
-TEST_F(Cli, edit_wiring_json_as_the_library_does_and_handles_on_their_transform)
+TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);
   {
@@ -618,7 +619,7 @@ TEST_F(Cli, edit_wiring_json_as_the_library_does_and_handles_on_their_transform)
       if(p.z() >= 0) { deformation.insert_roi_point(i); ++roi; }
       if(CGAL::squared_distance(p, Point(0, 0, 1)) <= 0.0625) { deformation.insert_handle_point(g, i); ++handles; }
     }
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * CGAL_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
     deformation.set_handle_transform(g, R, Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2));
     EXPECT_TRUE(deformation.deform());
     deformation.diffuse(points, points.parameters());
@@ -629,7 +630,7 @@ TEST_F(Cli, edit_wiring_json_as_the_library_does_and_handles_on_their_transform)
   EXPECT_LT(max_distance(std::vector<Point>(output.points().begin(), output.points().end()), library_edit(settings)), 1e-12);
   // Beyond the wiring: handle points end on their transform, the fixed part does not move.
   {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * 3.14159265358979323846 / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(25 * CGAL_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
     const Eigen::Vector3d t = Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2);
     double handle_error = 0, fixed_motion = 0;
     auto in_it = input.begin();
@@ -685,7 +686,7 @@ TEST_F(Cli, edit_wiring_json_as_the_library_does_and_handles_on_their_transform)
   expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "bad.json"});
 }
 
-TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)
+TEST_F(Cli, EditBySelAndDefAndItsMistakes)
 {
   const std::string in = write_sphere_ply("in.ply", 2000);
   CGAL::Point_set_3<Point> input;
@@ -770,7 +771,7 @@ TEST_F(Cli, edit_by_sel_and_def_and_its_mistakes)
   EXPECT_FALSE(fs::exists(path("x.ply")));
 }
 
-TEST_F(Cli, upsample_fills_a_hole_and_edit_upsample_fills_a_stretch)
+TEST_F(Cli, UpsampleFillsAHoleAndEditUpsampleFillsAStretch)
 {
   // A unit grid with a hole of radius 2.6 in its middle.
   {
@@ -834,7 +835,7 @@ TEST_F(Cli, upsample_fills_a_hole_and_edit_upsample_fills_a_stretch)
   EXPECT_NEAR(edit_report["upsampling"]["spacing"].get<double>(), 1.2, 0.25); // the grid's, before the edit
 }
 
-TEST_F(Cli, ctrl_c_ends_a_run_within_about_a_second_even_inside_a_factorisation_and_writes_nothing)
+TEST_F(Cli, CtrlCEndsARunWithinAboutASecondEvenInsideAFactorisationAndWritesNothing)
 {
   // The cubic order on most of a 40k-point sphere, no anchors: the factorisation, which reports no progress,
   // takes seconds. The interrupt comes 2.5 s in (in the factorisation in a Release build, earlier stages in a

@@ -6,6 +6,8 @@
 #include <CGAL_ext/internal/local_fit.h>
 #include <CGAL_ext/upsample_point_set.h>
 
+#include <CGAL/number_type_config.h>
+
 #include <gtest/gtest.h>
 
 #include <iterator>
@@ -111,7 +113,7 @@ TEST(UpsamplePointSet, AWideHoleInAWavySurfaceIsFilledOnTheSurface)
   // hole) around the inflection at the origin: new points deep in the hole must follow the wave across it.
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> jitter(-0.25, 0.25);
-  const double amplitude = 2, wavelength = 20, pi = 3.14159265358979323846;
+  const double amplitude = 2, wavelength = 20, pi = CGAL_PI;
   auto height = [&](double x) { return amplitude * std::sin(2 * pi * x / wavelength); };
   Oriented_points wave;
   for(int i = -20; i <= 20; ++i)
@@ -143,7 +145,7 @@ TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
   std::vector<Eigen::Vector3d> surface;
   for(int a = 0; a < 400; ++a)
     for(double z = 0.05; z <= 9.95; z += 0.02) {
-      const double angle = 2 * 3.14159265358979323846 * a / 400;
+      const double angle = 2 * CGAL_PI * a / 400;
       surface.emplace_back(std::cos(angle), std::sin(angle), z);
     }
   const double before = covering_radius(cylinder.points, surface);
@@ -170,7 +172,7 @@ TEST(UpsamplePointSet, RestoresAStretchedCylinderOnItsSurface)
     EXPECT_GT(p.z(), 2.0 - h); // only the stretched part gets new samples, nothing past the open ends
     EXPECT_LT(p.z(), 8.0 + h);
     const Eigen::Vector3d radial(p.x() / r, p.y() / r, 0);
-    EXPECT_GT(radial.dot(Eigen::Vector3d(n.x(), n.y(), n.z())), std::cos(10 * 3.14159265358979323846 / 180));
+    EXPECT_GT(radial.dot(Eigen::Vector3d(n.x(), n.y(), n.z())), std::cos(10 * CGAL_PI / 180));
   }
 }
 

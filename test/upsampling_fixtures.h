@@ -6,6 +6,8 @@
 
 #include <CGAL_ext/internal/Neighbor_graph.h>
 
+#include <CGAL/number_type_config.h>
+
 #include <cmath>
 #include <random>
 #include <vector>
@@ -66,12 +68,12 @@ inline Oriented_points random_plane_with_hole(double side, double hole, unsigned
 inline Oriented_points stretched_cylinder(double h)
 {
   Oriented_points out;
-  const int around = int(std::lround(2 * 3.14159265358979323846 / h)), rings = int(std::lround(6 / h));
+  const int around = int(std::lround(2 * CGAL_PI / h)), rings = int(std::lround(6 / h));
   for(int r = 0; r < rings; ++r) {
     const double z = (r + 0.5) * h;
     const double stretched = z < 2 ? z : z < 4 ? 2 + 3 * (z - 2) : z + 4;
     for(int a = 0; a < around; ++a) {
-      const double angle = 2 * 3.14159265358979323846 * (a + 0.5 * (r % 2)) / around;
+      const double angle = 2 * CGAL_PI * (a + 0.5 * (r % 2)) / around;
       out.points.emplace_back(std::cos(angle), std::sin(angle), stretched);
       out.normals.emplace_back(std::cos(angle), std::sin(angle), 0);
     }

@@ -128,6 +128,9 @@ enum class Laplacian_neighborhood
   mean_shift ///< the k nearest whose mean-shift modes agree (Miao et al. 2007, Sect. 5.1; needs normals)
 };
 
+/// Default neighbour count of the Laplacian (doc/geometric_details.md, "Defaults").
+constexpr unsigned int default_laplacian_neighbors = 10;
+
 /*!
   \ingroup PkgCGALExtRef
   Everything that defines the geometric details besides the neighbour count: the transfer function, the

@@ -3,20 +3,15 @@
 #ifndef CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H
 #define CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H
 
-#include <CGAL_ext/Detail_filter.h>
-#include <CGAL_ext/Least_squares_settings.h>
-#include <CGAL_ext/compute_geometric_details.h>
-#include <CGAL_ext/compute_simplification_sample_points.h>
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/exceptions.h>
-#include <CGAL_ext/internal/Detail_least_squares.h>
-#include <CGAL_ext/internal/Laplacian.h>
-#include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/detail_manipulation.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/internal/mean_shift.h>
-#include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/rigid_stepping.h>
+#include <CGAL_ext/internal/sample_points.h>
+#include <CGAL_ext/internal/sample_system.h>
 #include <CGAL_ext/internal/ssp_diffusion.h>
 #include <CGAL_ext/internal/strength_field.h>
 
@@ -31,152 +26,11 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
-#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
 namespace CGAL_ext {
-
-/*!
-  \ingroup PkgCGALExtRef
-  How the strength field measures the distances `d0` (to the fixed part) and `d1` (to a handle).
-*/
-enum class Strength_distance
-{
-  euclidean, ///< straight-line distance between sample points (the paper's)
-  geodesic   ///< shortest path along the sample points' neighbour graph (Dijkstra): does not leak across parts
-             ///< that are close in space but far along the surface, like an arm held near the body
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  How the sample points' details turn during an edit (the `R_i` of `delta'_i = R_i delta_i`).
-*/
-enum class Detail_rotation
-{
-  none,       ///< the details keep their world orientation (plain Laplacian editing)
-  propagated, ///< the paper's (Sect. 6.1): the handle rotations blended by the strength field
-  as_rigid_as_possible ///< each sample point's best rotation of its neighbourhood (Sorkine and Alexa 2007),
-                       ///< alternated with the solve: follows the solved shape, so large twists and bends that
-                       ///< the strength field cannot foresee keep their details
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  Where a point's offset is measured from when the deformation is diffused from the sample points to every
-  point (Miao et al. 2007, Sect. 6.2). Both reproduce rigid motions exactly and keep points whose sample
-  points did not move in place; they differ in how they blend bending.
-*/
-enum class Diffusion_origin
-{
-  nearest_sample, ///< the paper's: `p - ssp_0` (the nearest sample point) decoded in every frame from `ssp'_0`
-  own_sample      ///< `p - ssp_i` decoded in frame i from `ssp'_i`: each sample point carries the point rigidly
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  Settings of detail-preserving editing (Miao et al. 2007, Sect. 6). Implicitly constructible from a
-  `Detail_filter`.
-*/
-struct Detail_preserving_deformation_settings
-{
-  /// The details preserved on the sample points (their Laplacian is built on the sample points' kNN graph).
-  Detail_filter filter;
-  /// Neighbours of a sample point in the sample points' Laplacian (smaller when there are fewer sample points).
-  unsigned int sample_neighbors = default_laplacian_neighbors;
-  /// How the points are clustered into sample points; every point is its own sample point when the input
-  /// has at most `simplification.target_count` points and no `max_cluster_size` is set. Editing's defaults
-  /// (target 3,000, mode-spread threshold 2) give 3,000 to 4,500 sample points on any input, as in the
-  /// paper's Table 1, so that a drag stays interactive (doc/editing.md measures the quality cost).
-  Simplification_settings simplification = editing_simplification();
-  /// alpha (`least_squares.detail_weight`) and the solver.
-  /// Editing refines each drag's solve to a relative residual of 1e-10 (positions to about 1e-10 of their
-  /// displacement), which saves back-substitutions on every drag.
-  Least_squares_settings least_squares = editing_least_squares();
-  /// Weight of the handle constraints relative to the detail equations. Infinity (the default) makes them hard
-  /// constraints: the handle sample points leave the unknowns and every handle point ends exactly where its
-  /// group's transform puts it (as in `CGAL::Surface_mesh_deformation`). A finite weight is the paper's soft
-  /// constraint (the paper: 1): the handles land near their targets, closer for larger weights.
-  double handle_weight = std::numeric_limits<double>::infinity();
-  /// Distances of the strength field.
-  Strength_distance strength_distance = Strength_distance::euclidean;
-  /// How the details turn.
-  Detail_rotation rotations = Detail_rotation::propagated;
-  /// With `as_rigid_as_possible`: rotation fits and solves per step of `deform()` (a change of the handles
-  /// larger than 10 degrees or 5 % of the region's size is taken in steps). Each drag starts from the last
-  /// drag's rotations (the first from the propagated ones), so a drag in small steps converges as it goes.
-  /// ARAP converges slowly: more iterations bring the result closer to its fixed point, and to a converged mesh
-  /// ARAP (doc/editing.md, "As rigid as possible").
-  unsigned int rigid_iterations = 3;
-  /// With `as_rigid_as_possible`: a step stops iterating before `rigid_iterations` once no sample point moved
-  /// more than this fraction of the region's size in the last iteration (0: always `rigid_iterations`).
-  double rigid_tolerance = 0;
-  /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1.
-  unsigned int diffusion_samples = 4;
-  Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
-
-  Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
-
-  static Least_squares_settings editing_least_squares()
-  {
-    Least_squares_settings s;
-    s.refinement_tolerance = 1e-10;
-    return s;
-  }
-
-  static Simplification_settings editing_simplification()
-  {
-    Simplification_settings s;
-    s.target_count = 3000;
-    s.mode_spread_threshold = 2.0;
-    return s;
-  }
-
-  void validate() const
-  {
-    filter.validate();
-    simplification.validate();
-    least_squares.validate();
-    if(sample_neighbors < 1)
-      throw Invalid_input("detail-preserving deformation: sample_neighbors must be at least 1");
-    if(!(handle_weight > 0))
-      throw Invalid_input("detail-preserving deformation: handle_weight must be > 0 (infinity: exact handles)");
-    if(diffusion_samples < 1)
-      throw Invalid_input("detail-preserving deformation: diffusion_samples must be at least 1");
-    if(rigid_iterations < 1)
-      throw Invalid_input("detail-preserving deformation: rigid_iterations must be at least 1");
-    if(!(rigid_tolerance >= 0) || std::isinf(rigid_tolerance))
-      throw Invalid_input("detail-preserving deformation: rigid_tolerance must be a finite number >= 0");
-  }
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  Sizes and timings of a `Detail_preserving_deformation` (the fields of the paper's Table 1 and more).
-*/
-struct Detail_preserving_deformation_statistics
-{
-  std::size_t points = 0;      ///< input points
-  std::size_t samples = 0;     ///< simplification sample points
-  /// Sample points the mode-spread rule asked for (above `samples` when the budget of
-  /// `Simplification_settings::variation_budget` capped it).
-  std::size_t requested_samples = 0;
-  std::size_t roi_samples = 0; ///< sample points of the region of interest (the unknowns)
-  std::size_t handle_samples = 0;
-  double clustering_seconds = 0; ///< mean shift and clustering (the mean shift runs once per deformation object)
-  double preprocess_seconds = 0; ///< all of `preprocess()`, clustering and factorisation included
-  Least_squares_statistics least_squares; ///< assembly, factorisation and last solve of the sample points' system
-  double deform_seconds = 0;  ///< last `deform()`: propagated rotations, right-hand side, back-substitution
-  /// Last `deform()` with `as_rigid_as_possible`: rotation fits and solves, over all its steps.
-  unsigned int rigid_iterations = 0;
-  /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
-  /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
-  /// anything (the cubic order on a long region can: doc/editing.md, "Against CGAL on the Botsch–Sorkine
-  /// cactus").
-  double displacement_ratio = 0;
-  double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
-};
 
 /*!
   \ingroup PkgCGALExtAlgorithms
@@ -215,8 +69,10 @@ template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag>
 class Detail_preserving_deformation
 {
   using Matrix_n3 = internal::Matrix_n3;
+  using Transform = internal::Rigid_transform;
   static constexpr const char* who = "Detail_preserving_deformation";
-  enum : int { fixed_label = 0, roi_label = 1, first_handle_label = 2 };
+  static constexpr int fixed_label = internal::fixed_label, roi_label = internal::roi_label,
+                       first_handle_label = internal::first_handle_label;
 
 public:
   using Settings = Detail_preserving_deformation_settings;
@@ -401,7 +257,7 @@ public:
   /// @{
   std::size_t number_of_points() const { return m_cloud.size(); }
   std::size_t number_of_sample_points() const { return std::size_t(m_samples.rows()); }
-  std::size_t number_of_roi_sample_points() const { return m_roi.size(); }
+  std::size_t number_of_roi_sample_points() const { return m_system.roi.size(); }
   bool is_preprocessed() const { return m_preprocessed; }
   const Statistics& statistics() const { return m_statistics; }
 
@@ -418,8 +274,8 @@ public:
   /// The detail vector `f(K) s` of sample point `s` (zero outside the region of interest).
   Eigen::Vector3d sample_detail(std::size_t s) const
   {
-    const int r = m_roi_local.at(s);
-    return r < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(m_details.row(r).transpose());
+    const int r = m_system.roi_local.at(s);
+    return r < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(m_system.details.row(r).transpose());
   }
   /// The rotation of sample point `s`'s detail in the last `deform()`: propagated, or fitted to the result in
   /// as-rigid-as-possible mode (the identity outside the region).
@@ -427,7 +283,7 @@ public:
   /// The strength `f = beta(d0 / (d0 + d1))` of handle group `g` at sample point `s`.
   double strength(std::size_t s, std::size_t g) const { return m_strength.at(s * m_transforms.size() + g); }
   /// The sample points' Laplacian `K` (rows in sample-point order).
-  const internal::Sparse_row_matrix& sample_laplacian() const { return m_K; }
+  const Eigen::SparseMatrix<double, Eigen::RowMajor, int>& sample_laplacian() const { return m_system.K; }
   /// Whether sample point `s` is in the region of interest / a handle.
   bool is_roi_sample_point(std::size_t s) const { return m_sample_label.at(s) != fixed_label; }
   bool is_handle_sample_point(std::size_t s) const { return m_sample_label.at(s) >= first_handle_label; }
@@ -443,12 +299,6 @@ public:
   /// @}
 
 private:
-  struct Transform
-  {
-    Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
-    Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  };
-
   void check_group(std::size_t group) const
   {
     if(group >= m_transforms.size())
@@ -486,15 +336,7 @@ private:
   std::vector<int> m_sample_label; // per sample point
   std::vector<int> m_sample_first_row; // a member row of each sample point (for messages)
   std::size_t m_requested_samples = 0;  // what the mode-spread rule asked for
-  internal::Neighbor_graph m_graph; // symmetrised kNN of the sample points
-  internal::Sparse_row_matrix m_K;
-  std::vector<int> m_roi;       // sample points of the region, increasing
-  std::vector<int> m_roi_local; // per sample point: its row in m_roi, or -1
-  std::vector<int> m_anchors;   // local indices of the handle sample points
-  std::vector<int> m_anchor_group;
-  std::vector<std::pair<int, int>> m_rigid_edges; // as-rigid-as-possible: the graph's edges, one equation each
-  Matrix_n3 m_details;          // f(K) s on the region's rows
-  internal::Detail_least_squares m_system;
+  internal::Sample_system m_system; // graph, Laplacian, region indexing and factored system of the sample points
   std::vector<double> m_d1, m_strength; // per sample point and group
   std::vector<Eigen::Matrix3d> m_propagated, m_sample_rotation, m_frames; // m_propagated: the details' R_i
   bool m_has_rigid_rotations = false; // as-rigid-as-possible: m_propagated holds the last drag's rotations
@@ -539,25 +381,12 @@ void Detail_preserving_deformation<ConcurrencyTag>::cluster(internal::Progress& 
 {
   using namespace internal;
   const std::size_t n = m_cloud.size();
-  const Simplification_settings& simplification = m_settings.simplification;
-  bool needs_modes = false;
-  Cluster_split_rule rule = split_rule_for(simplification, n, needs_modes);
-  rule.labels = &m_label;
-  if(needs_modes) {
-    if(!m_has_mean_shift) {
-      const std::size_t k = std::min<std::size_t>(simplification.mean_shift_neighbors, n - 1);
-      if(!analyse_mean_shift<ConcurrencyTag>(m_cloud, m_normals, k, simplification.mean_shift, progress, m_mean_shift))
-        return;
-      m_has_mean_shift = true;
-    }
-    rule.modes = &m_mean_shift.modes;
-  }
   std::vector<int> order;
-  Cluster_split_counts counts;
-  const std::vector<int> leaves = split_into_clusters<ConcurrencyTag>(m_cloud.positions, rule, order, &counts);
-  m_requested_samples = counts.requested;
   Simplification_sample_points<CGAL::Simple_cartesian<double>> ssps;
-  make_surfels<CGAL::Simple_cartesian<double>, ConcurrencyTag>(m_cloud, m_normals, order, leaves, ssps);
+  if(!cluster_into_sample_points<CGAL::Simple_cartesian<double>, ConcurrencyTag>(
+       m_cloud, m_normals, m_settings.simplification, &m_label, progress, m_mean_shift, m_has_mean_shift, order, ssps))
+    return;
+  m_requested_samples = ssps.requested_count;
 
   const std::size_t count = ssps.size();
   m_samples.resize(Eigen::Index(count), 3);
@@ -589,7 +418,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_strength_field()
   }
   auto distance_to = [&](const std::vector<int>& sources) {
     return m_settings.strength_distance == Strength_distance::geodesic
-             ? graph_distance_to(m_samples, m_graph, sources)
+             ? graph_distance_to(m_samples, m_system.graph, sources)
              : euclidean_distance_to<ConcurrencyTag>(m_samples, sources);
   };
   const Eigen::VectorXd d0 = distance_to(fixed);
@@ -627,55 +456,20 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   const std::size_t count = std::size_t(m_samples.rows());
   if(count < 2)
     throw Invalid_input(std::string(who) + ": the points form a single sample point; lower the cluster size");
-  // The sample points' Laplacian on their symmetrised kNN graph.
-  const std::size_t k = std::min<std::size_t>(m_settings.sample_neighbors, count - 1);
-  Progress silent;
-  m_graph = symmetrize<ConcurrencyTag>(k_nearest_neighbor_graph<ConcurrencyTag>(m_samples, k, silent));
-  m_K = laplacian_matrix<ConcurrencyTag>(m_samples, m_graph, Laplacian_weights());
-
-  m_roi.clear();
-  m_roi_local.assign(count, -1);
-  std::vector<char> in_region(count, 0);
-  m_anchors.clear();
-  m_anchor_group.clear();
-  for(std::size_t s = 0; s < count; ++s) {
-    if(m_sample_label[s] == fixed_label) continue;
-    m_roi_local[s] = int(m_roi.size());
-    in_region[s] = 1;
-    if(m_sample_label[s] >= first_handle_label) {
-      m_anchors.push_back(int(m_roi.size()));
-      m_anchor_group.push_back(m_sample_label[s] - first_handle_label);
-    }
-    m_roi.push_back(int(s));
-  }
+  const std::size_t k = m_settings.sample_neighbors;
+  if(k >= count)
+    throw Invalid_input(std::string(who) + ": sample_neighbors (" + std::to_string(k) + ") must be less than the number "
+                        "of sample points (" + std::to_string(count) + "); lower it, or make the clusters smaller");
   std::vector<int> point_of_sample(count);
   for(std::size_t s = 0; s < count; ++s) point_of_sample[s] = m_cloud.input_index[std::size_t(m_sample_first_row[s])];
-  check_pinned(m_K, m_roi, in_region, m_anchors, point_of_sample, who);
-
-  // Details of the region's sample points and the factored normal equations. Soft handles weigh w against
-  // alpha: the minimiser of alpha ||A u - r||^2 + w ||S u - t||^2 is that of (alpha / w) ||A u - r||^2 +
-  // ||S u - t||^2. Exact handles leave the unknowns.
-  const Matrix_n3 all_details = apply_detail_filter<ConcurrencyTag>(m_K, m_settings.filter, m_samples);
-  m_details.resize(Eigen::Index(m_roi.size()), 3);
-  Matrix_n3 region_positions(Eigen::Index(m_roi.size()), 3);
-  for(std::size_t r = 0; r < m_roi.size(); ++r) {
-    m_details.row(Eigen::Index(r)) = all_details.row(m_roi[r]);
-    region_positions.row(Eigen::Index(r)) = m_samples.row(m_roi[r]);
-  }
-  Least_squares_settings least_squares = m_settings.least_squares;
+  m_system.setup<ConcurrencyTag>(m_samples, m_sample_label, point_of_sample, k, m_settings.filter,
+                                 m_settings.rotations == Detail_rotation::as_rigid_as_possible,
+                                 m_settings.least_squares, m_settings.handle_weight, who);
   const bool exact_handles = std::isinf(m_settings.handle_weight);
-  if(!exact_handles) least_squares.detail_weight /= m_settings.handle_weight;
-  // As-rigid-as-possible editing solves for the edges of the sample points' graph instead of their details.
-  if(m_settings.rotations == Detail_rotation::as_rigid_as_possible)
-    m_system.factor<ConcurrencyTag>(rigid_edge_rows(m_graph, m_roi_local, m_roi.size(), m_rigid_edges), m_anchors,
-                                    region_positions, least_squares, exact_handles);
-  else
-    m_system.factor<ConcurrencyTag>(detail_operator_rows<ConcurrencyTag>(m_K, m_settings.filter, m_roi), m_anchors,
-                                    region_positions, least_squares, exact_handles);
   if(!progress.report(0.6)) return false;
 
   build_strength_field();
-  m_frame_builder.setup(m_samples, m_sample_normals, m_graph);
+  m_frame_builder.setup(m_samples, m_sample_normals, m_system.graph);
   m_frames.resize(count);
   for_range<ConcurrencyTag>(0, count, [&](std::size_t s) {
     m_frames[s] = m_frame_builder.frame(m_samples, s, m_sample_normals.row(Eigen::Index(s)).transpose());
@@ -701,14 +495,14 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   m_has_rigid_rotations = false;
   m_solved_transforms.assign(m_transforms.size(), Transform());
   m_handles_centre.setZero();
-  for(int a : m_anchors) m_handles_centre += m_samples.row(m_roi[std::size_t(a)]).transpose() / double(m_anchors.size());
+  for(int a : m_system.anchors) m_handles_centre += m_samples.row(m_system.roi[std::size_t(a)]).transpose() / double(m_system.anchors.size());
   Eigen::AlignedBox3d region_box;
-  for(int s : m_roi) region_box.extend(m_samples.row(s).transpose());
+  for(int s : m_system.roi) region_box.extend(m_samples.row(s).transpose());
   m_region_size = region_box.diagonal().norm();
   m_sample_rotation.assign(count, Eigen::Matrix3d::Identity());
   m_deformed_samples = m_samples;
-  m_detail_change.resize(Eigen::Index(m_roi.size()), 3);
-  m_anchor_displacement.resize(Eigen::Index(m_anchors.size()), 3);
+  m_detail_change.resize(Eigen::Index(m_system.roi.size()), 3);
+  m_anchor_displacement.resize(Eigen::Index(m_system.anchors.size()), 3);
   m_deformed_points = m_cloud.positions;
   m_deformed_normals = m_normals;
   if(!progress.report(1.0)) return false;
@@ -716,8 +510,8 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   m_statistics.points = m_cloud.size();
   m_statistics.samples = count;
   m_statistics.requested_samples = m_requested_samples;
-  m_statistics.roi_samples = m_roi.size();
-  m_statistics.handle_samples = m_anchors.size();
+  m_statistics.roi_samples = m_system.roi.size();
+  m_statistics.handle_samples = m_system.anchors.size();
   m_statistics.least_squares = m_system.statistics();
   m_statistics.preprocess_seconds = seconds_since(start);
   m_preprocessed = true;
@@ -732,21 +526,16 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
   const auto start = std::chrono::steady_clock::now();
   const std::size_t groups = m_transforms.size();
   auto pull_anchors = [&](const std::vector<Transform>& transforms) {
-    for(std::size_t a = 0; a < m_anchors.size(); ++a) {
-      const Transform& T = transforms[std::size_t(m_anchor_group[a])];
-      const Eigen::Vector3d s = m_samples.row(m_roi[std::size_t(m_anchors[a])]).transpose();
+    for(std::size_t a = 0; a < m_system.anchors.size(); ++a) {
+      const Transform& T = transforms[std::size_t(m_system.anchor_group[a])];
+      const Eigen::Vector3d s = m_samples.row(m_system.roi[std::size_t(m_system.anchors[a])]).transpose();
       m_anchor_displacement.row(Eigen::Index(a)) = (T.rotation * s + T.translation - s).transpose();
     }
   };
-  auto solve = [&] {
-    const Matrix_n3 u = m_system.solve<ConcurrencyTag>(m_detail_change, m_anchor_displacement);
-    for(std::size_t r = 0; r < m_roi.size(); ++r)
-      m_deformed_samples.row(m_roi[r]) = m_samples.row(m_roi[r]) + u.row(Eigen::Index(r));
-  };
   // R_i = the strength field's blend of the handles' rotations.
   auto propagate = [&](const std::vector<Eigen::Quaterniond>& rotations) {
-    for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
-      const std::size_t s = std::size_t(m_roi[r]);
+    for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
+      const std::size_t s = std::size_t(m_system.roi[r]);
       m_propagated[s] = internal::propagated_rotation(rotations, &m_d1[s * groups], &m_strength[s * groups]).toRotationMatrix();
     });
   };
@@ -759,80 +548,61 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
     else
       propagate(rotations);
     pull_anchors(m_transforms);
-    for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
-      const Eigen::Vector3d delta = m_details.row(Eigen::Index(r)).transpose();
-      m_detail_change.row(Eigen::Index(r)) = (m_propagated[std::size_t(m_roi[r])] * delta - delta).transpose();
+    for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
+      const Eigen::Vector3d delta = m_system.details.row(Eigen::Index(r)).transpose();
+      m_detail_change.row(Eigen::Index(r)) = (m_propagated[std::size_t(m_system.roi[r])] * delta - delta).transpose();
     });
-    solve();
+    m_system.solve<ConcurrencyTag>(m_samples, m_detail_change, m_anchor_displacement, m_deformed_samples);
   } else {
     // ARAP's energy is not convex: a large change of the handles since the last solve is taken in steps of at
-    // most 10 degrees and 5 % of the region's size (each group's rotation slerped about the handles' common
+    // most `rigid_step_degrees` and `rigid_step_fraction` of the region's size (each group's rotation slerped about the handles' common
     // centre, which moves on a line), along which the solution follows the deformation the user would drag
     // through. Each step starts from the rotations of the one before (the first drag from the propagated
     // ones): on the 70-degree cactus, 3 % of the diagonal from CGAL's mesh ARAP after 10 iterations,
     // against 21 % in one step of 30 iterations and 24 % when each step first turns the rotations by the
     // strength field's blend.
-    std::size_t steps = 1;
-    const Eigen::Vector3d c = m_handles_centre;
-    for(std::size_t g = 0; g < groups; ++g) {
-      const Transform &from = m_solved_transforms[g], &to = m_transforms[g];
-      const double angle = from.rotation.angularDistance(to.rotation);
-      const double shift = ((to.rotation * c + to.translation) - (from.rotation * c + from.translation)).norm();
-      steps = std::max(steps, std::size_t(std::ceil(angle / (10 * 3.14159265358979323846 / 180) - 1e-9)));
-      if(m_region_size > 0) steps = std::max(steps, std::size_t(std::ceil(std::min(shift / (0.05 * m_region_size), 1e6) - 1e-9)));
-    }
+    const std::size_t steps = rigid_step_count(
+      m_solved_transforms, m_transforms, m_handles_centre, m_region_size,
+      Rigid_step_limits{m_settings.rigid_step_degrees, m_settings.rigid_step_fraction, m_settings.max_rigid_steps});
     std::vector<Transform> along(groups);
     std::vector<Eigen::Quaterniond> previous(groups);
     unsigned int iterations_used = 0;
     for(std::size_t step = 1; step <= steps; ++step) {
-      const double f = double(step) / double(steps);
-      for(std::size_t g = 0; g < groups; ++g) {
-        const Transform &from = m_solved_transforms[g], &to = m_transforms[g];
-        if(step == steps) { along[g] = to; continue; }
-        along[g].rotation = from.rotation.slerp(f, to.rotation);
-        const Eigen::Vector3d centre = (1 - f) * (from.rotation * c + from.translation) + f * (to.rotation * c + to.translation);
-        along[g].translation = centre - along[g].rotation * c;
-      }
+      for(std::size_t g = 0; g < groups; ++g)
+        along[g] = step == steps ? m_transforms[g]
+                                 : rigid_step(m_solved_transforms[g], m_transforms[g], m_handles_centre,
+                                              double(step) / double(steps));
       if(!m_has_rigid_rotations) {
         for(std::size_t g = 0; g < groups; ++g) rotations[g] = along[g].rotation;
         propagate(rotations);
         m_has_rigid_rotations = true;
-      } else if(m_roi.size() == std::size_t(m_samples.rows())) {
+      } else if(m_system.roi.size() == std::size_t(m_samples.rows())) {
         // Nothing is fixed: the strength field is 1 everywhere and its blend of the handles' turns is exact for
         // a rigid motion, so each step starts from it (with a fixed part it misleads: the cactus 24 %).
         std::vector<Eigen::Quaterniond> turns(groups);
         for(std::size_t g = 0; g < groups; ++g)
           turns[g] = along[g].rotation * (step == 1 ? m_solved_transforms[g].rotation : previous[g]).conjugate();
-        for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
-          const std::size_t s = std::size_t(m_roi[r]);
+        for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
+          const std::size_t s = std::size_t(m_system.roi[r]);
           m_propagated[s] = internal::propagated_rotation(turns, &m_d1[s * groups], &m_strength[s * groups]).toRotationMatrix() * m_propagated[s];
         });
       }
       for(std::size_t g = 0; g < groups; ++g) previous[g] = along[g].rotation;
       pull_anchors(along);
-      for(unsigned int iteration = 0; iteration < m_settings.rigid_iterations; ++iteration) {
-        const bool check_settled = m_settings.rigid_tolerance > 0;
-        m_detail_change = rigid_edge_change<ConcurrencyTag>(m_rigid_edges, m_samples, m_propagated);
-        if(check_settled) m_previous_samples = m_deformed_samples;
-        solve();
-        fit_neighborhood_rotations<ConcurrencyTag>(m_samples, m_deformed_samples, m_graph, m_roi, m_propagated);
-        ++iterations_used;
-        if(!check_settled) continue;
-        // Settled: no sample point moved more than the tolerance since the last solve.
-        double moved = 0;
-        for(int s : m_roi) moved = std::max(moved, (m_deformed_samples.row(s) - m_previous_samples.row(s)).norm());
-        if(moved <= m_settings.rigid_tolerance * m_region_size) break;
-      }
+      iterations_used += rigid_iterations<ConcurrencyTag>(m_system, m_samples, m_anchor_displacement,
+                                                          m_settings.rigid_iterations,
+                                                          m_settings.rigid_tolerance * m_region_size, m_propagated,
+                                                          m_deformed_samples, m_detail_change, m_previous_samples);
     }
     m_solved_transforms = m_transforms;
     m_statistics.rigid_iterations = iterations_used;
   }
   m_statistics.least_squares = m_system.statistics();
   double largest = 0, largest_handle = 0;
-  for(std::size_t r = 0; r < m_roi.size(); ++r) {
-    const double d = (m_deformed_samples.row(m_roi[r]) - m_samples.row(m_roi[r])).norm();
+  for(std::size_t r = 0; r < m_system.roi.size(); ++r) {
+    const double d = (m_deformed_samples.row(m_system.roi[r]) - m_samples.row(m_system.roi[r])).norm();
     largest = std::max(largest, d);
-    if(m_sample_label[std::size_t(m_roi[r])] >= first_handle_label) largest_handle = std::max(largest_handle, d);
+    if(m_sample_label[std::size_t(m_system.roi[r])] >= first_handle_label) largest_handle = std::max(largest_handle, d);
   }
   m_statistics.displacement_ratio = largest_handle > 0 ? largest / largest_handle : 0.0;
   m_statistics.deform_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -852,14 +622,14 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   std::vector<Eigen::Matrix3d>& rotation = m_group_rotations; // sized by preprocess(): no allocation per drag
   for(std::size_t g = 0; g < m_transforms.size(); ++g) rotation[g] = m_transforms[g].rotation.toRotationMatrix();
   const bool exact_handles = !m_handle_rows.empty();
-  for_range<ConcurrencyTag>(0, m_roi.size(), [&](std::size_t r) {
-    const std::size_t s = std::size_t(m_roi[r]);
+  for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
+    const std::size_t s = std::size_t(m_system.roi[r]);
     if(exact_handles && m_sample_label[s] >= first_handle_label) { // moved rigidly by its group, exactly
       m_sample_rotation[s] = rotation[std::size_t(m_sample_label[s] - first_handle_label)];
       return;
     }
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));
-    for(const int* j = m_graph.begin(s); j != m_graph.end(s) && !moved; ++j)
+    for(const int* j = m_system.graph.begin(s); j != m_system.graph.end(s) && !moved; ++j)
       moved = m_deformed_samples.row(*j) != m_samples.row(*j);
     if(!moved) {
       m_sample_rotation[s].setIdentity();

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_MEAN_SHIFT_SETTINGS_H
 #define CGAL_EXT_MEAN_SHIFT_SETTINGS_H
 
+#include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/exceptions.h>
 
 #include <cmath>
@@ -10,6 +11,9 @@
 #include <string>
 
 namespace CGAL_ext {
+
+/// Default number of candidate neighbours of the mean shift (and of its curvature fit).
+constexpr unsigned int default_mean_shift_neighbors = default_curvature_neighbors;
 
 /*!
   \ingroup PkgCGALExtRef
@@ -67,6 +71,39 @@ struct Mean_shift_settings
     check("tolerance", tolerance, false);
     if(max_iterations < 1) throw Invalid_input("mean shift settings: max_iterations must be at least 1");
   }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  The mean-shift mode of a point in the joint spatial-range domain, in the points' own units: the position
+  part, the normal part (a kernel-weighted mean of unit normals, so of length at most 1) and the mean
+  curvature part (the scaled curvature divided by the curvature scale again).
+*/
+template <typename Kernel>
+struct Mean_shift_mode
+{
+  typename Kernel::Point_3 position;
+  typename Kernel::Vector_3 normal;
+  typename Kernel::FT mean_curvature{0};
+  unsigned int iterations = 0; ///< mean-shift steps taken
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  What a mean shift did: the scales it used (after the automatic rules of `Mean_shift_settings`) and its
+  iteration counts.
+*/
+struct Mean_shift_result
+{
+  bool completed = false; ///< false when the callback cancelled
+  double spatial_bandwidth = 0;
+  double range_bandwidth = 0;
+  double curvature_scale = 0;
+  double mean_iterations = 0;
+  unsigned int max_iterations = 0;  ///< the most steps any point took
+  std::size_t points_at_cap = 0;    ///< points stopped by the iteration cap rather than the tolerance
+
+  explicit operator bool() const { return completed; }
 };
 
 } // namespace CGAL_ext

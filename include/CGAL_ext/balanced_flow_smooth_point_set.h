@@ -4,7 +4,8 @@
 #define CGAL_EXT_BALANCED_FLOW_SMOOTH_POINT_SET_H
 
 #include <CGAL_ext/Balanced_flow_settings.h>
-#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/balanced_flow.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 

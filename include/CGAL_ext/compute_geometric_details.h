@@ -4,73 +4,21 @@
 #define CGAL_EXT_COMPUTE_GEOMETRIC_DETAILS_H
 
 #include <CGAL_ext/Detail_filter.h>
-#include <CGAL_ext/compute_point_set_laplacian.h>
-#include <CGAL_ext/estimate_oriented_normals.h>
 #include <CGAL_ext/exceptions.h>
-#include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
-#include <CGAL_ext/internal/mean_shift.h>
+#include <CGAL_ext/internal/geometric_details.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/boost/graph/named_params_helper.h>
 #include <CGAL/tags.h>
 
-#include <algorithm>
 #include <functional>
 #include <vector>
 
 namespace CGAL_ext {
-
-/// Default neighbour count of the Laplacian (doc/geometric_details.md, "Defaults").
-constexpr unsigned int default_laplacian_neighbors = 10;
-
 namespace internal {
-
-/// Stands for "no oriented-magnitude output".
-struct No_output_map {};
-
-template <typename Key, typename Value>
-void put(No_output_map, const Key&, const Value&) {}
-
-/// The Laplacian the settings ask for, in the cloud's order: on the symmetrised kNN graph, or on the
-/// mean-shift neighbourhoods of `settings.neighborhood` (these need `normals`, unused otherwise).
-/// Returns false when cancelled.
-template <typename ConcurrencyTag>
-bool detail_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Detail_settings& settings,
-                      const Matrix_n3& normals, Progress& progress, Sparse_row_matrix& K, const char* who)
-{
-  if(settings.neighborhood == Laplacian_neighborhood::k_nearest)
-    return build_laplacian<ConcurrencyTag>(cloud, k, settings.weights, progress, K);
-
-  // The modes want their own candidate count; the Laplacian's candidates are the k nearest of those.
-  const std::size_t candidates = std::min<std::size_t>(std::max<std::size_t>(k, default_mean_shift_neighbors),
-                                                       cloud.size() - 1);
-  check_mean_shift_neighbors(candidates, cloud.size(), who);
-  const Progress::Range whole = progress.range();
-  progress.stage(whole.begin, whole.at(0.9));
-  Mean_shift_analysis analysis;
-  if(!analyse_mean_shift<ConcurrencyTag>(cloud, normals, candidates, settings.mean_shift, progress, analysis))
-    return false;
-  progress.stage(whole.at(0.9), whole.end);
-  constexpr std::size_t min_neighbors = 3;
-  const Neighbor_graph graph = symmetrize<ConcurrencyTag>(mean_shift_neighbor_graph<ConcurrencyTag>(
-    nearest_prefix(analysis.candidates, k), analysis.modes, std::min(k, min_neighbors)));
-  K = laplacian_matrix<ConcurrencyTag>(cloud.positions, graph, settings.weights);
-  return progress.report(1.0);
-}
-
-/// Detail vectors of a cloud, in the cloud's order. Returns false when cancelled.
-template <typename ConcurrencyTag>
-bool geometric_details(const Spatial_point_cloud& cloud, unsigned int k, const Detail_settings& settings,
-                       const Matrix_n3& normals, Progress& progress, Matrix_n3& details, const char* who)
-{
-  Sparse_row_matrix K;
-  if(!detail_laplacian<ConcurrencyTag>(cloud, k, settings, normals, progress, K, who)) return false;
-  details = apply_detail_filter<ConcurrencyTag>(K, settings.filter, cloud.positions);
-  return true;
-}
 
 template <typename ConcurrencyTag, typename PointRange, typename DetailMap, typename MagnitudeMap,
           typename NamedParameters>
@@ -115,14 +63,6 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   }
   return true;
 }
-
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
-#define CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES(EXTERN, Tag) \
-  EXTERN template bool detail_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Detail_settings&, \
-                                             const Matrix_n3&, Progress&, Sparse_row_matrix&, const char*); \
-  EXTERN template bool geometric_details<Tag>(const Spatial_point_cloud&, unsigned int, const Detail_settings&, \
-                                              const Matrix_n3&, Progress&, Matrix_n3&, const char*);
-CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES)
 
 } // namespace internal
 

@@ -4,7 +4,6 @@
 #define CGAL_EXT_COMPUTE_MEAN_SHIFT_MODES_H
 
 #include <CGAL_ext/Mean_shift_settings.h>
-#include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
@@ -20,60 +19,6 @@
 #include <vector>
 
 namespace CGAL_ext {
-
-/*!
-  \ingroup PkgCGALExtRef
-  The mean-shift mode of a point in the joint spatial-range domain, in the points' own units: the position
-  part, the normal part (a kernel-weighted mean of unit normals, so of length at most 1) and the mean
-  curvature part (the scaled curvature divided by the curvature scale again).
-*/
-template <typename Kernel>
-struct Mean_shift_mode
-{
-  typename Kernel::Point_3 position;
-  typename Kernel::Vector_3 normal;
-  typename Kernel::FT mean_curvature{0};
-  unsigned int iterations = 0; ///< mean-shift steps taken
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  What a mean shift did: the scales it used (after the automatic rules of `Mean_shift_settings`) and its
-  iteration counts.
-*/
-struct Mean_shift_result
-{
-  bool completed = false; ///< false when the callback cancelled
-  double spatial_bandwidth = 0;
-  double range_bandwidth = 0;
-  double curvature_scale = 0;
-  double mean_iterations = 0;
-  unsigned int max_iterations = 0;  ///< the most steps any point took
-  std::size_t points_at_cap = 0;    ///< points stopped by the iteration cap rather than the tolerance
-
-  explicit operator bool() const { return completed; }
-};
-
-namespace internal {
-
-inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Mean_shift_settings& settings)
-{
-  Mean_shift_result result;
-  result.completed = true;
-  result.spatial_bandwidth = analysis.scales.spatial_bandwidth;
-  result.range_bandwidth = analysis.scales.range_bandwidth;
-  result.curvature_scale = analysis.scales.curvature_scale;
-  double sum = 0;
-  for(int steps : analysis.iterations) {
-    sum += steps;
-    result.max_iterations = std::max(result.max_iterations, unsigned(steps));
-    if(steps == int(settings.max_iterations)) ++result.points_at_cap;
-  }
-  result.mean_iterations = analysis.iterations.empty() ? 0 : sum / double(analysis.iterations.size());
-  return result;
-}
-
-} // namespace internal
 
 /*!
   \ingroup PkgCGALExtAlgorithms

@@ -6,7 +6,6 @@
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Laplacian.h>
-#include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -16,63 +15,10 @@
 
 #include <Eigen/SparseCore>
 
-#include <algorithm>
 #include <functional>
-#include <utility>
 #include <vector>
 
 namespace CGAL_ext {
-namespace internal {
-
-/// Symmetrised kNN graph and Laplacian of a cloud, both in the cloud's (spatial) order.
-/// Progress runs over [0, 1] of the current stage. Returns false when cancelled.
-template <typename ConcurrencyTag>
-bool build_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Laplacian_weights& weights,
-                     Progress& progress, Sparse_row_matrix& K, Neighbor_graph* graph_out = nullptr)
-{
-  Neighbor_graph graph = symmetrize<ConcurrencyTag>(k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress));
-  if(progress.cancelled()) return false;
-  K = laplacian_matrix<ConcurrencyTag>(cloud.positions, graph, weights);
-  if(graph_out) *graph_out = std::move(graph);
-  return progress.report(1.0);
-}
-
-/// `P K P^T`: the matrix of the cloud's order re-indexed to the caller's order, rows sorted.
-inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const Spatial_point_cloud& cloud)
-{
-  const std::vector<int>& input_index = cloud.input_index;
-  const std::size_t n = input_index.size();
-  const std::vector<int> spatial_of = cloud.spatial_index();
-  Sparse_row_matrix P(K.rows(), K.cols());
-  P.resizeNonZeros(K.nonZeros());
-  int* outer = P.outerIndexPtr();
-  outer[0] = 0;
-  for(std::size_t r = 0; r < n; ++r) {
-    const int s = spatial_of[r];
-    outer[r + 1] = outer[r] + (K.outerIndexPtr()[s + 1] - K.outerIndexPtr()[s]);
-  }
-  std::vector<std::pair<int, double>> row;
-  for(std::size_t r = 0; r < n; ++r) {
-    const int s = spatial_of[r];
-    row.clear();
-    for(int e = K.outerIndexPtr()[s]; e < K.outerIndexPtr()[s + 1]; ++e)
-      row.emplace_back(input_index[std::size_t(K.innerIndexPtr()[e])], K.valuePtr()[e]);
-    std::sort(row.begin(), row.end());
-    for(std::size_t m = 0; m < row.size(); ++m) {
-      P.innerIndexPtr()[outer[r] + int(m)] = row[m].first;
-      P.valuePtr()[outer[r] + int(m)] = row[m].second;
-    }
-  }
-  return P;
-}
-
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
-#define CGAL_EXT_BUILD_LAPLACIAN_INSTANCES(EXTERN, Tag) \
-  EXTERN template bool build_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Laplacian_weights&, \
-                                            Progress&, Sparse_row_matrix&, Neighbor_graph*);
-CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_BUILD_LAPLACIAN_INSTANCES)
-
-} // namespace internal
 
 /*!
   \ingroup PkgCGALExtAlgorithms

@@ -3,42 +3,16 @@
 #ifndef CGAL_EXT_ENHANCE_GEOMETRIC_DETAILS_H
 #define CGAL_EXT_ENHANCE_GEOMETRIC_DETAILS_H
 
-#include <CGAL_ext/Balanced_flow_settings.h>
+#include <CGAL_ext/Detail_scaling_settings.h>
+#include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/balanced_flow.h>
+#include <CGAL_ext/internal/detail_manipulation.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
-#include <CGAL_ext/scale_geometric_details.h>
+#include <CGAL_ext/internal/geometric_details.h>
 
 #include <numeric>
 
 namespace CGAL_ext {
-
-/*!
-  \ingroup PkgCGALExtRef
-  Settings of detail enhancement: those of scaling plus the balanced flow of the base surface.
-*/
-struct Detail_enhancement_settings : Detail_scaling_settings
-{
-  Balanced_flow_settings flow;
-  /// A partial region's normals, Laplacian and base surface are computed on the points within this many
-  /// neighbourhood radii of it (the radius: the median distance of a region point to its k-th nearest region
-  /// point), not on the whole model; 0 computes them on the whole model. The balanced flow's influence fades
-  /// about e-fold every 5 radii: at 80, a 100k-point region of 1M samples of the armadillo moved within 1.2e-7
-  /// of its displacement's RMS of where the whole model's computation puts it (doc/detail_scaling.md, "A region
-  /// of a large model").
-  double flow_margin = 80;
-
-  Detail_enhancement_settings(const Detail_filter& filter = {}) : Detail_scaling_settings(filter) {}
-  Detail_enhancement_settings(const Detail_scaling_settings& s, const Balanced_flow_settings& f = {})
-    : Detail_scaling_settings(s), flow(f) {}
-
-  void validate() const
-  {
-    Detail_scaling_settings::validate();
-    flow.validate();
-    if(!(std::isfinite(flow_margin) && flow_margin >= 0))
-      throw Invalid_input("enhancement: flow_margin must be a finite number >= 0");
-  }
-};
 
 namespace internal {
 

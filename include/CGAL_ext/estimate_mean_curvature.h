@@ -3,7 +3,7 @@
 #ifndef CGAL_EXT_ESTIMATE_MEAN_CURVATURE_H
 #define CGAL_EXT_ESTIMATE_MEAN_CURVATURE_H
 
-#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>

@@ -17,9 +17,6 @@
 
 namespace CGAL_ext {
 
-/// Default neighbour count of normal estimation when a point set comes without normals.
-constexpr unsigned int default_normal_neighbors = 18;
-
 /*!
   \ingroup PkgCGALExtAlgorithms
   Estimates an oriented unit normal of every point, for scans that come without normals: what

@@ -3,6 +3,8 @@
 #ifndef CGAL_EXT_GENERATED_SHAPES_H
 #define CGAL_EXT_GENERATED_SHAPES_H
 
+#include <CGAL/number_type_config.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -34,7 +36,7 @@ struct Oriented_sample
 };
 
 namespace detail {
-constexpr double pi = 3.14159265358979323846;
+constexpr double pi = CGAL_PI;
 
 /// Unit normal of the parametric surface `f(u, v)` by central differences, oriented like `outward`.
 template <typename F>

@@ -3,11 +3,11 @@
 #ifndef CGAL_EXT_SCALE_GEOMETRIC_DETAILS_H
 #define CGAL_EXT_SCALE_GEOMETRIC_DETAILS_H
 
-#include <CGAL_ext/Detail_filter.h>
-#include <CGAL_ext/Least_squares_settings.h>
-#include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/Detail_scaling_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/detail_manipulation.h>
+#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/geometric_details.h>
 
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/boost/graph/named_params_helper.h>
@@ -19,127 +19,7 @@
 
 namespace CGAL_ext {
 
-/*!
-  \ingroup PkgCGALExtRef
-  The default anchors of a partial region of interest. Soft border anchors conflict with the border's own
-  detail equations (which ask those points to move); how that conflict resolves depends on the order.
-  Measured (doc/detail_scaling.md): on a bumpy patch scaled to s = 0, the largest height left in the centre
-  is 0.08 / 0.06 / 1.3 bump amplitudes for the linear / quadric / cubic order with border anchors and
-  0.05 / 0.04 / 0.28 without; on a quarter of a unit sphere scaled by s = 2, the largest displacement is
-  0.11 / 0.11 / 2.9 with border anchors and 0.52 / 0.52 / 0.11 without. The cubic order responds so weakly to
-  smooth shapes (`f(k) ~ 2.7 k^2`) that anchoring turns the conflict into a bulge; the linear and quadric
-  orders need the anchors to keep a curved region's own curvature from being scaled as a whole.
-*/
-enum class Border_anchoring
-{
-  automatic, ///< border anchors for the linear and quadric orders, none for the cubic order (the default)
-  anchored,  ///< border anchors for every order (the paper's soft constraints)
-  free       ///< no border anchors: the surroundings alone hold the region
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  Settings of detail scaling: what the details are (transfer function, Laplacian weights) and how the
-  least-squares problem is solved. Implicitly constructible from a `Detail_filter`.
-*/
-struct Detail_scaling_settings
-{
-  Detail_settings details;
-  Least_squares_settings least_squares;
-  /// Without caller anchors, whether a partial region anchors its border (its points with a neighbour
-  /// outside; the paper's soft constraints) or is held by its fixed surroundings alone (the detail equations
-  /// are then square and consistent). See `Border_anchoring`.
-  Border_anchoring border_anchoring = Border_anchoring::automatic;
-
-  /// Whether the default anchors of a partial region are its border, for the filter of these settings.
-  bool anchors_border() const
-  {
-    return border_anchoring == Border_anchoring::anchored ||
-           (border_anchoring == Border_anchoring::automatic && details.filter.order != Detail_order::cubic);
-  }
-
-  Detail_scaling_settings(const Detail_filter& filter = {}) : details(filter) {}
-  Detail_scaling_settings(const Detail_settings& d, const Least_squares_settings& ls = {}) : details(d), least_squares(ls) {}
-
-  void validate() const { details.validate(); least_squares.validate(); }
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  What a detail scaling or enhancement did. Converts to `false` when the callback cancelled it (the points
-  are then untouched).
-*/
-struct Detail_manipulation_result
-{
-  bool completed = false;
-  std::size_t region_size = 0;       ///< points of the region of interest
-  std::size_t computed_points = 0;   ///< points the Laplacian (and for enhancement the normals and base surface) used
-  std::size_t anchor_count = 0;      ///< anchors used (given or default)
-  bool default_anchors = false;      ///< whether the anchors were chosen by the function
-  Least_squares_statistics least_squares;
-
-  explicit operator bool() const { return completed; }
-};
-
-/*!
-  \ingroup PkgCGALExtRef
-  The indices of the points of `points` whose `selection_map` value is `true`: a region of interest or
-  anchors given as a property map (a `Point_set_3` property, say).
-*/
-template <typename PointRange, typename SelectionMap>
-std::vector<std::size_t> selected_indices(const PointRange& points, SelectionMap selection_map)
-{
-  std::vector<std::size_t> indices;
-  std::size_t i = 0;
-  for(const auto& item : points) {
-    if(get(selection_map, item)) indices.push_back(i);
-    ++i;
-  }
-  return indices;
-}
-
 namespace internal {
-
-/// The anchors of a region in local indices: the caller's (a range of indices or `point_is_constrained_map`)
-/// or, without any, none, with `defaulted` set so that the caller picks its default anchors.
-template <typename PointRange, typename AnchorRange, typename NamedParameters>
-std::vector<int> region_anchors(const PointRange& points, const AnchorRange* anchors, const NamedParameters& np,
-                                const Region& region, bool& defaulted, const char* who)
-{
-  using CGAL::parameters::get_parameter;
-  defaulted = false;
-  if(anchors)
-    return local_anchor_indices(region.roi, rows_of_indices(*anchors, region.row_of, who, "anchor"), region.cloud.input_index, who);
-  if constexpr(!CGAL::parameters::is_default_parameter<NamedParameters, CGAL::internal_np::point_is_constrained_t>::value)
-    return local_anchor_indices(
-      region.roi,
-      rows_of_indices(selected_indices(points, get_parameter(np, CGAL::internal_np::point_is_constrained)), region.row_of, who, "anchor"),
-      region.cloud.input_index, who);
-  defaulted = true;
-  return {};
-}
-
-/// The shared last steps of scaling and enhancement: check that the anchors pin the region, solve for its
-/// displacements and write them through the point map. `result` carries the anchor choice in and out.
-template <typename ConcurrencyTag, typename PointRange, typename PointMap>
-Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap point_map, const Sparse_row_matrix& K,
-                                                  const Region& region, const std::vector<int>& anchors_local,
-                                                  const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
-                                                  const Detail_scaling_settings& settings, Progress& progress,
-                                                  Detail_manipulation_result result, const char* who)
-{
-  check_pinned(K, region.roi, region.in_roi, anchors_local, region.cloud.input_index, who);
-  const Matrix_n3 displacement = solve_region_displacements<ConcurrencyTag>(
-    K, region.cloud.positions, settings.details.filter, region.roi, anchors_local, detail_change, anchor_displacement,
-    settings.least_squares, result.least_squares);
-  if(!progress.report(1.0)) return {};
-  write_region(points, point_map, region.cloud, region.roi, displacement);
-  result.completed = true;
-  result.region_size = region.roi.size();
-  result.anchor_count = anchors_local.size();
-  result.computed_points = region.cloud.size();
-  return result;
-}
 
 template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename AnchorRange, typename NamedParameters>
 Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsigned int k, const IndexRange& roi_indices,

@@ -4,11 +4,11 @@
 // The sparse-algebra cores of CGAL_ext compiled once for the project's own programs, tests, examples and
 // benchmarks (doc/design.md, "Build time"): Laplacians, sparse products, the detail least squares and its
 // factorisation, the balanced flow and the diffusion stencil, for each concurrency tag.
-#include <CGAL_ext/compute_geometric_details.h>
-#include <CGAL_ext/compute_point_set_laplacian.h>
 #include <CGAL_ext/internal/Detail_least_squares.h>
+#include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/balanced_flow.h>
 #include <CGAL_ext/internal/detail_manipulation.h>
+#include <CGAL_ext/internal/geometric_details.h>
 #include <CGAL_ext/internal/ssp_diffusion.h>
 
 namespace CGAL_ext {

@@ -4,12 +4,12 @@
 // The neighbourhood cores of CGAL_ext compiled once for the project's own programs, tests, examples and
 // benchmarks (doc/design.md, "Build time"): the spatial sort, neighbour graphs, oriented normals, curvature,
 // mean shift, hole gaps, cluster splitting, rigid fits and the strength field, for each concurrency tag.
-#include <CGAL_ext/compute_simplification_sample_points.h>
-#include <CGAL_ext/detect_sparse_directions.h>
+#include <CGAL_ext/internal/cluster_split.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/internal/mean_curvature.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>
+#include <CGAL_ext/internal/sparse_directions.h>
 #include <CGAL_ext/internal/strength_field.h>
 
 namespace CGAL_ext {

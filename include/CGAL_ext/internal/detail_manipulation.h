@@ -6,12 +6,12 @@
 // What detail scaling and enhancement share: the region of interest and its anchors in the cloud's order,
 // the check that something pins every part of the region, and the solve for the region's displacements.
 
-#include <CGAL_ext/Detail_filter.h>
-#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/Detail_scaling_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Detail_least_squares.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/boost/graph/named_params_helper.h>
@@ -248,6 +248,47 @@ void write_region(PointRange& points, PointMap point_map, const Spatial_point_cl
     const Eigen::RowVector3d x = cloud.positions.row(roi[std::size_t(r)]) + displacement.row(r);
     put(point_map, item, Point(x(0), x(1), x(2)));
   }
+}
+
+/// The anchors of a region in local indices: the caller's (a range of indices or `point_is_constrained_map`)
+/// or, without any, none, with `defaulted` set so that the caller picks its default anchors.
+template <typename PointRange, typename AnchorRange, typename NamedParameters>
+std::vector<int> region_anchors(const PointRange& points, const AnchorRange* anchors, const NamedParameters& np,
+                                const Region& region, bool& defaulted, const char* who)
+{
+  using CGAL::parameters::get_parameter;
+  defaulted = false;
+  if(anchors)
+    return local_anchor_indices(region.roi, rows_of_indices(*anchors, region.row_of, who, "anchor"), region.cloud.input_index, who);
+  if constexpr(!CGAL::parameters::is_default_parameter<NamedParameters, CGAL::internal_np::point_is_constrained_t>::value)
+    return local_anchor_indices(
+      region.roi,
+      rows_of_indices(selected_indices(points, get_parameter(np, CGAL::internal_np::point_is_constrained)), region.row_of, who, "anchor"),
+      region.cloud.input_index, who);
+  defaulted = true;
+  return {};
+}
+
+/// The shared last steps of scaling and enhancement: check that the anchors pin the region, solve for its
+/// displacements and write them through the point map. `result` carries the anchor choice in and out.
+template <typename ConcurrencyTag, typename PointRange, typename PointMap>
+Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap point_map, const Sparse_row_matrix& K,
+                                                  const Region& region, const std::vector<int>& anchors_local,
+                                                  const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                                                  const Detail_scaling_settings& settings, Progress& progress,
+                                                  Detail_manipulation_result result, const char* who)
+{
+  check_pinned(K, region.roi, region.in_roi, anchors_local, region.cloud.input_index, who);
+  const Matrix_n3 displacement = solve_region_displacements<ConcurrencyTag>(
+    K, region.cloud.positions, settings.details.filter, region.roi, anchors_local, detail_change, anchor_displacement,
+    settings.least_squares, result.least_squares);
+  if(!progress.report(1.0)) return {};
+  write_region(points, point_map, region.cloud, region.roi, displacement);
+  result.completed = true;
+  result.region_size = region.roi.size();
+  result.anchor_count = anchors_local.size();
+  result.computed_points = region.cloud.size();
+  return result;
 }
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
 #define CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
 
+#include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_INTERNAL_MEAN_CURVATURE_H
 #define CGAL_EXT_INTERNAL_MEAN_CURVATURE_H
 
+#include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -21,24 +22,6 @@
 #include <vector>
 
 namespace CGAL_ext {
-
-/*!
-  \ingroup PkgCGALExtRef
-  How the local surface is fitted to a point and its k nearest neighbours.
-*/
-enum class Curvature_fitting
-{
-  /// `CGAL::Monge_via_jet_fitting`, degree 2 (PCA frame, SVD fit, Monge form): the reference.
-  monge_jet_fitting,
-  /// A degree-2 height function `z = f + d x + e y + a x^2 + b xy + c y^2` fitted by least squares in the
-  /// frame of the point's normal, with fixed-size Eigen matrices; `H` from the fit's derivatives at the point.
-  /// Validated against the Monge fit in the tests; several times faster.
-  closed_form
-};
-
-/// Default neighbour count of the curvature fit.
-constexpr unsigned int default_curvature_neighbors = 15;
-
 namespace internal {
 
 /// Signed mean curvature of the graph `z(x, y)` at the origin from its first and second derivatives,

@@ -18,10 +18,6 @@
 #include <vector>
 
 namespace CGAL_ext {
-
-/// Default number of candidate neighbours of the mean shift (and of its curvature fit).
-constexpr unsigned int default_mean_shift_neighbors = default_curvature_neighbors;
-
 namespace internal {
 
 /// n x 7 array: the normalised features `(x / h_s, n / h_r, c H / h_r)`, or modes in the same units.
@@ -222,6 +218,24 @@ Neighbor_graph mean_shift_neighbor_graph(const Neighbor_graph& candidates, const
     std::copy_n(kept.data() + candidates.offsets[i], count[i], graph.indices.data() + graph.offsets[i]);
   });
   return graph;
+}
+
+/// What `compute_mean_shift_modes` reports of an analysis: its scales and iteration counts.
+inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Mean_shift_settings& settings)
+{
+  Mean_shift_result result;
+  result.completed = true;
+  result.spatial_bandwidth = analysis.scales.spatial_bandwidth;
+  result.range_bandwidth = analysis.scales.range_bandwidth;
+  result.curvature_scale = analysis.scales.curvature_scale;
+  double sum = 0;
+  for(int steps : analysis.iterations) {
+    sum += steps;
+    result.max_iterations = std::max(result.max_iterations, unsigned(steps));
+    if(steps == int(settings.max_iterations)) ++result.points_at_cap;
+  }
+  result.mean_iterations = analysis.iterations.empty() ? 0 : sum / double(analysis.iterations.size());
+  return result;
 }
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).

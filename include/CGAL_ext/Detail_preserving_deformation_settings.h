@@ -1,0 +1,175 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_SETTINGS_H
+#define CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_SETTINGS_H
+
+#include <CGAL_ext/Detail_filter.h>
+#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/Simplification_settings.h>
+#include <CGAL_ext/exceptions.h>
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtRef
+  How the strength field measures the distances `d0` (to the fixed part) and `d1` (to a handle).
+*/
+enum class Strength_distance
+{
+  euclidean, ///< straight-line distance between sample points (the paper's)
+  geodesic   ///< shortest path along the sample points' neighbour graph (Dijkstra): does not leak across parts
+             ///< that are close in space but far along the surface, like an arm held near the body
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  How the sample points' details turn during an edit (the `R_i` of `delta'_i = R_i delta_i`).
+*/
+enum class Detail_rotation
+{
+  none,       ///< the details keep their world orientation (plain Laplacian editing)
+  propagated, ///< the paper's (Sect. 6.1): the handle rotations blended by the strength field
+  as_rigid_as_possible ///< each sample point's best rotation of its neighbourhood (Sorkine and Alexa 2007),
+                       ///< alternated with the solve: follows the solved shape, so large twists and bends that
+                       ///< the strength field cannot foresee keep their details
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Where a point's offset is measured from when the deformation is diffused from the sample points to every
+  point (Miao et al. 2007, Sect. 6.2). Both reproduce rigid motions exactly and keep points whose sample
+  points did not move in place; they differ in how they blend bending.
+*/
+enum class Diffusion_origin
+{
+  nearest_sample, ///< the paper's: `p - ssp_0` (the nearest sample point) decoded in every frame from `ssp'_0`
+  own_sample      ///< `p - ssp_i` decoded in frame i from `ssp'_i`: each sample point carries the point rigidly
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Settings of detail-preserving editing (Miao et al. 2007, Sect. 6). Implicitly constructible from a
+  `Detail_filter`.
+*/
+struct Detail_preserving_deformation_settings
+{
+  /// The details preserved on the sample points (their Laplacian is built on the sample points' kNN graph).
+  Detail_filter filter;
+  /// Neighbours of a sample point in the sample points' Laplacian, itself not counted: at least 1 and fewer than
+  /// the sample points (`preprocess()` throws otherwise, as the free functions do for points).
+  unsigned int sample_neighbors = default_laplacian_neighbors;
+  /// How the points are clustered into sample points; every point is its own sample point when the input
+  /// has at most `simplification.target_count` points and no `max_cluster_size` is set. Editing's defaults
+  /// (target 3,000, mode-spread threshold 2) give 3,000 to 4,500 sample points on any input, as in the
+  /// paper's Table 1, so that a drag stays interactive (doc/editing.md measures the quality cost).
+  Simplification_settings simplification = editing_simplification();
+  /// alpha (`least_squares.detail_weight`) and the solver.
+  /// Editing refines each drag's solve to a relative residual of 1e-10 (positions to about 1e-10 of their
+  /// displacement), which saves back-substitutions on every drag.
+  Least_squares_settings least_squares = editing_least_squares();
+  /// Weight of the handle constraints relative to the detail equations. Infinity (the default) makes them hard
+  /// constraints: the handle sample points leave the unknowns and every handle point ends exactly where its
+  /// group's transform puts it (as in `CGAL::Surface_mesh_deformation`). A finite weight is the paper's soft
+  /// constraint (the paper: 1): the handles land near their targets, closer for larger weights.
+  double handle_weight = std::numeric_limits<double>::infinity();
+  /// Distances of the strength field.
+  Strength_distance strength_distance = Strength_distance::euclidean;
+  /// How the details turn.
+  Detail_rotation rotations = Detail_rotation::propagated;
+  /// With `as_rigid_as_possible`: rotation fits and solves per step of `deform()` (a change of the handles
+  /// larger than `rigid_step_degrees` or `rigid_step_fraction` of the region's size is taken in steps). Each drag starts from the last
+  /// drag's rotations (the first from the propagated ones), so a drag in small steps converges as it goes.
+  /// ARAP converges slowly: more iterations bring the result closer to its fixed point, and to a converged mesh
+  /// ARAP (doc/editing.md, "As rigid as possible").
+  unsigned int rigid_iterations = 3;
+  /// With `as_rigid_as_possible`: a step stops iterating before `rigid_iterations` once no sample point moved
+  /// more than this fraction of the region's size in the last iteration (0: always `rigid_iterations`).
+  double rigid_tolerance = 0;
+  /// With `as_rigid_as_possible`: the largest turn of a handle group in one step of `deform()`, in degrees, > 0.
+  /// ARAP's energy is not convex: a large change of the handles taken at once can land in another minimum.
+  double rigid_step_degrees = 10;
+  /// With `as_rigid_as_possible`: the largest move of the handles' centre in one step, as a fraction of the
+  /// region's bounding diagonal, > 0.
+  double rigid_step_fraction = 0.05;
+  /// With `as_rigid_as_possible`: the most steps one `deform()` takes, >= 1; a drag that would need more takes
+  /// larger ones.
+  unsigned int max_rigid_steps = 1000;
+  /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1.
+  unsigned int diffusion_samples = 4;
+  Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
+
+  Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
+
+  static Least_squares_settings editing_least_squares()
+  {
+    Least_squares_settings s;
+    s.refinement_tolerance = 1e-10;
+    return s;
+  }
+
+  static Simplification_settings editing_simplification()
+  {
+    Simplification_settings s;
+    s.target_count = 3000;
+    s.mode_spread_threshold = 2.0;
+    return s;
+  }
+
+  void validate() const
+  {
+    filter.validate();
+    simplification.validate();
+    least_squares.validate();
+    if(sample_neighbors < 1)
+      throw Invalid_input("detail-preserving deformation: sample_neighbors must be at least 1");
+    if(!(handle_weight > 0))
+      throw Invalid_input("detail-preserving deformation: handle_weight must be > 0 (infinity: exact handles)");
+    if(diffusion_samples < 1)
+      throw Invalid_input("detail-preserving deformation: diffusion_samples must be at least 1");
+    if(rigid_iterations < 1)
+      throw Invalid_input("detail-preserving deformation: rigid_iterations must be at least 1");
+    if(!(rigid_tolerance >= 0) || std::isinf(rigid_tolerance))
+      throw Invalid_input("detail-preserving deformation: rigid_tolerance must be a finite number >= 0");
+    if(!(rigid_step_degrees > 0) || std::isinf(rigid_step_degrees))
+      throw Invalid_input("detail-preserving deformation: rigid_step_degrees must be a finite number > 0");
+    if(!(rigid_step_fraction > 0) || std::isinf(rigid_step_fraction))
+      throw Invalid_input("detail-preserving deformation: rigid_step_fraction must be a finite number > 0");
+    if(max_rigid_steps < 1)
+      throw Invalid_input("detail-preserving deformation: max_rigid_steps must be at least 1");
+  }
+};
+
+/*!
+  \ingroup PkgCGALExtRef
+  Sizes and timings of a `Detail_preserving_deformation` (the fields of the paper's Table 1 and more).
+*/
+struct Detail_preserving_deformation_statistics
+{
+  std::size_t points = 0;      ///< input points
+  std::size_t samples = 0;     ///< simplification sample points
+  /// Sample points the mode-spread rule asked for (above `samples` when the budget of
+  /// `Simplification_settings::variation_budget` capped it).
+  std::size_t requested_samples = 0;
+  std::size_t roi_samples = 0; ///< sample points of the region of interest (the unknowns)
+  std::size_t handle_samples = 0;
+  double clustering_seconds = 0; ///< mean shift and clustering (the mean shift runs once per deformation object)
+  double preprocess_seconds = 0; ///< all of `preprocess()`, clustering and factorisation included
+  Least_squares_statistics least_squares; ///< assembly, factorisation and last solve of the sample points' system
+  double deform_seconds = 0;  ///< last `deform()`: propagated rotations, right-hand side, back-substitution
+  /// Last `deform()` with `as_rigid_as_possible`: rotation fits and solves, over all its steps.
+  unsigned int rigid_iterations = 0;
+  /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
+  /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
+  /// anything (the cubic order on a long region can: doc/editing.md, "Against CGAL on the Botsch–Sorkine
+  /// cactus").
+  double displacement_ratio = 0;
+  double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
+};
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_SETTINGS_H

@@ -1,0 +1,275 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_UPSAMPLING_H
+#define CGAL_EXT_INTERNAL_UPSAMPLING_H
+
+// The steps of up-sampling: new samples across each hole gap, kept apart on a grid of cells, projected onto
+// local surface fits and relaxed by repulsion.
+
+#include <CGAL_ext/Upsampling_settings.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/local_fit.h>
+#include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/sparse_directions.h>
+
+#include <CGAL/number_type_config.h>
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// A hash of grid cells of side `cell`: the points already accepted, to keep new samples apart.
+class Cell_set
+{
+public:
+  explicit Cell_set(double cell) : m_cell(cell) {}
+  using Key = std::tuple<long long, long long, long long>;
+
+  Key key(const Eigen::Vector3d& p) const
+  {
+    return Key((long long)std::floor(p.x() / m_cell), (long long)std::floor(p.y() / m_cell), (long long)std::floor(p.z() / m_cell));
+  }
+  /// Whether a point of the set lies within `radius` (at most `cell`) of `p`.
+  bool near(const Eigen::Vector3d& p, double radius, const std::vector<Eigen::Vector3d>& points) const
+  {
+    const Key c = key(p);
+    for(long long dx = -1; dx <= 1; ++dx)
+      for(long long dy = -1; dy <= 1; ++dy)
+        for(long long dz = -1; dz <= 1; ++dz) {
+          const auto it = m_members.find(Key(std::get<0>(c) + dx, std::get<1>(c) + dy, std::get<2>(c) + dz));
+          if(it == m_members.end()) continue;
+          for(int m : it->second)
+            if((points[std::size_t(m)] - p).norm() < radius) return true;
+        }
+    return false;
+  }
+  void insert(const Eigen::Vector3d& p, int index) { m_members[key(p)].push_back(index); }
+
+private:
+  struct Hash
+  {
+    std::size_t operator()(const Key& k) const
+    {
+      return std::size_t(std::get<0>(k) * 73856093LL ^ std::get<1>(k) * 19349663LL ^ std::get<2>(k) * 83492791LL);
+    }
+  };
+  double m_cell;
+  std::unordered_map<Key, std::vector<int>, Hash> m_members;
+};
+
+/// Projects `x` onto the surface fitted to the input samples around it, with a normal oriented like `normal`;
+/// updates both. Near the samples, a degree-2 fit to the `k` nearest. Inside a hole, where the nearest sample
+/// is `d` > 1.5 h away, the k nearest would lie on the hole's near side and the fit would extrapolate from there;
+/// so the fit takes the nearest k / 8 samples in each of 8 directions around `x` (among the about
+/// 3 pi (d / h)^2 samples of a disc of radius 2 d), which surround the hole, and a degree-3 surface through
+/// them interpolates the rim: a wave's inflection across a hole is then followed, not flattened.
+inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, std::size_t k, double h, Eigen::Vector3d& x,
+                                 Eigen::Vector3d& normal)
+{
+  thread_local std::vector<int> near;
+  near.clear();
+  const Position_tree::Point query(x.x(), x.y(), x.z());
+  double nearest2 = 0;
+  tree.nearest(query, k, [&](int j, double d2) {
+    if(near.empty()) nearest2 = d2;
+    near.push_back(j);
+  });
+  const bool inside_hole = nearest2 > 2.25 * h * h;
+  Height_fit fit(x, normal, inside_hole ? 3 : 2);
+  if(inside_hole) {
+    near.clear();
+    const Eigen::Vector3d& u = fit.tangent_u();
+    const Eigen::Vector3d& v = fit.tangent_v();
+    constexpr double pi = CGAL_PI;
+    const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
+    std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    tree.nearest(query, std::min<std::size_t>(candidates, std::size_t(samples.rows())), [&](int j, double) {
+      const Eigen::Vector3d d = samples.row(j).transpose() - x;
+      const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
+      std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
+      if(in_direction < per_direction) {
+        ++in_direction;
+        near.push_back(j);
+      }
+    });
+  }
+  fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
+  x = fit.project(x);
+  const Eigen::Vector3d n = fit.normal(x);
+  normal = n.dot(normal) < 0 ? Eigen::Vector3d(-n) : n;
+}
+
+/// Whether `x` continues the surface of its 3 nearest input samples: its offset from each leans at most 30
+/// degrees out of that sample's tangent plane. A projection that lands off the surface (a fit misled where the
+/// surface folds, or across a thin part) fails this, and the new point is dropped rather than written there.
+inline bool continues_surface(const Matrix_n3& samples, const Matrix_n3& normals, const Position_tree& tree, const Eigen::Vector3d& x)
+{
+  bool along = true;
+  tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 3, [&](int j, double) {
+    const Eigen::Vector3d offset = x - samples.row(j).transpose();
+    const double height = std::abs(offset.dot(normals.row(j).transpose()));
+    along = along && 3 * height * height <= offset.squaredNorm() - height * height;
+  });
+  return along;
+}
+
+/// Up-sampling's rounds on the input's arrays: detect the gaps across holes from the points `examine` (all
+/// of them in the first round unless `region_given`), insert samples along them at the spacing interpolated
+/// between the gap's ends, relax them on the surface of the input, drop those that do not settle on it, and
+/// examine the sparse points and the new ones again, for at most `settings.max_rounds` rounds. `spacing` holds
+/// each input point's target spacing; `local_empty_radii` says whether its empty radius is measured against the
+/// points' own quarter gaps (`empty_radii`). Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, const Position_tree& input_tree,
+                const Upsampling_settings& settings, bool region_given, std::vector<int> examine,
+                std::vector<double> all_spacing, bool local_empty_radii, Progress& progress, Upsampling_result& result,
+                std::vector<Eigen::Vector3d>& new_points, std::vector<Eigen::Vector3d>& new_normals)
+{
+  const std::size_t k = settings.neighbors;
+  // All samples so far: the input first, then the new ones (rows n..).
+  const std::size_t n = std::size_t(positions.rows());
+  Matrix_n3 all = positions, all_normals = input_normals;
+  // New samples fill quarters; they empty one only by turning a point's principal axes, which is rare: after
+  // the first round, only the points that were sparse and the new points are examined again.
+  std::vector<int> sparse;
+  // Each sample's empty radius in its spacings (see `empty_radii`): new samples take the one interpolated along
+  // their gap, so a hole in a random sampling is filled to its surroundings' own standard.
+  std::vector<double> all_empty_factor;
+  {
+    const std::vector<double> radius =
+      empty_radii<ConcurrencyTag>(positions, input_normals, input_tree, k, all_spacing, local_empty_radii);
+    all_empty_factor.resize(n);
+    for(std::size_t i = 0; i < n; ++i) all_empty_factor[i] = radius[i] / all_spacing[i];
+  }
+  for(std::size_t round = 0; round < settings.max_rounds; ++round) {
+    std::vector<double> empty_radius(all.rows());
+    for(std::size_t i = 0; i < empty_radius.size(); ++i) empty_radius[i] = all_empty_factor[i] * all_spacing[i];
+    progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
+    if(!progress.report(0.0)) return false;
+    const Position_tree tree(all, ConcurrencyTag());
+    const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, empty_radius,
+                                                                 settings.detection.max_hole_size,
+                                                                 round == 0 && !region_given ? nullptr : &examine, sparse);
+    if(round == 0) {
+      std::vector<char> boundary(n, 0);
+      for(const Hole_gap& g : gaps) boundary[std::size_t(g.from)] = 1;
+      result.hole_boundary_points = std::size_t(std::count(boundary.begin(), boundary.end(), 1));
+    }
+    // Candidates along every gap at the target spacing (interpolated between the gap's ends); a candidate is
+    // kept only at least half a spacing from every sample and from the candidates kept before it.
+    double widest = 0;
+    for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
+    Cell_set kept(0.5 * widest);
+    std::vector<Eigen::Vector3d> round_points, round_normals;
+    std::vector<double> round_spacing, round_empty_factor;
+    for(const Hole_gap& g : gaps) {
+      const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
+      const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
+      const double ha = all_spacing[std::size_t(g.from)], hb = all_spacing[std::size_t(g.across)];
+      const int steps = int(std::lround((b - a).norm() / (0.5 * (ha + hb))));
+      for(int s = 1; s < steps; ++s) {
+        const double t = double(s) / steps, h = (1 - t) * ha + t * hb;
+        const Eigen::Vector3d x = a + t * (b - a);
+        bool crowded = kept.near(x, 0.5 * h, round_points);
+        if(!crowded)
+          tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1, [&](int, double d2) { crowded = d2 < 0.25 * h * h; });
+        if(crowded) continue;
+        kept.insert(x, int(round_points.size()));
+        round_points.push_back(x);
+        Eigen::Vector3d normal = (1 - t) * na + t * nb;
+        round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
+        round_spacing.push_back(h);
+        round_empty_factor.push_back((1 - t) * all_empty_factor[std::size_t(g.from)] + t * all_empty_factor[std::size_t(g.across)]);
+      }
+    }
+    if(round_points.empty()) break;
+    ++result.rounds;
+
+    // Relaxation (Jacobi steps, so the result does not depend on the thread count): repulsion in the tangent
+    // plane from every sample closer than 1.5 spacings (the moving point's), then back onto the surface of the
+    // input samples.
+    // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
+    Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
+    std::vector<char> settled(round_points.size(), 1);
+    for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
+      for(std::size_t m = 0; m < round_points.size(); ++m) moving.row(Eigen::Index(m)) = round_points[m].transpose();
+      const Position_tree moving_tree(moving, ConcurrencyTag());
+      std::vector<Eigen::Vector3d> moved(round_points.size()), turned(round_points.size());
+      for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
+        Eigen::Vector3d x = round_points[m], normal = round_normals[m];
+        const double h = round_spacing[m], radius = 1.5 * h;
+        if(iteration < settings.relaxation_iterations) {
+          Eigen::Vector3d push = Eigen::Vector3d::Zero();
+          auto repel = [&push, &x, radius](const Matrix_n3* from) {
+            return [&push, &x, radius, from](int j, double d2) {
+              const double d = std::sqrt(d2);
+              if(d >= radius || !(d > 0)) return;
+              const double w = 1 - d / radius;
+              push += w * w * (x - from->row(j).transpose()) / d;
+            };
+          };
+          const Position_tree::Point query(x.x(), x.y(), x.z());
+          tree.nearest(query, 12, repel(&all));
+          moving_tree.nearest(query, std::min<std::size_t>(12, round_points.size()), repel(&moving));
+          push = 0.5 * h * (push - push.dot(normal) * normal);
+          if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
+          x += push;
+        }
+        project_onto_surface(positions, input_tree, 2 * k, h, x, normal);
+        if(iteration == settings.relaxation_iterations) {
+          // A projection onto the surface should be a fixed point: projecting the result again must not move
+          // it. Where the fit is unstable (a cubic across a tear, in a frame that tilts with the normal) it
+          // does, and the point is dropped rather than written off the surface.
+          Eigen::Vector3d again = x, again_normal = normal;
+          project_onto_surface(positions, input_tree, 2 * k, h, again, again_normal);
+          settled[m] = (again - x).squaredNorm() <= 0.0625 * h * h; // a quarter spacing
+        }
+        moved[m] = x;
+        turned[m] = normal;
+      });
+      round_points.swap(moved);
+      round_normals.swap(turned);
+    }
+    std::vector<char> keep(round_points.size());
+    for_range<ConcurrencyTag>(0, round_points.size(), [&](std::size_t m) {
+      keep[m] = settled[m] && continues_surface(positions, input_normals, input_tree, round_points[m]);
+    });
+    std::size_t kept_count = 0;
+    for(std::size_t m = 0; m < round_points.size(); ++m)
+      if(keep[m]) {
+        round_points[kept_count] = round_points[m];
+        round_normals[kept_count] = round_normals[m];
+        round_empty_factor[kept_count] = round_empty_factor[m];
+        round_spacing[kept_count++] = round_spacing[m];
+      }
+    round_points.resize(kept_count);
+    round_normals.resize(kept_count);
+    round_spacing.resize(kept_count);
+    round_empty_factor.resize(kept_count);
+    examine = sparse;
+    for(std::size_t m = 0; m < round_points.size(); ++m) examine.push_back(int(n + new_points.size() + m));
+    new_points.insert(new_points.end(), round_points.begin(), round_points.end());
+    new_normals.insert(new_normals.end(), round_normals.begin(), round_normals.end());
+    all_spacing.insert(all_spacing.end(), round_spacing.begin(), round_spacing.end());
+    all_empty_factor.insert(all_empty_factor.end(), round_empty_factor.begin(), round_empty_factor.end());
+    all.conservativeResize(Eigen::Index(n + new_points.size()), 3);
+    all_normals.conservativeResize(all.rows(), 3);
+    for(std::size_t m = 0; m < new_points.size(); ++m) {
+      all.row(Eigen::Index(n + m)) = new_points[m].transpose();
+      all_normals.row(Eigen::Index(n + m)) = new_normals[m].transpose();
+    }
+  }
+  return true;
+}
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_UPSAMPLING_H

@@ -1,0 +1,252 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "file_checks.h"
+
+#include "cli_support.h"
+
+#include <cctype>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+namespace point_detail {
+namespace fs = std::filesystem;
+namespace {
+
+/// Available memory in bytes (MemAvailable of /proc/meminfo), or 0 when it cannot be read.
+std::uint64_t available_memory()
+{
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::uint64_t kib = 0;
+  std::string unit;
+  while(meminfo >> key >> kib >> unit)
+    if(key == "MemAvailable:") return kib * 1024;
+  return 0;
+}
+
+std::string gibibytes(double bytes)
+{
+  std::ostringstream os;
+  os.precision(bytes < 1024.0 * 1024 * 1024 * 10 ? 2 : 0);
+  os << std::fixed << bytes / (1024.0 * 1024 * 1024) << " GiB";
+  return os.str();
+}
+
+/// Fails early, before any reader allocates, for a file that announces more points than this machine's memory
+/// can process at `bytes_per_point`.
+void check_memory_for(const fs::path& path, std::uint64_t points, std::uint64_t bytes_per_point)
+{
+  const std::uint64_t available = available_memory();
+  if(available > 0 && points > available / bytes_per_point)
+    throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(points) +
+                    " points, which need about " + gibibytes(double(points) * bytes_per_point) +
+                    " of memory; this machine has " + gibibytes(double(available)) + " available");
+}
+
+} // namespace
+
+Off_file read_off(const fs::path& path, std::uint64_t bytes_per_point)
+{
+  std::ifstream in = open_input(path);
+  const std::string name = path.string();
+  std::size_t line_number = 0;
+  std::vector<std::string> tokens;
+  // The next line with content, comments ('#' to the end of the line) removed, split at blanks.
+  auto next_line = [&]() {
+    std::string line;
+    while(std::getline(in, line)) {
+      ++line_number;
+      line = line.substr(0, line.find('#'));
+      std::istringstream words(line);
+      tokens.clear();
+      for(std::string word; words >> word;) tokens.push_back(word);
+      if(!tokens.empty()) return true;
+    }
+    return false;
+  };
+  auto where = [&]() { return name + ":" + std::to_string(line_number) + ": "; };
+  auto real = [&](const std::string& token) {
+    char* end = nullptr;
+    const double value = std::strtod(token.c_str(), &end);
+    if(end != token.c_str() + token.size()) throw Cli_error(where() + "'" + token + "' is not a number");
+    return value;
+  };
+  auto count = [&](const std::string& token, const char* what) {
+    char* end = nullptr;
+    errno = 0;
+    const long long value = std::strtoll(token.c_str(), &end, 10);
+    if(end != token.c_str() + token.size() || errno == ERANGE || value < 0)
+      throw Cli_error(where() + "'" + token + "' is not a " + what);
+    return std::uint64_t(value);
+  };
+
+  if(!next_line()) throw Cli_error(name + " contains no points");
+  const std::string keyword = tokens[0];
+  const std::size_t off_at = keyword.rfind("OFF");
+  if(off_at == std::string::npos || off_at + 3 != keyword.size())
+    throw Cli_error(where() + "not an OFF file (it starts with '" + keyword + "')");
+  const std::string prefix = keyword.substr(0, off_at);
+  if(prefix.find('4') != std::string::npos || prefix.find('n') != std::string::npos)
+    throw Cli_error(where() + keyword + " (4D or n-dimensional OFF) is not supported");
+  for(char c : prefix)
+    if(c != 'S' && c != 'T' && c != 'C' && c != 'N') throw Cli_error(where() + "unknown OFF variant '" + keyword + "'");
+  const bool with_normals = prefix.find('N') != std::string::npos;
+  tokens.erase(tokens.begin());
+  if(!tokens.empty() && tokens[0] == "BINARY")
+    throw Cli_error(where() + "binary OFF is not supported; convert it to PLY");
+  if(tokens.empty() && !next_line()) throw Cli_error(name + ": the header has no vertex count");
+  const std::uint64_t vertex_count = count(tokens[0], "vertex count");
+  const std::uint64_t face_count = tokens.size() > 1 ? count(tokens[1], "face count") : 0;
+  check_memory_for(path, vertex_count, bytes_per_point);
+
+  Off_file off;
+  const std::size_t per_vertex = with_normals ? 6 : 3;
+  for(std::uint64_t v = 0; v < vertex_count; ++v) {
+    if(!next_line())
+      throw Cli_error("cannot read " + name + ": truncated off file (the header announces " + std::to_string(vertex_count) +
+                      " points, " + std::to_string(v) + " were read)");
+    if(tokens.size() < per_vertex)
+      throw Cli_error(where() + "a vertex needs " + std::to_string(per_vertex) + " numbers, this line has " +
+                      std::to_string(tokens.size()));
+    off.vertices.emplace_back(real(tokens[0]), real(tokens[1]), real(tokens[2]));
+    if(with_normals) off.normals.emplace_back(real(tokens[3]), real(tokens[4]), real(tokens[5]));
+  }
+  // Faces give the vertex normals when the file has none; a file cut short in its faces loses only them.
+  for(std::uint64_t f = 0; f < face_count && next_line(); ++f) {
+    const std::uint64_t corners = count(tokens[0], "corner count");
+    if(tokens.size() < corners + 1)
+      throw Cli_error(where() + "a face of " + std::to_string(corners) + " corners has " +
+                      std::to_string(tokens.size() - 1) + " indices");
+    std::vector<std::size_t> face;
+    for(std::uint64_t c = 1; c <= corners; ++c) {
+      const std::uint64_t index = count(tokens[c], "vertex index");
+      if(index >= vertex_count)
+        throw Cli_error(where() + "vertex index " + tokens[c] + " is out of range (" + std::to_string(vertex_count) +
+                        " vertices)");
+      face.push_back(std::size_t(index));
+    }
+    off.faces.push_back(std::move(face));
+  }
+  return off;
+}
+
+namespace {
+
+std::uint64_t ply_scalar_size(const std::string& type)
+{
+  if(type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if(type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if(type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32") return 4;
+  if(type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+/// Reads and checks a PLY header, and returns its vertex count and the fewest bytes of data that can hold all
+/// its elements (binary: their records, with empty lists; ASCII: two characters per value). CGAL 5.5's reader
+/// does not check the header: a property before any element made it read before its element array (found by
+/// fuzz/fuzz_point_reader), so a malformed header is refused here first.
+Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std::string& name)
+{
+  Announced a;
+  std::string line, format;
+  std::size_t line_number = 0;
+  auto fail = [&](const std::string& what) -> Announced {
+    throw Cli_error("cannot read " + name + ": malformed ply header (line " + std::to_string(line_number) + ": " + what + ")");
+  };
+  auto whole = [&](const std::string& token) {
+    if(token.empty() || token.size() > 18 || token.find_first_not_of("0123456789") != std::string::npos)
+      fail("'" + token + "' is not a count");
+    return std::uint64_t(std::stoull(token));
+  };
+  struct Element { std::string name; std::uint64_t count = 0, values = 0, bytes = 0; };
+  std::vector<Element> elements;
+  std::map<std::string, std::string> vertex_types; // CGAL's reader needs x y z (and nx ny nz) of one float type
+  auto same_float_type = [&](const char* a, const char* b, const char* c) {
+    const std::string& t = vertex_types[a];
+    const bool is_float = t == "float" || t == "float32" || t == "double" || t == "float64";
+    return is_float && vertex_types[b] == t && vertex_types[c] == t;
+  };
+  while(std::getline(in, line)) {
+    ++line_number;
+    if(!line.empty() && line.back() == '\r') line.pop_back();
+    // CGAL's reader cuts names at a NUL byte ("x\0" is x), and the duplicate check below could not see that.
+    if(std::any_of(line.begin(), line.end(), [](unsigned char c) { return (c < 0x20 && c != '\t') || c == 0x7f; }))
+      fail("a control character in the header");
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for(std::string word; words >> word;) w.push_back(word);
+    if(line_number == 1) {
+      if(line != "ply") fail("a PLY file starts with the line 'ply'");
+      continue;
+    }
+    if(w.empty()) continue;
+    if(w[0] == "comment" || w[0] == "obj_info") continue;
+    if(w[0] == "format") {
+      if(w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        fail("the format is ascii, binary_little_endian or binary_big_endian, and a version");
+      format = w[1];
+    } else if(w[0] == "element") {
+      if(w.size() != 3) fail("an element line is 'element NAME COUNT'");
+      for(const Element& e : elements)
+        if(e.name == w[1]) fail("element '" + w[1] + "' appears twice"); // CGAL would size by one, read the other
+      elements.push_back({w[1], whole(w[2])});
+    } else if(w[0] == "property") {
+      if(elements.empty()) fail("a property before any element");
+      Element& e = elements.back();
+      if(w.size() == 5 && w[1] == "list") {
+        const std::uint64_t count_bytes = ply_scalar_size(w[2]);
+        if(count_bytes == 0 || ply_scalar_size(w[3]) == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
+        e.bytes += count_bytes;
+      } else if(w.size() == 3) {
+        const std::uint64_t bytes = ply_scalar_size(w[1]);
+        if(bytes == 0) fail("unknown property type '" + w[1] + "'");
+        e.bytes += bytes;
+        if(e.name == "vertex" && !vertex_types.emplace(w[2], w[1]).second) fail("property '" + w[2] + "' appears twice");
+      } else
+        fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
+      ++e.values;
+    } else if(w[0] == "end_header") {
+      if(format.empty()) fail("no format line");
+      if(!same_float_type("x", "y", "z")) fail("the vertices need x, y and z properties, all float or all double");
+      if((vertex_types.count("nx") || vertex_types.count("ny") || vertex_types.count("nz")) && !same_float_type("nx", "ny", "nz"))
+        fail("the normals need nx, ny and nz properties, all float or all double");
+      header_bytes = std::uint64_t(in.tellg());
+      for(const Element& e : elements) {
+        // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
+        if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");
+        const std::uint64_t per_item = format == "ascii" ? 2 * e.values : e.bytes;
+        if(per_item > 0 && e.count > (std::uint64_t(1) << 62) / per_item) fail("element '" + e.name + "' is too large");
+        a.smallest_bytes += e.count * per_item;
+        if(e.name == "vertex") a.vertices = e.count;
+        if(e.name == "tristrips" && e.count > 0) a.triangle_strips = true;
+      }
+      return a;
+    } else
+      fail("unknown keyword '" + w[0] + "'");
+  }
+  throw Cli_error("cannot read " + name + ": malformed ply header (no end_header line)");
+}
+
+} // namespace
+
+Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
+{
+  std::ifstream in(path, std::ios::binary);
+  std::uint64_t header_bytes = 0;
+  const Announced a = ply_announced(in, header_bytes, path.string());
+  check_memory_for(path, a.vertices, bytes_per_point);
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(path, ec);
+  if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
+    throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
+                    std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
+                    " bytes, the file holds " + std::to_string(size - header_bytes) + " after its header)");
+  return a;
+}
+
+} // namespace point_detail

@@ -1,0 +1,45 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+// What the program's readers check before CGAL's readers allocate anything: the memory a file's announced
+// points need, the PLY header (refused when malformed or when the file cannot hold what it announces), and an
+// OFF reader of the project's own.
+#ifndef POINT_DETAIL_FILE_CHECKS_H
+#define POINT_DETAIL_FILE_CHECKS_H
+
+#include "point_io.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace point_detail {
+
+/// An ASCII OFF file ([ST][C][N]OFF): vertices, their normals (NOFF) and faces. Colours and texture
+/// coordinates are skipped. The project reads OFF itself: CGAL 5.5's scanner reads past its buffer on some
+/// malformed colour entries (found by fuzz/fuzz_point_reader).
+struct Off_file
+{
+  std::vector<Point> vertices;
+  std::vector<Vector> normals;
+  std::vector<std::vector<std::size_t>> faces;
+};
+
+/// Reads an OFF file, failing before allocating when its header announces more vertices than the memory holds
+/// at `bytes_per_point`. Throws Cli_error naming the file and the problem.
+Off_file read_off(const std::filesystem::path& path, std::uint64_t bytes_per_point);
+
+/// What a PLY header announces, read without trusting it.
+struct Announced
+{
+  std::uint64_t vertices = 0;
+  std::uint64_t smallest_bytes = 0; ///< the fewest bytes of data after the header that can hold them
+  bool triangle_strips = false;     ///< faces given as an element 'tristrips' (CGAL's reader reads only 'face')
+};
+
+/// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
+/// hold what it announces. Returns what it announces.
+Announced check_ply_header(const std::filesystem::path& path, std::uint64_t bytes_per_point);
+
+} // namespace point_detail
+
+#endif
