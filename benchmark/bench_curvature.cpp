@@ -102,7 +102,7 @@ std::vector<Analytic_shape> analytic_shapes(std::size_t n)
 {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double pi = 3.14159265358979323846;
+  const double pi = CGAL_PI;
   std::vector<Analytic_shape> shapes(3);
   shapes[0].name = "sphere r 1";
   shapes[1].name = "cylinder r 0.5";
@@ -209,25 +209,21 @@ void bench_normals(const std::string& name, const Point_cloud& cloud, int reps, 
 
 void write_normals_results(const fs::path& out, const std::vector<Normals_row>& rows, int reps)
 {
-  std::ofstream csv(out / "normals_results.csv");
-  csv << "model,points,method,median_s,min_s,max_s,flipped_fraction\n";
+  std::string csv = "model,points,method,median_s,min_s,max_s,flipped_fraction\n";
   for(const Normals_row& r : rows)
-    csv << r.model << "," << r.points << ",\"" << r.method << "\"," << r.time.median << "," << r.time.min << ","
-        << r.time.max << "," << r.flipped << "\n";
-  std::ofstream md(out / "normals_results.md");
-  md << "# Normal estimation for scans without normals\n\n- " << tbb::info::default_concurrency()
-     << " threads; medians of " << reps << " runs; 18 neighbours; malloc: " << malloc_pages() << "\n"
-     << "- flipped: normals more than 90 degrees from the mesh's (its area-weighted vertex normals for the "
-        "vertices, the sampled face's normal for the samples)\n\n"
-     << "| model | points | CGAL_ext s | CGAL s | CGAL_ext flipped | CGAL flipped |\n|---|---:|---:|---:|---:|---:|\n";
-  char buf[320];
-  for(std::size_t i = 0; i + 1 < rows.size(); i += 2) {
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %.3f | %.3f | %.3f %% | %.3f %% |\n", rows[i].model.c_str(), rows[i].points,
-                  rows[i].time.median, rows[i + 1].time.median, 100 * rows[i].flipped, 100 * rows[i + 1].flipped);
-    md << buf;
-  }
+    csv += format("%s,%zu,\"%s\",%g,%g,%g,%g\n", r.model.c_str(), r.points, r.method.c_str(), r.time.median, r.time.min,
+                  r.time.max, r.flipped);
+  std::string md = "# Normal estimation for scans without normals\n\n" + machine_facts() +
+                   format("- medians of %d runs; 18 neighbours\n", reps) +
+                   "- flipped: normals more than 90 degrees from the mesh's (its area-weighted vertex normals for the "
+                   "vertices, the sampled face's normal for the samples)\n\n"
+                   "| model | points | CGAL_ext s | CGAL s | CGAL_ext flipped | CGAL flipped |\n|---|---:|---:|---:|---:|---:|\n";
+  for(std::size_t i = 0; i + 1 < rows.size(); i += 2)
+    md += format("| %s | %zu | %.3f | %.3f | %.3f %% | %.3f %% |\n", rows[i].model.c_str(), rows[i].points,
+                 rows[i].time.median, rows[i + 1].time.median, 100 * rows[i].flipped, 100 * rows[i + 1].flipped);
+  write_result_file(out, "normals_results.csv", csv);
+  write_result_file(out, "normals_results.md", md);
 }
-
 
 int run(int argc, char** argv)
 {
@@ -237,55 +233,42 @@ int run(int argc, char** argv)
   const bool quick = options.quick;
   const fs::path data = options.data, out = options.out;
   const int reps = options.reps;
-  std::vector<std::pair<std::string, Point_cloud>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
-    const fs::path file = data / "meshes" / (std::string(m) + ".off");
-    if(!fs::exists(file)) continue;
-    models.emplace_back(m, read_point_cloud(file));
-    if(quick) break;
-  }
+  Models models = load_scans(data, quick);
   if(models.empty()) { std::fprintf(stderr, "bench_curvature: no model under %s/meshes (run scripts/fetch_data.sh)\n", data.string().c_str()); return 1; }
-  models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000));
+  add_armadillo_sampling(models, data, quick);
   std::vector<Row> rows;
   for(const auto& [name, cloud] : models) {
     bench_model<CGAL::Sequential_tag>(name, cloud, reps, rows);
     bench_model<CGAL::Parallel_tag>(name, cloud, reps, rows);
   }
-  fs::create_directories(out);
-  std::ofstream csv(out / "curvature_results.csv");
-  csv << "model,points,method,k,mode,median_s,min_s,max_s,peak_rss_mib,median_abs_difference_to_monge\n";
-  for(const Row& r : rows)
-    csv << r.model << "," << r.points << ",\"" << r.method << "\"," << r.k << "," << r.mode << "," << r.time.median << ","
-        << r.time.min << "," << r.time.max << "," << r.peak_mib << "," << r.error << "\n";
-  std::ofstream md(out / "curvature_results.md");
-  md << "# Mean-curvature benchmark\n\n- " << tbb::info::default_concurrency() << " threads in parallel runs; malloc: " << malloc_pages()
-     << "; medians of " << reps << " runs; normals given (mesh faces or sampled faces)\n"
-     << "- times include the kNN graph; |dH| is the median absolute difference to the Monge fit at k = 15\n\n"
-     << "| model | points | method | k | mode | median s | min-max s | median abs dH | peak MiB |\n|---|---:|---|---:|---|---:|---|---:|---:|\n";
-  char buf[320];
+  std::string csv = "model,points,method,k,mode,median_s,min_s,max_s,peak_rss_mib,median_abs_difference_to_monge\n";
+  std::string md = "# Mean-curvature benchmark\n\n" + machine_facts() +
+                   format("- medians of %d runs; normals given (mesh faces or sampled faces)\n", reps) +
+                   "- times include the kNN graph; |dH| is the median absolute difference to the Monge fit at k = 15\n\n"
+                   "| model | points | method | k | mode | median s | min-max s | median abs dH | peak MiB |\n|---|---:|---|---:|---|---:|---|---:|---:|\n";
   for(const Row& r : rows) {
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %u | %s | %.3f | %.3f-%.3f | %.2e | %.0f |\n", r.model.c_str(), r.points,
-                  r.method.c_str(), r.k, r.mode.c_str(), r.time.median, r.time.min, r.time.max, r.error, r.peak_mib);
-    md << buf;
+    csv += format("%s,%zu,\"%s\",%u,%s,%g,%g,%g,%g,%g\n", r.model.c_str(), r.points, r.method.c_str(), r.k, r.mode.c_str(),
+                  r.time.median, r.time.min, r.time.max, r.peak_mib, r.error);
+    md += format("| %s | %zu | %s | %u | %s | %.3f | %.3f-%.3f | %.2e | %.0f |\n", r.model.c_str(), r.points,
+                 r.method.c_str(), r.k, r.mode.c_str(), r.time.median, r.time.min, r.time.max, r.error, r.peak_mib);
   }
 
   std::vector<Accuracy_row> accuracy;
   bench_accuracy(quick ? 20000 : 200000, reps, accuracy);
-  std::ofstream accuracy_csv(out / "curvature_accuracy.csv");
-  accuracy_csv << "shape,points,method,k,median_s,min_s,max_s,median_relative_error,p95_relative_error\n";
-  for(const Accuracy_row& r : accuracy)
-    accuracy_csv << "\"" << r.shape << "\"," << r.points << ",\"" << r.method << "\",15," << r.time.median << "," << r.time.min
-                 << "," << r.time.max << "," << r.median_error << "," << r.p95_error << "\n";
-  md << "\n## Against the analytic curvature, beside CGAL's Monge_via_jet_fitting\n\n"
-     << "Random samples (uniform by area) with exact normals, k = 15 for both, parallel; error |H - H_true| / |H_true| "
+  std::string accuracy_csv = "shape,points,method,k,median_s,min_s,max_s,median_relative_error,p95_relative_error\n";
+  md += "\n## Against the analytic curvature, beside CGAL's Monge_via_jet_fitting\n\n"
+        "Random samples (uniform by area) with exact normals, k = 15 for both, parallel; error |H - H_true| / |H_true| "
         "(the cylinder without its ends).\n\n"
-     << "| shape | points | method | median s | median error | 95th pct error |\n|---|---:|---|---:|---:|---:|\n";
+        "| shape | points | method | median s | median error | 95th pct error |\n|---|---:|---|---:|---:|---:|\n";
   for(const Accuracy_row& r : accuracy) {
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %.3f | %.2e | %.2e |\n", r.shape.c_str(), r.points, r.method.c_str(),
-                  r.time.median, r.median_error, r.p95_error);
-    md << buf;
+    accuracy_csv += format("\"%s\",%zu,\"%s\",15,%g,%g,%g,%g,%g\n", r.shape.c_str(), r.points, r.method.c_str(),
+                           r.time.median, r.time.min, r.time.max, r.median_error, r.p95_error);
+    md += format("| %s | %zu | %s | %.3f | %.2e | %.2e |\n", r.shape.c_str(), r.points, r.method.c_str(), r.time.median,
+                 r.median_error, r.p95_error);
   }
-  std::printf("wrote %s and %s\n", (out / "curvature_results.md").string().c_str(), (out / "curvature_results.csv").string().c_str());
+  write_result_file(out, "curvature_results.csv", csv);
+  write_result_file(out, "curvature_accuracy.csv", accuracy_csv);
+  write_result_file(out, "curvature_results.md", md);
 
   std::vector<Normals_row> normal_rows;
   std::vector<fs::path> meshes;
@@ -300,7 +283,6 @@ int run(int argc, char** argv)
   }
   if(!quick) bench_normals("armadillo (1M samples)", sample_mesh(data / "meshes/armadillo.off", 1000000), reps, normal_rows);
   write_normals_results(out, normal_rows, reps);
-  std::printf("wrote %s\n", (out / "normals_results.md").string().c_str());
   return 0;
 }
 

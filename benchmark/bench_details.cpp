@@ -78,23 +78,6 @@ void bench_model(const std::string& name, const Point_cloud& cloud, int reps, in
       }));
 }
 
-std::string machine_facts(int threads)
-{
-  std::ostringstream os;
-  std::ifstream cpu("/proc/cpuinfo");
-  std::string line, model = "unknown";
-  while(std::getline(cpu, line))
-    if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
-  os << "- CPU: " << model << "; threads used in parallel runs: " << threads << "\n"
-     << "- compiler: GCC " << __VERSION__ << ", -O3 -DNDEBUG (Release)\n"
-     << "- CGAL " << CGAL_VERSION_STR << ", Eigen " << EIGEN_WORLD_VERSION << "." << EIGEN_MAJOR_VERSION << "." << EIGEN_MINOR_VERSION
-     << ", oneTBB " << TBB_VERSION_MAJOR << "." << TBB_VERSION_MINOR << "\n"
-     << "- malloc: " << malloc_pages() << " (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n"
-     << "- k = 10 (symmetrised), uniform weights, lambda 0.8, mu 1.6; pipeline = compute_geometric_details with normals given\n";
-  return os.str();
-}
-
-
 int run(int argc, char** argv)
 {
   use_huge_pages(argv);
@@ -105,15 +88,8 @@ int run(int argc, char** argv)
   const int reps = options.reps;
   const int threads = tbb::info::default_concurrency();
   std::vector<Row> rows;
-  std::vector<std::pair<std::string, Point_cloud>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
-    const fs::path file = data / "meshes" / (std::string(m) + ".off");
-    if(!fs::exists(file)) { std::fprintf(stderr, "skipping %s (run scripts/fetch_data.sh)\n", file.string().c_str()); continue; }
-    models.emplace_back(m, read_point_cloud(file));
-    if(quick) break;
-  }
-  if(fs::exists(data / "meshes/armadillo.off"))
-    models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000));
+  Models models = load_scans(data, quick);
+  add_armadillo_sampling(models, data, quick);
   if(models.empty()) {
     std::fprintf(stderr, "bench_details: no model found under %s/meshes (run scripts/fetch_data.sh)\n", data.string().c_str());
     return 1;
@@ -122,23 +98,21 @@ int run(int argc, char** argv)
     bench_model<CGAL::Sequential_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, 1, rows);
     bench_model<CGAL::Parallel_tag>(name, cloud, name == "armadillo_1M" ? std::min(reps, 3) : reps, threads, rows);
   }
-  fs::create_directories(out);
-  std::ofstream csv(out / "details_results.csv");
-  csv << "model,points,stage,mode,threads,median_s,min_s,max_s,peak_rss_mib\n";
-  for(const Row& r : rows)
-    csv << r.model << "," << r.points << "," << r.stage << "," << r.mode << "," << r.threads << "," << r.time.median << ","
-        << r.time.min << "," << r.time.max << "," << r.peak_mib << "\n";
-  std::ofstream md(out / "details_results.md");
-  md << "# Details pipeline benchmark\n\n" << machine_facts(threads) << "- repetitions: " << reps
-     << " (3 at 1M points); peak memory is the process's peak RSS when the stage finished\n\n"
-     << "| model | points | stage | mode | median s | min-max s | peak MiB |\n|---|---:|---|---|---:|---|---:|\n";
-  char buf[256];
+  std::string csv = "model,points,stage,mode,threads,median_s,min_s,max_s,peak_rss_mib\n";
+  std::string md = "# Details pipeline benchmark\n\n" + machine_facts() +
+                   "- k = 10 (symmetrised), uniform weights, lambda 0.8, mu 1.6; pipeline = compute_geometric_details "
+                   "with normals given\n" +
+                   format("- repetitions: %d (3 at 1M points); peak memory is the process's peak RSS when the stage "
+                          "finished\n\n", reps) +
+                   "| model | points | stage | mode | median s | min-max s | peak MiB |\n|---|---:|---|---|---:|---|---:|\n";
   for(const Row& r : rows) {
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %s (%d) | %.4f | %.4f-%.4f | %.0f |\n", r.model.c_str(), r.points,
-                  r.stage.c_str(), r.mode.c_str(), r.threads, r.time.median, r.time.min, r.time.max, r.peak_mib);
-    md << buf;
+    csv += format("%s,%zu,%s,%s,%d,%g,%g,%g,%g\n", r.model.c_str(), r.points, r.stage.c_str(), r.mode.c_str(),
+                  r.threads, r.time.median, r.time.min, r.time.max, r.peak_mib);
+    md += format("| %s | %zu | %s | %s (%d) | %.4f | %.4f-%.4f | %.0f |\n", r.model.c_str(), r.points, r.stage.c_str(),
+                 r.mode.c_str(), r.threads, r.time.median, r.time.min, r.time.max, r.peak_mib);
   }
-  std::printf("wrote %s and %s\n", (out / "details_results.md").string().c_str(), (out / "details_results.csv").string().c_str());
+  write_result_file(out, "details_results.csv", csv);
+  write_result_file(out, "details_results.md", md);
   return 0;
 }
 

@@ -36,20 +36,8 @@ using Mesh = CGAL::Surface_mesh<Point>;
 
 namespace bench_editing {
 
-std::vector<std::string> lines; // the Markdown report, section by section
+Markdown_report report;
 std::ofstream csv;
-
-void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void say(const char* format, ...)
-{
-  char buf[1024];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buf, sizeof buf, format, args);
-  va_end(args);
-  lines.push_back(buf);
-  std::printf("%s", buf);
-}
 
 std::vector<std::size_t> all_indices(std::size_t n)
 {
@@ -90,7 +78,7 @@ Edit_description scan_edit(const Point_cloud& cloud, double diagonal)
     }
   }
   centre /= double(handle.points.size());
-  handle.rotation = Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  handle.rotation = Eigen::AngleAxisd(30 * CGAL_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
   handle.translation = centre - handle.rotation * centre + Eigen::Vector3d(0, 0.05 * diagonal, 0);
   edit.handles.push_back(handle);
   return edit;
@@ -252,7 +240,7 @@ void table1(const std::string& name, const Point_cloud& cloud, const Edit_descri
                 name.c_str(), v.label, st.clustering_seconds, st.least_squares.assembly_seconds,
                 st.least_squares.factor_seconds, st.deform_seconds, st.least_squares.solve_seconds, st.least_squares.iterations,
                 st.least_squares.method.c_str());
-    say("| %s | %s | %zu | %zu | %zu | %.3f | **%.4f** | **%.4f** | %.1f (%.1f-%.1f) |\n", name.c_str(), v.label,
+    report.addf("| %s | %s | %zu | %zu | %zu | %.3f | **%.4f** | **%.4f** | %.1f (%.1f-%.1f) |\n", name.c_str(), v.label,
         st.points, st.samples, st.roi_samples, t.preprocess.median, t.editing.median, t.diffusion.median,
         1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max);
     csv << "table1,\"" << name << "\"," << v.label << "," << st.points << "," << st.samples << "," << st.roi_samples << ","
@@ -282,13 +270,13 @@ void scaling(const std::string& name, const Point_cloud& cloud, const Edit_descr
         // iteration cap: reported as such, with the time it took to give up (preprocess included).
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const int cap = edit.settings.least_squares.max_iterations;
-        say("| %s | %zu | %s | %s | | | | not converged in %d iterations (%.1f s) | | %d |\n", name.c_str(),
+        report.addf("| %s | %zu | %s | %s | | | | not converged in %d iterations (%.1f s) | | %d |\n", name.c_str(),
             cloud.points.size(), order_name, "CG", cap, seconds, cap);
         csv << "scaling,\"" << name << "\"," << order_name << ",cg_not_converged," << cloud.points.size() << ",0,0,0," << seconds
             << ",0,0,0," << cap << "\n";
         continue;
       }
-      say("| %s | %zu | %s | %s | %zu | %zu | %.3f | %.4f | %.1f (%.1f-%.1f) | %d |\n", name.c_str(), t.last.points,
+      report.addf("| %s | %zu | %s | %s | %zu | %zu | %.3f | %.4f | %.1f (%.1f-%.1f) | %d |\n", name.c_str(), t.last.points,
           order_name, cg ? "CG" : "Cholesky", t.last.samples, t.last.roi_samples, t.preprocess.median, t.editing.median,
           1e3 * t.drag.median, 1e3 * t.drag.min, 1e3 * t.drag.max, cg ? t.last.least_squares.iterations : 0);
       csv << "scaling,\"" << name << "\"," << order_name << "," << (cg ? "cg" : "cholesky") << "," << t.last.points << ","
@@ -334,7 +322,7 @@ void compare_with_arap(const std::string& name, const Point_cloud& cloud, const 
     if(std::isfinite(drag)) std::snprintf(per_drag, sizeof per_drag, "%.1f", 1e3 * drag);
     if(ssps) std::snprintf(samples, sizeof samples, "%zu", ssps);
     if(std::isfinite(to_long)) std::snprintf(percent_long, sizeof percent_long, "%.2f %%", 100 * to_long);
-    say("| %s | %s | %s | %.3f | %.3f | %s | %s | %s | %.3f | %.3f | %.2e |\n", name.c_str(), what.c_str(), samples, preprocess,
+    report.addf("| %s | %s | %s | %.3f | %.3f | %s | %s | %s | %.3f | %.3f | %.2e |\n", name.c_str(), what.c_str(), samples, preprocess,
         deform, per_drag, percent, percent_long, change, stretch, handle);
     csv << "arap,\"" << name << "\",\"" << what << "\"," << preprocess << "," << deform << "," << distance << "," << change << ","
         << handle << "," << ssps << "," << stretch << ",";
@@ -396,9 +384,9 @@ void cactus(const fs::path& data, int reps, bool quick)
     auto row = [&](const char* what, const internal::Matrix_n3& result) {
       const double to_sre = hausdorff(result, reference) / diagonal, to_sre_converged = hausdorff(result, sre_converged) / diagonal,
                    to_original_converged = hausdorff(result, original_converged) / diagonal;
-      say("| %.0f degrees | %s | %.1f %% | %.1f %% | %.1f %% |\n", fraction * turn.angle() * 180 / M_PI, what, 100 * to_sre,
+      report.addf("| %.0f degrees | %s | %.1f %% | %.1f %% | %.1f %% |\n", fraction * turn.angle() * 180 / CGAL_PI, what, 100 * to_sre,
           100 * to_sre_converged, 100 * to_original_converged);
-      csv << "cactus," << fraction * turn.angle() * 180 / M_PI << ",\"" << what << "\"," << to_sre << "," << to_sre_converged << ","
+      csv << "cactus," << fraction * turn.angle() * 180 / CGAL_PI << ",\"" << what << "\"," << to_sre << "," << to_sre_converged << ","
           << to_original_converged << "\n";
     };
     row("CGAL SRE_ARAP, 10 iterations", reference);
@@ -456,7 +444,7 @@ void diffusion_origins(const std::string& name, const Point_cloud& cloud, const 
     const internal::Matrix_n3 deformed = deformed_points(*d);
     const char* what = origin == CGAL_ext::Diffusion_origin::nearest_sample ? "nearest (paper: p - ssp_0)" : "own (p - ssp_i)";
     const double change = point_detail_change(cloud, edit, deformed), stretch = stretch_quantile(cloud, edit, deformed);
-    say("| %s | %s | %zu | %.3f | %.2f | %.4f |\n", name.c_str(), what, d->number_of_sample_points(), change, stretch,
+    report.addf("| %s | %s | %zu | %.3f | %.2f | %.4f |\n", name.c_str(), what, d->number_of_sample_points(), change, stretch,
         d->statistics().diffuse_seconds);
     csv << "diffusion," << name << ",\"" << what << "\"," << change << "," << stretch << "," << d->statistics().diffuse_seconds << "\n";
   }
@@ -482,7 +470,7 @@ void sample_point_quality(const std::string& name, const Point_cloud& cloud, con
     } catch(const CGAL_ext::Invalid_input& e) {
       // A scan's loose fragment inside the region, joined to nothing outside it by these sample points'
       // graph, leaves the system singular: the library refuses it, and so is it reported.
-      say("| %s | %s | refused: %s | | | | | |\n", name.c_str(), v.what, e.what());
+      report.addf("| %s | %s | refused: %s | | | | | |\n", name.c_str(), v.what, e.what());
       continue;
     }
     std::vector<double> drag;
@@ -494,7 +482,7 @@ void sample_point_quality(const std::string& name, const Point_cloud& cloud, con
     }
     const internal::Matrix_n3 result = deformed_points(*d);
     if(reference.rows() == 0) reference = result;
-    say("| %s | %s | %zu | %zu | %.3f | %.1f | %.2f %% | %.3f |\n", name.c_str(), v.what, d->number_of_sample_points(),
+    report.addf("| %s | %s | %zu | %zu | %.3f | %.1f | %.2f %% | %.3f |\n", name.c_str(), v.what, d->number_of_sample_points(),
         d->number_of_roi_sample_points(), d->statistics().preprocess_seconds, 1e3 * summarize(drag).median,
         100 * hausdorff(result, reference) / diagonal, point_detail_change(cloud, edit, result));
     csv << "ssp_quality," << name << ",\"" << v.what << "\"," << d->number_of_sample_points() << "," << summarize(drag).median << ","
@@ -525,15 +513,16 @@ int run(int argc, char** argv)
   }
   if(models.empty()) { std::fprintf(stderr, "bench_editing: no model under %s/meshes (run scripts/fetch_data.sh)\n", data.string().c_str()); return 1; }
 
-  say("# Detail-preserving editing benchmark\n\n- %d threads; malloc: %s; medians of %d runs (per drag: %d steps); default "
+  report.add("# Detail-preserving editing benchmark\n\n" + machine_facts());
+  report.addf("- medians of %d runs (per drag: %d steps); default "
       "settings (k = 10 on the SSPs, target 3,000 SSPs, mode-spread threshold 2, 4 diffusion samples, own-origin encoding)\n"
       "- edit of a scan: the region is every point within 40 %% of the bounding diagonal of the point farthest along +x, the "
       "handle those within 6 %%; the handle turns by 30 degrees about y and moves by 5 %% of the diagonal\n"
       "- editing the SSPs: operator rows, normal matrix, factorisation and the first solve (the paper's Table 1 column); "
       "diffusion: frames and every point's position and normal; per drag: new handle transform, deform(), diffuse()\n\n",
-      tbb::info::default_concurrency(), malloc_pages().c_str(), options.reps, quick ? 5 : 20);
+      options.reps, quick ? 5 : 20);
 
-  say("## Table 1\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) |\n"
+  report.addf("## Table 1\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
   {
     // The paper's own global edit at its size: a 44,383-point tentacle, all but its base in the region, the tip
@@ -549,17 +538,17 @@ int run(int argc, char** argv)
       if(tentacle.points[i].x() < -0.85) tip.points.push_back(i);
     }
     const Eigen::Vector3d base(0, 0, 0.05);
-    tip.rotation = Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    tip.rotation = Eigen::AngleAxisd(40 * CGAL_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
     tip.translation = base - tip.rotation * base;
     edit.handles.push_back(tip);
     table1("tentacle (generated)", tentacle, edit, options.reps, quick ? 5 : 20);
   }
   for(const auto& [name, cloud, mesh] : models) table1(name, cloud, scan_edit(cloud, diagonal_of(cloud.points)), options.reps, quick ? 5 : 20);
-  say("\nThe paper (Pentium 4, 2.0 GHz): horse 48,484 points, 3,287 SSPs, 687 in the ROI: editing SSPs 0.10 / 0.19 / 1.17 s "
+  report.addf("\nThe paper (Pentium 4, 2.0 GHz): horse 48,484 points, 3,287 SSPs, 687 in the ROI: editing SSPs 0.10 / 0.19 / 1.17 s "
       "(linear / quadric / cubic), diffusion 0.32 s; tentacle 44,383 points, 3,339 SSPs, 3,122 in the ROI: 1.61 / 1.98 / 20.8 s, "
       "diffusion 0.83 s; dinosaur 56,194 points, 5,954 SSPs, 5,584 in the ROI: 2.58 / 4.90 s (cubic not given), diffusion 1.18 / 1.55 s.\n\n");
 
-  say("## Scaling: samplings of the armadillo surface, Cholesky against conjugate gradients\n\n"
+  report.addf("## Scaling: samplings of the armadillo surface, Cholesky against conjugate gradients\n\n"
       "Conjugate gradients: one run, 3 drags (each drag is an iterative solve); iterations of the last solve.\n\n"
       "| sampling | points | order | solver | SSPs | ROI SSPs | preprocess s | editing SSPs s | per drag ms (min-max) | CG iterations |\n"
       "|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
@@ -568,9 +557,9 @@ int run(int argc, char** argv)
     scaling("armadillo_" + (n >= 1000000 ? std::to_string(n / 1000000) + "M" : std::to_string(n / 1000) + "k"), sampling,
             scan_edit(sampling, diagonal_of(sampling.points)), options.reps, quick ? 5 : 20);
   }
-  say("\n");
+  report.addf("\n");
 
-  say("## Against CGAL's mesh ARAP (same mesh, region, control vertices and targets)\n\n"
+  report.addf("## Against CGAL's mesh ARAP (same mesh, region, control vertices and targets)\n\n"
       "| model | method | SSPs | preprocess s | deform s | per drag ms (median) | Hausdorff to SRE_ARAP (of the diagonal) | to SRE_ARAP after 1,000 iterations | detail change | kNN edge stretch, 99th percentile | handle error (of the diagonal) |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for(const auto& [name, cloud, mesh] : models)
@@ -589,14 +578,14 @@ int run(int argc, char** argv)
                       vertices, split, scan_edit(vertices, diagonal_of(vertices.points)), 1, 20, quick);
   }
 
-  say("\n## The Botsch-Sorkine cactus against CGAL's SRE_ARAP (alpha 0.02) and ORIGINAL_ARAP\n\n"
+  report.addf("\n## The Botsch-Sorkine cactus against CGAL's SRE_ARAP (alpha 0.02) and ORIGINAL_ARAP\n\n"
       "Every point is its own SSP (620 points). Hausdorff distance between the results, of the bounding diagonal; "
       "converged: 3,000 iterations.\n\n"
       "| handle turn | method | to SRE_ARAP, 10 iterations | to SRE_ARAP, converged | to ORIGINAL_ARAP, converged |\n"
       "|---|---|---:|---:|---:|\n");
   cactus(data, options.reps, quick);
 
-  say("\n## Diffusion encodings\n\nRotation-compensated change of every region point's own quadric details (k = 10), relative "
+  report.addf("\n## Diffusion encodings\n\nRotation-compensated change of every region point's own quadric details (k = 10), relative "
       "to their size, and the largest stretch of a kNN edge of the region.\n\n"
       "| model | encoding | SSPs | detail change | largest stretch | diffusion s |\n|---|---|---:|---:|---:|---:|\n");
   for(const auto& [name, cloud, mesh] : models) {
@@ -606,16 +595,16 @@ int run(int argc, char** argv)
     diffusion_origins(name + " (SSPs of <= 50 points)", cloud, edit);
   }
 
-  say("\n## What coarser sample points cost (quadric)\n\nThe same edit with every point its own sample point (the reference) "
+  report.addf("\n## What coarser sample points cost (quadric)\n\nThe same edit with every point its own sample point (the reference) "
       "and with coarser sample points: the Hausdorff distance of the result to the reference (of the diagonal) and the "
       "rotation-compensated change of the region's own details, as above.\n\n"
       "| model | sample points | SSPs | ROI SSPs | preprocess s | per drag ms | Hausdorff to every-point result | detail change |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|\n");
   for(const auto& [name, cloud, mesh] : models) sample_point_quality(name, cloud, scan_edit(cloud, diagonal_of(cloud.points)), quick ? 3 : 10);
 
-  std::ofstream md(out / "editing_results.md");
-  for(const std::string& l : lines) md << l;
-  std::printf("wrote %s and %s\n", (out / "editing_results.md").string().c_str(), (out / "editing_results.csv").string().c_str());
+  csv.close();
+  std::printf("wrote %s\n", (out / "editing_results.csv").string().c_str());
+  write_result_file(out, "editing_results.md", report.text());
   return 0;
 }
 

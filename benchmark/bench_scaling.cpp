@@ -146,8 +146,7 @@ int run(int argc, char** argv)
   const double offset = base_surface_offset(armadillo);
   std::printf("balanced-flow base of the armadillo: mean normal offset = %.3f of the RMS offset\n", offset);
 
-  fs::create_directories(out);
-  std::ofstream csv(out / "scaling_results.csv");
+  std::ostringstream csv;
   csv << "case,points,order,solver,roi,anchors,normal_nonzeros,assembly_s,factor_s,solve_s,total_s,call_s,iterations,relative_residual,method\n";
   for(const Row& r : rows)
     csv << '"' << r.name << "\"," << r.points << "," << r.order << "," << r.solver << "," << r.roi << "," << r.anchors << ","
@@ -155,34 +154,26 @@ int run(int argc, char** argv)
         << r.assembly.median + r.factor.median + r.solve.median << "," << r.call.median << "," << r.iterations << ","
         << r.residual << ",\"" << r.method << "\"\n";
 
-  std::ofstream md(out / "scaling_results.md");
-  std::ifstream cpu("/proc/cpuinfo");
-  std::string line, model = "unknown";
-  while(std::getline(cpu, line))
-    if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
-  md << "# Detail scaling and enhancement benchmark\n\n"
-     << "- CPU: " << model << "; " << tbb::info::default_concurrency() << " threads; GCC " << __VERSION__ << ", Release\n"
-     << "- malloc: " << malloc_pages() << " (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n"
-     << "- k = 10, lambda 0.8, mu 1.6, s = 2, default anchors; medians of " << reps
-     << " repetitions for Cholesky (min-max of the total beside), 1 for conjugate gradients\n"
-     << "- total = assembly (ROI rows of f(K), normal matrix) + factor + solve (with refinement); call = the whole "
-        "function (kNN, Laplacian, normals given, base surface for enhancement, write-back)\n\n"
-     << "| case | order | solver | ROI | anchors | nnz/row of N | assembly s | factor s | solve s | total s (min-max) | iterations | rel. residual | call s |\n"
-     << "|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n";
-  char buf[512];
+  std::string md = "# Detail scaling and enhancement benchmark\n\n" + machine_facts() +
+                   format("- k = 10, lambda 0.8, mu 1.6, s = 2, default anchors; medians of %d repetitions for Cholesky "
+                          "(min-max of the total beside), 1 for conjugate gradients\n", reps) +
+                   "- total = assembly (ROI rows of f(K), normal matrix) + factor + solve (with refinement); call = the whole "
+                   "function (kNN, Laplacian, normals given, base surface for enhancement, write-back)\n\n"
+                   "| case | order | solver | ROI | anchors | nnz/row of N | assembly s | factor s | solve s | total s (min-max) | iterations | rel. residual | call s |\n"
+                   "|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n";
   for(const Row& r : rows) {
     const double total = r.assembly.median + r.factor.median + r.solve.median;
     const double lo = r.assembly.min + r.factor.min + r.solve.min, hi = r.assembly.max + r.factor.max + r.solve.max;
-    std::snprintf(buf, sizeof buf, "| %s | %s | %s | %zu | %zu | %.0f | %.3f | %.3f | %.3f | %.3f (%.3f-%.3f) | %d | %.1e | %.3f |\n",
-                  r.name.c_str(), r.order.c_str(), r.solver.c_str(), r.roi, r.anchors,
-                  double(r.normal_nonzeros) / double(std::max<std::size_t>(r.roi, 1)), r.assembly.median, r.factor.median,
-                  r.solve.median, total, lo, hi, r.iterations, r.residual, r.call.median);
-    md << buf;
+    md += format("| %s | %s | %s | %zu | %zu | %.0f | %.3f | %.3f | %.3f | %.3f (%.3f-%.3f) | %d | %.1e | %.3f |\n",
+                 r.name.c_str(), r.order.c_str(), r.solver.c_str(), r.roi, r.anchors,
+                 double(r.normal_nonzeros) / double(std::max<std::size_t>(r.roi, 1)), r.assembly.median, r.factor.median,
+                 r.solve.median, total, lo, hi, r.iterations, r.residual, r.call.median);
   }
-  md << "\nCholesky: " << (rows.empty() ? "" : rows.front().method) << ".\n"
-     << "Balanced-flow base surface of the armadillo: mean offset along the normals = " << offset
-     << " of the RMS offset (0: no shrinkage or swelling).\n";
-  std::printf("wrote %s and %s\n", (out / "scaling_results.md").string().c_str(), (out / "scaling_results.csv").string().c_str());
+  md += "\nCholesky: " + (rows.empty() ? std::string() : rows.front().method) + ".\n" +
+        format("Balanced-flow base surface of the armadillo: mean offset along the normals = %g of the RMS offset (0: no "
+               "shrinkage or swelling).\n", offset);
+  write_result_file(out, "scaling_results.csv", csv.str());
+  write_result_file(out, "scaling_results.md", md);
   return 0;
 }
 

@@ -135,15 +135,9 @@ int run(int argc, char** argv)
   if(!options.valid) return 2;
   const bool quick = options.quick;
   const fs::path data = options.data, out = options.out;
-  std::vector<std::pair<std::string, Point_cloud>> models;
-  for(const char* m : {"armadillo", "bunny00", "refined_elephant", "camel"}) {
-    const fs::path file = data / "meshes" / (std::string(m) + ".off");
-    if(!fs::exists(file)) continue;
-    models.emplace_back(m, read_point_cloud(file));
-    if(quick) break;
-  }
+  Models models = load_scans(data, quick);
   if(models.empty()) { std::fprintf(stderr, "bench_simplification: no model under %s/meshes (run scripts/fetch_data.sh)\n", data.string().c_str()); return 1; }
-  models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(data / "meshes/armadillo.off", quick ? 100000 : 1000000));
+  add_armadillo_sampling(models, data, quick);
   std::vector<Row> rows;
   for(const auto& [name, cloud] : models) {
     bench_model<CGAL::Sequential_tag>(name, cloud, options.reps, rows);
@@ -151,28 +145,21 @@ int run(int argc, char** argv)
   }
   sweep_threshold(models.front().first, models.front().second, rows);
 
-  fs::create_directories(out);
-  std::ofstream csv(out / "simplification_results.csv");
-  csv << "model,points,stage,mode,median_s,min_s,max_s,count,mean_shift_steps,peak_rss_mib\n";
-  for(const Row& r : rows)
-    csv << r.model << "," << r.points << ",\"" << r.stage << "\"," << r.mode << "," << r.time.median << "," << r.time.min << ","
-        << r.time.max << "," << r.count << "," << r.iterations << "," << r.peak_mib << "\n";
-  std::ofstream md(out / "simplification_results.md");
-  md << "# Mean shift and simplification sample points benchmark\n\n- " << tbb::info::default_concurrency()
-     << " threads in parallel runs; malloc: " << malloc_pages() << "; medians of " << options.reps
-     << " runs (the threshold sweep: one run); normals given (mesh faces or sampled faces)\n"
-     << "- stages: kNN graph, closed-form curvature, Gaussian mean shift (default bandwidths), clustering with "
-        "maximum size 50 and mode-spread threshold 1; the whole call includes the spatial sort and all stages\n"
-     << "- count: sample points (ours, CGAL's hierarchy) or points kept (grid); steps: mean-shift steps per point\n\n"
-     << "| model | points | stage | mode | median s | min-max s | count | steps | peak MiB |\n|---|---:|---|---|---:|---|---:|---:|---:|\n";
-  char buf[400];
+  std::string csv = "model,points,stage,mode,median_s,min_s,max_s,count,mean_shift_steps,peak_rss_mib\n";
+  std::string md = "# Mean shift and simplification sample points benchmark\n\n" + machine_facts() +
+                   format("- medians of %d runs (the threshold sweep: one run); normals given (mesh faces or sampled faces)\n", options.reps) +
+                   "- stages: kNN graph, closed-form curvature, Gaussian mean shift (default bandwidths), clustering with "
+                   "maximum size 50 and mode-spread threshold 1; the whole call includes the spatial sort and all stages\n"
+                   "- count: sample points (ours, CGAL's hierarchy) or points kept (grid); steps: mean-shift steps per point\n\n"
+                   "| model | points | stage | mode | median s | min-max s | count | steps | peak MiB |\n|---|---:|---|---|---:|---|---:|---:|---:|\n";
   for(const Row& r : rows) {
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %s | %s | %.3f | %.3f-%.3f | %zu | %.2f | %.0f |\n", r.model.c_str(), r.points,
-                  r.stage.c_str(), r.mode.c_str(), r.time.median, r.time.min, r.time.max, r.count, r.iterations, r.peak_mib);
-    md << buf;
+    csv += format("%s,%zu,\"%s\",%s,%g,%g,%g,%zu,%g,%g\n", r.model.c_str(), r.points, r.stage.c_str(), r.mode.c_str(),
+                  r.time.median, r.time.min, r.time.max, r.count, r.iterations, r.peak_mib);
+    md += format("| %s | %zu | %s | %s | %.3f | %.3f-%.3f | %zu | %.2f | %.0f |\n", r.model.c_str(), r.points,
+                 r.stage.c_str(), r.mode.c_str(), r.time.median, r.time.min, r.time.max, r.count, r.iterations, r.peak_mib);
   }
-  std::printf("wrote %s and %s\n", (out / "simplification_results.md").string().c_str(),
-              (out / "simplification_results.csv").string().c_str());
+  write_result_file(out, "simplification_results.csv", csv);
+  write_result_file(out, "simplification_results.md", md);
   return 0;
 }
 

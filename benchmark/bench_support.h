@@ -2,6 +2,7 @@
 #ifndef POINT_DETAIL_BENCH_SUPPORT_H
 #define POINT_DETAIL_BENCH_SUPPORT_H
 
+#include "cli_support.h"
 #include "point_io.h"
 
 #include <CGAL_ext/internal/Point_arrays.h>
@@ -9,13 +10,19 @@
 #include <Eigen/Geometry>
 
 #include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/version.h>
+
+#include <tbb/info.h>
+#include <tbb/version.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <random>
@@ -166,6 +173,102 @@ inline Bench_options parse_bench_options(int argc, char** argv, const char* prog
   if(o.quick) o.reps = 1;
   return o;
 }
+
+inline std::string vformat(const char* fmt, va_list args)
+{
+  va_list again;
+  va_copy(again, args);
+  std::string text(std::size_t(std::max(0, std::vsnprintf(nullptr, 0, fmt, args))), '\0');
+  std::vsnprintf(text.data(), text.size() + 1, fmt, again);
+  va_end(again);
+  return text;
+}
+
+/// `printf` into a string: a Markdown row or heading.
+inline std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+inline std::string format(const char* fmt, ...)
+{
+  va_list args;
+  va_start(args, fmt);
+  std::string text = vformat(fmt, args);
+  va_end(args);
+  return text;
+}
+
+/// The machine and the build a benchmark ran on, as the first lines of its Markdown file.
+inline std::string machine_facts()
+{
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line, model = "unknown";
+  while(std::getline(cpu, line))
+    if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
+  return format("- CPU: %s; threads in parallel runs: %d\n- compiler: GCC %s, -O3 -DNDEBUG (Release); CGAL %s, "
+                "Eigen %d.%d.%d, oneTBB %d.%d\n- malloc: %s (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n",
+                model.c_str(), tbb::info::default_concurrency(), __VERSION__, CGAL_VERSION_STR, EIGEN_WORLD_VERSION,
+                EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION, TBB_VERSION_MAJOR, TBB_VERSION_MINOR, malloc_pages().c_str());
+}
+
+using Models = std::vector<std::pair<std::string, Point_cloud>>;
+
+/// The benchmark's scans, the vertices of CGAL's meshes under DATA/meshes with normals from their faces: all of
+/// `names`, or the first in a quick run. A missing file is skipped with a note.
+inline Models load_scans(const std::filesystem::path& data, bool quick,
+                         const std::vector<std::string>& names = {"armadillo", "bunny00", "refined_elephant", "camel"})
+{
+  Models models;
+  for(const std::string& m : names) {
+    const std::filesystem::path file = data / "meshes" / (m + ".off");
+    if(!std::filesystem::exists(file)) {
+      std::fprintf(stderr, "skipping %s (run scripts/fetch_data.sh)\n", file.string().c_str());
+      continue;
+    }
+    models.emplace_back(m, read_point_cloud(file));
+    if(quick) break;
+  }
+  return models;
+}
+
+/// `models` with the armadillo's surface sampled at 1M points (100k in a quick run) appended, when the mesh is there.
+inline void add_armadillo_sampling(Models& models, const std::filesystem::path& data, bool quick)
+{
+  const std::filesystem::path mesh = data / "meshes/armadillo.off";
+  if(std::filesystem::exists(mesh))
+    models.emplace_back(quick ? "armadillo_100k" : "armadillo_1M", sample_mesh(mesh, quick ? 100000 : 1000000));
+}
+
+/// Writes `text` to DIR/NAME (creating DIR) and says so.
+inline void write_result_file(const std::filesystem::path& out, const std::string& name, const std::string& text)
+{
+  std::filesystem::create_directories(out);
+  std::ofstream(out / name) << text;
+  std::printf("wrote %s\n", (out / name).string().c_str());
+}
+
+/// A Markdown report that the benchmark writes as it goes: each part is printed at once and kept for the file.
+class Markdown_report
+{
+public:
+  void add(const std::string& text)
+  {
+    m_text += text;
+    std::printf("%s", text.c_str());
+    std::fflush(stdout);
+  }
+
+  /// `add` of a `printf` format.
+  void addf(const char* fmt, ...) __attribute__((format(printf, 2, 3)))
+  {
+    va_list args;
+    va_start(args, fmt);
+    add(vformat(fmt, args));
+    va_end(args);
+  }
+
+  const std::string& text() const { return m_text; }
+
+private:
+  std::string m_text;
+};
 
 } // namespace point_detail
 

@@ -34,14 +34,8 @@ using Inserted = std::vector<std::pair<Point, Vector>>;
 
 namespace bench_upsampling {
 
-std::vector<std::string> lines;
+Markdown_report report;
 std::ofstream csv;
-
-void say(const std::string& line)
-{
-  lines.push_back(line);
-  std::printf("%s", line.c_str());
-}
 
 /// The largest distance from the reference samples to their nearest point of `samples`.
 double covering_radius(const std::vector<Point>& samples, const std::vector<Point>& reference)
@@ -157,10 +151,8 @@ void bench(const std::string& name, const Point_cloud& input, const Mesh& mesh, 
       mean += d / double(added.size());
     }
     const double before = covering_radius(stretched.points, reference) / h, after = covering_radius(all_points, reference) / h;
-    char buf[512];
-    std::snprintf(buf, sizeof buf, "| %s | %s | %zu | %zu | %.3f | %.2f | %.2f | %.4f | %.4f | %.4f | %.4f |\n", name.c_str(), method,
-                  n, added.size(), time.median, before, after, mean / h, farthest / h, farthest_where_short / h, input_farthest / h);
-    say(buf);
+    report.addf("| %s | %s | %zu | %zu | %.3f | %.2f | %.2f | %.4f | %.4f | %.4f | %.4f |\n", name.c_str(), method, n,
+                added.size(), time.median, before, after, mean / h, farthest / h, farthest_where_short / h, input_farthest / h);
     csv << name << ",\"" << method << "\"," << n << "," << added.size() << "," << time.median << "," << before << "," << after
         << "," << mean / h << "," << farthest / h << "," << farthest_where_short / h << "," << input_farthest / h << "\n";
   };
@@ -192,10 +184,8 @@ void bench(const std::string& name, const Point_cloud& input, const Mesh& mesh, 
       });
       const char* method = local ? "ours on the same sampling before the edit, local spacings (the default)"
                                  : "ours on the same sampling before the edit";
-      char buf[256];
-      std::snprintf(buf, sizeof buf, "| %s | %s | %zu | %zu | %.3f | | | | | | |\n", name.c_str(), method, input.points.size(),
-                    unedited.size(), t.median);
-      say(buf);
+      report.addf("| %s | %s | %zu | %zu | %.3f | | | | | | |\n", name.c_str(), method, input.points.size(),
+                  unedited.size(), t.median);
       csv << name << ",\"" << method << "\"," << input.points.size() << "," << unedited.size() << "," << t.median << ",,,,,,\n";
     }
   }
@@ -213,17 +203,15 @@ int run(int argc, char** argv)
   csv.open(options.out / "upsampling_results.csv");
   csv << "model,method,points,inserted,median_s,covering_radius_before_h,covering_radius_after_h,mean_distance_of_new_h,"
          "largest_distance_of_new_h,largest_distance_of_new_by_short_triangles_h,largest_distance_of_input_h\n";
-  char head[1024];
-  std::snprintf(head, sizeof head,
-                "# Up-sampling benchmark\n\n- %d threads; malloc: %s; ours: median of %d runs, CGAL's: one run\n"
-                "- the arm nearest +x pulled out by 25 %% of the diagonal (detail-preserving edit, quadric, default SSPs); "
-                "target spacing: the model's typical spacing h before the edit\n"
-                "- covering radius: the largest distance from the edited surface (the mesh with its vertices moved by "
-                "the same edit, sampled 20 times denser) to the nearest sample; distances in h\n\n"
-                "| model | method | points | new points | time s | covering radius before | after | mean distance of new points to the surface | largest | largest where the surface's triangle is shorter than 4 h | largest of the edited input |\n"
-                "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-                tbb::info::default_concurrency(), malloc_pages().c_str(), options.reps);
-  say(head);
+  report.add("# Up-sampling benchmark\n\n" + machine_facts());
+  report.addf("- ours: median of %d runs, CGAL's: one run\n"
+              "- the arm nearest +x pulled out by 25 %% of the diagonal (detail-preserving edit, quadric, default SSPs); "
+              "target spacing: the model's typical spacing h before the edit\n"
+              "- covering radius: the largest distance from the edited surface (the mesh with its vertices moved by "
+              "the same edit, sampled 20 times denser) to the nearest sample; distances in h\n\n"
+              "| model | method | points | new points | time s | covering radius before | after | mean distance of new points to the surface | largest | largest where the surface's triangle is shorter than 4 h | largest of the edited input |\n"
+              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+                options.reps);
   Mesh mesh;
   if(!CGAL::IO::read_polygon_mesh(file.string(), mesh)) { std::fprintf(stderr, "cannot read %s\n", file.string().c_str()); return 1; }
   const Point_cloud vertices = read_point_cloud(file);
@@ -235,9 +223,7 @@ int run(int argc, char** argv)
     const auto [refined, refined_vertices] = split_at_midpoints(mesh, vertices, 3);
     bench("armadillo_1M", sample_mesh(file, 1000000), refined, refined_vertices, false, options.reps);
   }
-  std::ofstream md(options.out / "upsampling_results.md");
-  for(const std::string& l : lines) md << l;
-  std::printf("wrote %s\n", (options.out / "upsampling_results.md").string().c_str());
+  write_result_file(options.out, "upsampling_results.md", report.text());
   return 0;
 }
 
