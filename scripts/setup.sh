@@ -11,6 +11,7 @@ packages=(
   libsuitesparse-dev libopenblas-dev
   clang libclang-rt-14-dev time bc
   doxygen python3 python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 
 missing=()

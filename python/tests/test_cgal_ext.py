@@ -1,0 +1,247 @@
+# The Python module against the library's numbers as the point-detail program gives them, on a generated shape
+# and on CGAL's armadillo scan; its errors; the GIL released during a computation; progress and cancellation.
+import threading
+
+import numpy as np
+import pytest
+
+import cgal_ext
+from conftest import normals_of, read_ply, run_program, write_ply, xyz
+
+TOLERANCE = 1e-12
+
+
+def assert_close(a, b, scale=1.0):
+    assert a.shape == b.shape
+    assert np.max(np.abs(a - b)) <= TOLERANCE * scale
+
+
+@pytest.fixture
+def sphere_file(sphere, tmp_path):
+    points, normals = sphere
+    path = tmp_path / "sphere.ply"
+    write_ply(path, points, normals)
+    return path
+
+
+def test_details_are_the_programs(sphere, sphere_file, tmp_path):
+    points, normals = sphere
+    run_program("details", "-i", sphere_file, "-o", tmp_path / "out.ply", "--order", "cubic", "-k", 12)
+    out = read_ply(tmp_path / "out.ply")
+    details, magnitude = cgal_ext.compute_geometric_details(points, normals, k=12, order="cubic")
+    assert_close(details, np.column_stack([out["detail_x"], out["detail_y"], out["detail_z"]]))
+    assert_close(magnitude, np.asarray(out["detail_magnitude"]))
+    # Any memory layout gives the same numbers: Fortran order, a strided view.
+    f_details, _ = cgal_ext.compute_geometric_details(np.asfortranarray(points), np.asfortranarray(normals), k=12, order="cubic")
+    assert np.array_equal(f_details, details)
+    padded = np.zeros((len(points), 5))
+    padded[:, 1:4] = points
+    s_details, _ = cgal_ext.compute_geometric_details(padded[:, 1:4], normals, k=12, order="cubic")
+    assert np.array_equal(s_details, details)
+
+
+def test_details_of_a_cgal_scan_are_the_programs(armadillo):
+    points, normals, vertex = armadillo
+    details, magnitude = cgal_ext.compute_geometric_details(points, normals)
+    scale = np.abs(points).max()
+    assert_close(details, np.column_stack([vertex["detail_x"], vertex["detail_y"], vertex["detail_z"]]), scale)
+    assert_close(magnitude, np.asarray(vertex["detail_magnitude"]), scale)
+
+
+def test_curvature_is_the_programs(sphere, sphere_file, tmp_path):
+    points, normals = sphere
+    run_program("curvature", "-i", sphere_file, "-o", tmp_path / "h.ply", "--fitting", "closed-form")
+    H = cgal_ext.estimate_mean_curvature(points, normals, fitting="closed_form")
+    assert_close(H, np.asarray(read_ply(tmp_path / "h.ply")["mean_curvature"]))
+    assert abs(np.median(H) - 1.0) < 0.05  # a unit sphere
+
+
+def test_sample_points_are_the_programs(sphere, sphere_file, tmp_path):
+    points, normals = sphere
+    run_program("simplify", "-i", sphere_file, "-o", tmp_path / "s.ply", "--target", 800, "--clusters", tmp_path / "c.ply")
+    labels = cgal_ext.compute_simplification_sample_points(points, normals, target_count=800)
+    assert labels.dtype == np.int64
+    assert np.array_equal(labels, read_ply(tmp_path / "c.ply")["ssp_index"].astype(np.int64))
+
+
+def test_scaling_and_enhancement_are_the_programs(sphere, sphere_file, tmp_path):
+    points, normals = sphere
+    roi = np.flatnonzero(points[:, 2] > 0.5)
+    (tmp_path / "roi.txt").write_text("\n".join(map(str, roi)) + "\n")
+    run_program("scale", "-i", sphere_file, "-o", tmp_path / "scaled.ply", "-s", 2, "--roi", "indices:%s" % (tmp_path / "roi.txt"))
+    scaled = cgal_ext.scale_geometric_details(points, roi, 2.0, normals=normals)
+    assert_close(scaled, xyz(read_ply(tmp_path / "scaled.ply")))
+    outside = np.setdiff1d(np.arange(len(points)), roi)
+    assert np.array_equal(scaled[outside], points[outside])
+    run_program("enhance", "-i", sphere_file, "-o", tmp_path / "enhanced.ply", "-s", 2)
+    assert_close(cgal_ext.enhance_geometric_details(points, 2.0, normals=normals), xyz(read_ply(tmp_path / "enhanced.ply")))
+    # s = 1 leaves the points as they were.
+    assert np.allclose(cgal_ext.scale_geometric_details(points, roi, 1.0, normals=normals), points, atol=1e-12)
+
+
+def test_upsampling_is_the_programs(sphere, tmp_path):
+    points, normals = sphere
+    keep = np.linalg.norm(points - points[0], axis=1) > 0.25  # a hole around the first point
+    points, normals = points[keep], normals[keep]
+    write_ply(tmp_path / "holed.ply", points, normals)
+    run_program("upsample", "-i", tmp_path / "holed.ply", "-o", tmp_path / "up.ply")
+    out = read_ply(tmp_path / "up.ply")
+    new = out["inserted"] == 1
+    added, added_normals = cgal_ext.upsample_point_set(points, normals)
+    assert len(added) > 10
+    assert_close(added, xyz(out)[new])
+    assert_close(added_normals, normals_of(out)[new])
+
+
+def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path):
+    points, normals = sphere
+    status = np.where(points[:, 2] > 0.8, 2, np.where(points[:, 2] > 0.0, 1, 0))
+    angle = np.radians(20)
+    R = np.array([[1, 0, 0], [0, np.cos(angle), -np.sin(angle)], [0, np.sin(angle), np.cos(angle)]])
+    t = np.array([0.0, 0.0, 0.1])
+    (tmp_path / "e.sel").write_text("\n".join(map(str, status)) + "\n")
+    (tmp_path / "e.def").write_text("\n".join(" ".join("%.17g" % v for v in row)
+                                              for row in np.vstack([np.column_stack([R, t]), [0, 0, 0, 1]])) + "\n")
+    run_program("edit", "-i", sphere_file, "-o", tmp_path / "edited.ply", "--sel", tmp_path / "e.sel", "--def", tmp_path / "e.def")
+    out = read_ply(tmp_path / "edited.ply")
+
+    deformation = cgal_ext.Deformation(points, normals)
+    deformation.insert_roi(np.flatnonzero(status > 0))
+    group = deformation.create_handle_group(np.flatnonzero(status == 2))
+    assert deformation.preprocess()
+    deformation.set_handle_transform(group, R, t)
+    deformation.deform()
+    moved, moved_normals = deformation.diffuse()
+    assert_close(moved, xyz(out), 2.0)
+    assert_close(moved_normals, normals_of(out), 2.0)
+    handles = status == 2
+    assert np.max(np.abs(moved[handles] - (points[handles] @ R.T + t))) < 1e-9  # exact handles
+    stats = deformation.statistics()
+    assert stats["points"] == len(points) and stats["roi_samples"] > 0
+    # Into the caller's arrays, reused from drag to drag.
+    P, N = np.empty_like(points), np.empty_like(normals)
+    returned = deformation.diffuse(P, N)
+    assert returned[0] is P and returned[1] is N
+    assert np.array_equal(P, moved) and np.array_equal(N, moved_normals)
+    with pytest.raises(ValueError, match="rows"):
+        deformation.diffuse(P[:10], N)
+    P.flags.writeable = False
+    with pytest.raises(ValueError, match="not writable"):
+        deformation.diffuse(P, N)
+
+
+@pytest.mark.parametrize("call, error, needle", [
+    (lambda p, n: cgal_ext.compute_geometric_details(p[:, :2].copy()), ValueError, "shape (n, 3)"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p.astype(np.float32)), ValueError, "dtype float64"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p.tolist()), ValueError, "numpy array"),
+    (lambda p, n: cgal_ext.compute_geometric_details(np.where(np.arange(len(p))[:, None] == 5, np.nan, p)), ValueError, "non-finite"),
+    (lambda p, n: cgal_ext.compute_geometric_details(np.zeros((0, 3))), ValueError, "empty"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p[:8].copy(), n[:8].copy()), ValueError, "k = 10"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n[:10].copy()), ValueError, "as many rows"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, order="quintic"), ValueError, "order"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, lam=0.0), ValueError, "lambda"),
+    (lambda p, n: cgal_ext.scale_geometric_details(p, [len(p)], 2.0, normals=n), ValueError, "not a point index"),
+    (lambda p, n: cgal_ext.scale_geometric_details(p, np.array([0.5]), 2.0, normals=n), ValueError, "integer indices"),
+    (lambda p, n: cgal_ext.estimate_mean_curvature(p, n, k=3), ValueError, "at least 5"),
+    (lambda p, n: cgal_ext.upsample_point_set(p, None), ValueError, "normals are required"),
+    (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), ValueError, "unknown setting 'rotation'"),
+])
+def test_bad_input_is_a_value_error_naming_it(sphere, call, error, needle):
+    points, normals = sphere
+    with pytest.raises(error) as raised:
+        call(points, normals)
+    assert needle in str(raised.value)
+
+
+def test_a_handle_outside_the_region_is_a_value_error(sphere):
+    points, normals = sphere
+    deformation = cgal_ext.Deformation(points, normals)
+    deformation.insert_roi(np.flatnonzero(points[:, 2] > 0.5))
+    deformation.create_handle_group(np.flatnonzero(points[:, 2] < -0.9))
+    with pytest.raises(ValueError, match="not in the region of interest"):
+        deformation.preprocess()
+    with pytest.raises(ValueError, match="not a rotation"):
+        deformation.set_handle_transform(0, 2 * np.eye(3), np.zeros(3))
+
+
+def test_progress_is_reported_and_an_exception_from_it_cancels(sphere):
+    points, normals = sphere
+    fractions = []
+    cgal_ext.compute_geometric_details(points, normals, progress=fractions.append)
+    assert fractions and all(0.0 <= f <= 1.0 for f in fractions) and fractions == sorted(fractions)
+
+    class Stop(Exception):
+        pass
+
+    def stop(fraction):
+        raise Stop()
+
+    with pytest.raises(Stop):
+        cgal_ext.compute_geometric_details(points, normals, progress=stop)
+    deformation = cgal_ext.Deformation(points, normals)
+    deformation.insert_roi(np.flatnonzero(points[:, 2] > 0.0))
+    deformation.create_handle_group(np.flatnonzero(points[:, 2] > 0.8))
+    with pytest.raises(Stop):
+        deformation.preprocess(progress=stop)
+    assert deformation.preprocess()  # cancelled, then done
+
+
+def test_another_thread_runs_while_the_library_computes(sphere):
+    points, normals = sphere
+    many = np.vstack([points * (1 + 0.1 * i) for i in range(30)])  # 180k points: a second or two
+    count, running = [0], [True]
+
+    def spin():
+        while running[0]:
+            count[0] += 1
+
+    thread = threading.Thread(target=spin)
+    thread.start()
+    try:
+        before = count[0]
+        cgal_ext.compute_geometric_details(many, k=10)
+        during = count[0] - before
+    finally:
+        running[0] = False
+        thread.join()
+    # With the GIL held for the whole call, the other thread would count almost nothing meanwhile.
+    assert during > 10000
+
+
+def test_a_large_input_is_read_in_place(tmp_path):
+    """Peak memory of details on 1M points from Python within 10 % of the C++ example's on the same points."""
+    import os
+    import subprocess
+    import sys
+    from conftest import bumpy_sphere
+    examples = os.environ.get("CGAL_EXT_EXAMPLES")
+    if not examples or not os.path.exists("/usr/bin/time"):
+        pytest.skip("needs the C++ examples (CGAL_EXT_EXAMPLES) and /usr/bin/time")
+    points, normals = bumpy_sphere(1000000, seed=3)
+    write_ply(tmp_path / "big.ply", points, normals)
+    del points, normals
+
+    def peak_kib(command):
+        result = subprocess.run(["/usr/bin/time", "-f", "%M"] + command, capture_output=True, text=True,
+                                env=dict(os.environ, OMP_NUM_THREADS="1"))
+        assert result.returncode == 0, result.stderr
+        return int(result.stderr.strip().splitlines()[-1])
+
+    cpp = peak_kib([examples, "compute_geometric_details_example", str(tmp_path / "big.ply")])
+    script = ("import sys; sys.path[:0] = %r; import numpy as np, cgal_ext; from conftest import read_ply\n"
+              "v = read_ply(%r); p = np.column_stack([v['x'], v['y'], v['z']]); n = np.column_stack([v['nx'], v['ny'], v['nz']])\n"
+              "del v; cgal_ext.compute_geometric_details(p, n)\n") % (sys.path[:1] + [os.path.dirname(__file__)], str(tmp_path / "big.ply"))
+    python = peak_kib([sys.executable, "-c", script])
+    print("peak memory, details of 1M points: C++ example %d MiB, Python %d MiB" % (cpp // 1024, python // 1024))
+    assert python <= 1.10 * cpp
+
+
+@pytest.mark.parametrize("example", ["details_colours.py", "edit.py"])
+def test_the_python_examples_run(example, tmp_path):
+    import os
+    import subprocess
+    import sys
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "python", example)
+    result = subprocess.run([sys.executable, script, str(tmp_path / "out.ply")], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "out.ply").read_bytes().startswith(b"ply\n")
