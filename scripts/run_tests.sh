@@ -5,7 +5,7 @@
 # README's headline figures come from committed result files, that no internal header includes an algorithm
 # header (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into
 # the build folder), the unit tests of the library and the program built with AddressSanitizer and
-# UndefinedBehaviorSanitizer (each unit test runs once, there), and each fuzz target for 30 seconds. Ends with
+# UndefinedBehaviorSanitizer (each unit test runs once, there), and each fuzz target for 20 seconds. Ends with
 # the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/design.md,
 # "Build time", gives the figures of a fresh clone with the compiler cache off on 2 cores.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
@@ -42,5 +42,5 @@ timed_stage "include layers" python3 scripts/include_layers.py --check
 timed_stage "API reference" bash scripts/build_api_docs.sh
 timed_stage pictures env BUILD_DIR="$build" DOC_IMAGES_DIR="$build/doc_images" bash scripts/make_doc_images.sh
 bash scripts/run_sanitized_tests.sh # times "sanitized build" and "sanitized tests"
-bash scripts/run_fuzzers.sh 30      # times "fuzz build" and "fuzz runs"
+bash scripts/run_fuzzers.sh 20      # times "fuzz build" and "fuzz runs"
 python3 scripts/check_stage_times.py "$STAGE_TIMES" "$(echo "$(date +%s.%N) - $run_start" | bc)"

@@ -188,7 +188,8 @@ def test_progress_is_reported_and_an_exception_from_it_cancels(sphere):
 
 def test_another_thread_runs_while_the_library_computes(sphere):
     points, normals = sphere
-    many = np.vstack([points * (1 + 0.1 * i) for i in range(30)])  # 180k points: a second or two
+    many = np.vstack([points * (1 + 0.1 * i) for i in range(30)])  # 180k points: about a second
+    many_normals = np.vstack([normals] * 30)
     count, running = [0], [True]
 
     def spin():
@@ -199,7 +200,7 @@ def test_another_thread_runs_while_the_library_computes(sphere):
     thread.start()
     try:
         before = count[0]
-        cgal_ext.compute_geometric_details(many, k=10)
+        cgal_ext.compute_geometric_details(many, many_normals, k=10)
         during = count[0] - before
     finally:
         running[0] = False
@@ -245,3 +246,18 @@ def test_the_python_examples_run(example, tmp_path):
     result = subprocess.run([sys.executable, script, str(tmp_path / "out.ply")], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "out.ply").read_bytes().startswith(b"ply\n")
+
+
+def test_ctrl_c_cancels_a_computation(sphere):
+    """A KeyboardInterrupt arriving during a call (here from a timer, as Ctrl-C would) ends it at the next progress
+    report and is raised, with no progress callable given."""
+    import _thread
+    points, _ = sphere
+    many = np.vstack([points * (1 + 0.1 * i) for i in range(60)])  # 360k points without normals: seconds
+    timer = threading.Timer(0.1, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            cgal_ext.compute_geometric_details(many)
+    finally:
+        timer.cancel()
