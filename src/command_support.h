@@ -24,6 +24,7 @@ namespace point_detail {
 
 namespace fs = std::filesystem;
 
+/// The program's own options, given before the subcommand.
 struct Common_options
 {
   int threads = 0; // 0: all cores

@@ -44,6 +44,8 @@ inline std::size_t largest_cluster(const std::vector<int>& leaves, std::size_t n
   return largest;
 }
 
+/// One surfel per cluster of `split_into_clusters` (`order`, `leaves`): the centroid, the covariance normal
+/// oriented like the members' normals, the radius and the members as input indices.
 template <typename Kernel, typename ConcurrencyTag>
 void make_surfels(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const std::vector<int>& order,
                   const std::vector<int>& leaves, Simplification_sample_points<Kernel>& out)
