@@ -92,15 +92,22 @@ TEST(MeanShift, ModesAreFixedPointsOfABruteForceMeanShift)
   for(std::size_t i = 0; i < n; ++i)
     features[i] << s.points[i].x() / hs, s.points[i].y() / hs, s.points[i].z() / hs, s.normals[i].x() / hr,
       s.normals[i].y() / hr, s.normals[i].z() / hr, c * H[i] / hr;
+  // Plain loops over the coefficients: the sanitized pass compiles the tests without optimisation, where
+  // Eigen's expressions would take most of this test's time.
   auto step = [&](const Row& mode) {
-    Row sum = Row::Zero();
-    double weights = 0;
-    for(const Row& q : features) {
-      const double w = std::exp(-0.5 * ((mode.head<3>() - q.head<3>()).squaredNorm() + (mode.tail<4>() - q.tail<4>()).squaredNorm()));
-      sum += w * q;
+    double sum[7] = {0, 0, 0, 0, 0, 0, 0}, weights = 0;
+    const double* m = mode.data();
+    for(const Row& feature : features) {
+      const double* q = feature.data();
+      double d2 = 0;
+      for(int j = 0; j < 7; ++j) d2 += (m[j] - q[j]) * (m[j] - q[j]);
+      const double w = std::exp(-0.5 * d2);
+      for(int j = 0; j < 7; ++j) sum[j] += w * q[j];
       weights += w;
     }
-    return Row(sum / weights);
+    Row next;
+    for(int j = 0; j < 7; ++j) next(j) = sum[j] / weights;
+    return next;
   };
   double worst_match = 0, worst_shift = 0;
   for(std::size_t i = 0; i < n; ++i) {
