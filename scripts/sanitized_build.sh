@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages (scripts/setup.sh), configures the sanitized build in $SANITIZE_BUILD_DIR
 # (default: build-sanitize) and builds the given targets (all when none are given): the library, the program
-# and every test with AddressSanitizer and UndefinedBehaviorSanitizer (clang, -O1, line tables), and the
-# libFuzzer targets of the program's readers. One build serves scripts/run_sanitized_tests.sh and
+# and every test with AddressSanitizer and UndefinedBehaviorSanitizer (clang, -O1, the test programs -O0, line
+# tables), and the libFuzzer targets of the program's readers. One build serves scripts/run_sanitized_tests.sh and
 # scripts/run_fuzzers.sh. clang, not GCC: it compiles the sanitized library in about two thirds of GCC's time
 # (doc/design.md, "Build time").
 # Usage: scripts/sanitized_build.sh [TARGET...]

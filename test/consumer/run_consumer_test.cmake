@@ -1,4 +1,5 @@
-# Installs the package from BINARY_DIR into WORK_DIR/install, then configures, builds and runs test/consumer.
+# Installs the package from BINARY_DIR into WORK_DIR/install, then configures, builds (with COMPILER) and runs
+# test/consumer.
 file(REMOVE_RECURSE ${WORK_DIR})
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
@@ -8,7 +9,7 @@ function(run)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${WORK_DIR}/install)
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/test/consumer -B ${WORK_DIR}/build -G ${GENERATOR}
-    -DCMAKE_PREFIX_PATH=${WORK_DIR}/install -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_PREFIX_PATH=${WORK_DIR}/install -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${COMPILER}
     # -O1: the test checks the installed package, not the optimiser, and its one file compiles faster so.
     "-DCMAKE_CXX_FLAGS_RELEASE=-O1 -DNDEBUG")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
