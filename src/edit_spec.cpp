@@ -209,12 +209,17 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("diffusion")) {
     const json& d = edit["diffusion"];
-    check_keys(d, {"samples", "origin"}, file + ": diffusion");
+    check_keys(d, {"samples", "origin", "turn"}, file + ": diffusion");
     if(d.contains("samples")) settings.diffusion_samples = unsigned(whole(d["samples"], file + ": diffusion.samples"));
     if(d.contains("origin")) {
       if(d["origin"] == "own") settings.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
       else if(d["origin"] == "nearest") settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
       else throw Cli_error(file + ": diffusion.origin must be \"own\" or \"nearest\"");
+    }
+    if(d.contains("turn")) {
+      if(d["turn"] == "fitted") settings.diffusion_turn = CGAL_ext::Sample_turn::fitted;
+      else if(d["turn"] == "frames") settings.diffusion_turn = CGAL_ext::Sample_turn::frames;
+      else throw Cli_error(file + ": diffusion.turn must be \"fitted\" or \"frames\"");
     }
   }
   if(edit.contains("simplification")) {

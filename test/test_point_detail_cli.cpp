@@ -593,7 +593,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
     edit << R"({"roi": ["box:-2,-2,0,2,2,2"],
                "handles": [{"select": ["sphere:0,0,1,0.25"], "translation": [0.1, 0, 0.2],
                             "rotation": {"axis": [0, 1, 0], "degrees": 25}, "pivot": [0, 0, 1]}],
-               "filter": {"order": "cubic", "lambda": 0.8, "mu": 1.6}, "diffusion": {"origin": "nearest"}})";
+               "filter": {"order": "cubic", "lambda": 0.8, "mu": 1.6}, "diffusion": {"origin": "nearest", "turn": "frames"}})";
   }
   const Program_run r = run("edit -i " + in + " -o " + path("out.ply") + " --edit " + path("edit.json") + " --png " +
                             path("out.png") + " --report " + path("out.json"));
@@ -608,6 +608,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   // The same edit through the library.
   CGAL_ext::Detail_preserving_deformation_settings settings(CGAL_ext::Detail_filter{CGAL_ext::Detail_order::cubic, 0.8, 1.6});
   settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
+  settings.diffusion_turn = CGAL_ext::Sample_turn::frames;
   std::size_t roi = 0, handles = 0, ssps = 0, roi_ssps = 0;
   auto library_edit = [&](const CGAL_ext::Detail_preserving_deformation_settings& s) {
     CGAL::Point_set_3<Point> points = input;

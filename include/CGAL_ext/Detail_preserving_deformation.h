@@ -616,16 +616,23 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   if(!m_preprocessed)
     throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
   const auto start = std::chrono::steady_clock::now();
-  // Each region sample point turns by its deformed frame against its original one. A sample point whose
-  // frame neighbourhood did not move and that was not turned keeps the identity exactly, so unchanged parts
-  // stay bit for bit; fixed sample points keep their frames (doc/editing.md, "The paper's encoding and ours").
+  // Each region sample point turns by the best rotation of its neighbourhood or by its deformed frame against
+  // its original one (settings.diffusion_turn). A sample point whose neighbourhood did not move (and, with
+  // frames, that was not turned) keeps the identity exactly, so unchanged parts stay bit for bit; fixed sample
+  // points keep theirs (doc/editing.md, "Sample point turns").
   std::vector<Eigen::Matrix3d>& rotation = m_group_rotations; // sized by preprocess(): no allocation per drag
   for(std::size_t g = 0; g < m_transforms.size(); ++g) rotation[g] = m_transforms[g].rotation.toRotationMatrix();
   const bool exact_handles = !m_handle_rows.empty();
+  const bool rigid_rotations = m_settings.rotations == Detail_rotation::as_rigid_as_possible && m_has_rigid_rotations;
   for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(m_system.roi[r]);
     if(exact_handles && m_sample_label[s] >= first_handle_label) { // moved rigidly by its group, exactly
       m_sample_rotation[s] = rotation[std::size_t(m_sample_label[s] - first_handle_label)];
+      return;
+    }
+    if(m_settings.diffusion_turn == Sample_turn::fitted) {
+      // As rigid as possible, the last local step fitted these very rotations to the deformed sample points.
+      m_sample_rotation[s] = rigid_rotations ? m_propagated[s] : fitted_rotation(m_samples, m_deformed_samples, m_system.graph, s);
       return;
     }
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));

@@ -30,23 +30,31 @@ Matrix3 best_rotation(const Matrix3& covariance)
   return v * svd.matrixU().transpose();
 }
 
-/// The local step of as-rigid-as-possible editing: for each of the sample points `rows`, the best rotation of
-/// the edges to its graph neighbours from `rest` to `deformed` (uniform weights), written to `rotations[s]`.
-/// A sample point whose neighbourhood did not move gets the identity exactly, so unmoved parts stay exact.
+/// The best rotation of the edges from sample point `s` to its graph neighbours, from `rest` to `deformed`
+/// (uniform weights). A sample point whose neighbourhood did not move gets the identity exactly, so unmoved
+/// parts stay exact. (A template for the reason `best_rotation` is one.)
+template <typename Positions>
+Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s)
+{
+  const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
+  bool moved = p != q;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+    moved = moved || rest.row(*j) != deformed.row(*j);
+    covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
+  }
+  return moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
+}
+
+/// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`,
+/// written to `rotations[s]`.
 template <typename ConcurrencyTag>
 void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed, const Neighbor_graph& graph,
                                 const std::vector<int>& rows, std::vector<Eigen::Matrix3d>& rotations)
 {
   for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(rows[r]);
-    const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
-    bool moved = p != q;
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
-      moved = moved || rest.row(*j) != deformed.row(*j);
-      covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
-    }
-    rotations[s] = moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
+    rotations[s] = fitted_rotation(rest, deformed, graph, s);
   });
 }
 
