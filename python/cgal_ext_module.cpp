@@ -511,6 +511,17 @@ private:
       } else if(key == "target_count") s.simplification.target_count = as_count(value.cast<long long>(), "target_count");
       else if(key == "max_cluster_size") s.simplification.max_cluster_size = as_count(value.cast<long long>(), "max_cluster_size");
       else if(key == "diffusion_samples") s.diffusion_samples = as_count(value.cast<long long>(), "diffusion_samples");
+      else if(key == "diffusion_origin") {
+        const std::string o = value.cast<std::string>();
+        if(o == "own") s.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
+        else if(o == "nearest") s.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
+        else throw py::value_error("diffusion_origin must be \"own\" or \"nearest\", not \"" + o + "\"");
+      } else if(key == "diffusion_turn") {
+        const std::string t = value.cast<std::string>();
+        if(t == "fitted") s.diffusion_turn = CGAL_ext::Sample_turn::fitted;
+        else if(t == "frames") s.diffusion_turn = CGAL_ext::Sample_turn::frames;
+        else throw py::value_error("diffusion_turn must be \"fitted\" or \"frames\", not \"" + t + "\"");
+      }
       else throw py::value_error("unknown setting '" + key + "' (see help(cgal_ext.Deformation))");
     }
     s.validate();
@@ -566,7 +577,8 @@ PYBIND11_MODULE(cgal_ext, m)
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
                           "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, strength "
-                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples.")
+                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, diffusion_origin "
+                          "('own', 'nearest'), diffusion_turn ('fitted', 'frames').")
     .def(py::init<const py::object&, const py::object&, const py::kwargs&>(), "points"_a, "normals"_a = py::none())
     .def("insert_roi", &Deformation::insert_roi, "indices"_a)
     .def("create_handle_group", &Deformation::create_handle_group, "indices"_a)

@@ -93,7 +93,11 @@ def test_upsampling_is_the_programs(sphere, tmp_path):
     assert_close(added_normals, normals_of(out)[new])
 
 
-def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path):
+@pytest.mark.parametrize("options, settings", [
+    ((), {}),
+    (("--diffusion-turn", "frames", "--diffusion-origin", "nearest"), {"diffusion_turn": "frames", "diffusion_origin": "nearest"}),
+])
+def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, settings):
     points, normals = sphere
     status = np.where(points[:, 2] > 0.8, 2, np.where(points[:, 2] > 0.0, 1, 0))
     angle = np.radians(20)
@@ -102,10 +106,10 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path):
     (tmp_path / "e.sel").write_text("\n".join(map(str, status)) + "\n")
     (tmp_path / "e.def").write_text("\n".join(" ".join("%.17g" % v for v in row)
                                               for row in np.vstack([np.column_stack([R, t]), [0, 0, 0, 1]])) + "\n")
-    run_program("edit", "-i", sphere_file, "-o", tmp_path / "edited.ply", "--sel", tmp_path / "e.sel", "--def", tmp_path / "e.def")
+    run_program("edit", "-i", sphere_file, "-o", tmp_path / "edited.ply", "--sel", tmp_path / "e.sel", "--def", tmp_path / "e.def", *options)
     out = read_ply(tmp_path / "edited.ply")
 
-    deformation = cgal_ext.Deformation(points, normals)
+    deformation = cgal_ext.Deformation(points, normals, **settings)
     deformation.insert_roi(np.flatnonzero(status > 0))
     group = deformation.create_handle_group(np.flatnonzero(status == 2))
     assert deformation.preprocess()
@@ -145,6 +149,8 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path):
     (lambda p, n: cgal_ext.estimate_mean_curvature(p, n, k=3), ValueError, "at least 5"),
     (lambda p, n: cgal_ext.upsample_point_set(p, None), ValueError, "normals are required"),
     (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), ValueError, "unknown setting 'rotation'"),
+    (lambda p, n: cgal_ext.Deformation(p, n, diffusion_turn="twisted"), ValueError, "diffusion_turn must be"),
+    (lambda p, n: cgal_ext.Deformation(p, n, diffusion_origin="far"), ValueError, "diffusion_origin must be"),
 ])
 def test_bad_input_is_a_value_error_naming_it(sphere, call, error, needle):
     points, normals = sphere
