@@ -469,11 +469,13 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   if(!progress.report(0.6)) return false;
 
   build_strength_field();
-  m_frame_builder.setup(m_samples, m_sample_normals, m_system.graph);
-  m_frames.resize(count);
-  for_range<ConcurrencyTag>(0, count, [&](std::size_t s) {
-    m_frames[s] = m_frame_builder.frame(m_samples, s, m_sample_normals.row(Eigen::Index(s)).transpose());
-  });
+  if(m_settings.diffusion_turn == Sample_turn::frames) { // the fitted turns need no frames
+    m_frame_builder.setup(m_samples, m_sample_normals, m_system.graph);
+    m_frames.resize(count);
+    for_range<ConcurrencyTag>(0, count, [&](std::size_t s) {
+      m_frames[s] = m_frame_builder.frame(m_samples, s, m_sample_normals.row(Eigen::Index(s)).transpose());
+    });
+  }
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
                                            std::min<std::size_t>(m_settings.diffusion_samples, count));
   // Points carried by fixed sample points only never move: each drag skips them.
