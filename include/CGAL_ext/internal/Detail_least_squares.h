@@ -384,7 +384,7 @@ try {
 
   const double alpha = settings.detail_weight;
   const std::size_t n = std::size_t(m_A.cols());
-  if(settings.solver == Linear_solver::conjugate_gradient) {
+  if(settings.solver == Linear_solver::conjugate_gradient || m_preconditioned) {
     // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
     m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));
     for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
@@ -394,6 +394,8 @@ try {
       if(!(m_diagonal(j) > 0))
         throw Numerical_failure("detail least squares: point " + std::to_string(region_row(std::size_t(j))) +
                                 " of the region appears in no equation; the normal matrix is singular");
+  }
+  if(settings.solver == Linear_solver::conjugate_gradient) {
     m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
     m_statistics.assembly_seconds = seconds_since(start);
     m_factored = true;
@@ -493,7 +495,8 @@ try {
   if(m_preconditioned) // the factor is the preconditioner's, and nothing is refined against it
     m_statistics.method = std::string("conjugate gradients on N, preconditioned by the ") +
                           (m_main ? "CHOLMOD supernodal LL^T" : "Eigen SimplicialLDLT") +
-                          " of the linear order's normal matrix + 1e-12 I" + order_name;
+                          " of the linear order's normal matrix + 1e-12 I" + order_name +
+                          (settings.preconditioner_diagonal_weight > 0 ? ", plus Jacobi on N" : "");
   m_statistics.factor_seconds = seconds_since(factor_start);
   m_factored = true;
 } catch(const std::bad_alloc&) {
@@ -520,7 +523,15 @@ try {
         return (r.array().colwise() * inverse_diagonal).matrix();
       });
     } else if(m_preconditioned) {
-      conjugate_gradients<ConcurrencyTag>(b, b_norm, u, [&](const Matrix_n3& r) -> Matrix_n3 { return factor_solve(r); });
+      // B^-1 + w D^-1: the factor of the linear order B carries the smooth displacements, Jacobi on N the
+      // roughest, where B's response is far above N's (Least_squares_settings::preconditioner_diagonal_weight).
+      const double weight = m_settings.preconditioner_diagonal_weight;
+      const Eigen::ArrayXd weighted_inverse_diagonal = weight * m_diagonal.array().inverse();
+      conjugate_gradients<ConcurrencyTag>(b, b_norm, u, [&](const Matrix_n3& r) -> Matrix_n3 {
+        Matrix_n3 z = factor_solve(r);
+        if(weight > 0) z += (r.array().colwise() * weighted_inverse_diagonal).matrix();
+        return z;
+      });
     } else
       refined_cholesky_solve<ConcurrencyTag>(b, b_norm, u);
   }
