@@ -32,14 +32,15 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   if(!std::isfinite(s)) throw Invalid_input(std::string(who) + ": the enhancement factor s must be finite");
   settings.validate();
 
-  Region region = make_region<ConcurrencyTag>(points, point_map, k, roi_indices, who);
+  // A part of the model: only its surroundings shape its base surface, and only they are sorted spatially.
+  const bool partial = roi_indices != nullptr;
+  Region region = make_region<ConcurrencyTag>(points, point_map, k, roi_indices, who, !partial);
   Detail_manipulation_result result;
   std::vector<int> anchors_local =
     region_anchors(points, static_cast<const std::vector<int>*>(nullptr), np, region, result.default_anchors, who);
-  // A small region of a large model: only its surroundings shape its base surface (the anchors' local indices
-  // stay valid: the region keeps its order).
-  region = region_surroundings<ConcurrencyTag>(std::move(region), k, settings.flow_margin,
-                                               std::max<std::size_t>(k, default_normal_neighbors) + 1);
+  if(partial)
+    region = region_surroundings<ConcurrencyTag>(region, k, settings.flow_margin,
+                                                 std::max<std::size_t>(k, default_normal_neighbors) + 1, anchors_local, who);
   const Spatial_point_cloud& cloud = region.cloud;
   const std::vector<int>& roi = region.roi;
   const std::vector<char>& in_roi = region.in_roi;

@@ -37,13 +37,24 @@ struct Region
   std::vector<char> in_roi; ///< per cloud row
 };
 
-/// Copies and checks the points and `k`, and places the region (`roi_indices`, or every point when null).
+/// Copies and checks the points and `k`, and places the region (`roi_indices`, or every point when null). The
+/// cloud is in spatial order, or with `spatial_order` false in the caller's order, for `region_surroundings`,
+/// which sorts only the points it keeps.
 template <typename ConcurrencyTag, typename PointRange, typename PointMap, typename IndexRange>
 Region make_region(const PointRange& points, PointMap point_map, unsigned int k, const IndexRange* roi_indices,
-                   const char* who)
+                   const char* who, bool spatial_order = true)
 {
   Region region;
-  region.cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
+  if(spatial_order) {
+    region.cloud = make_spatial_point_cloud<ConcurrencyTag>(points, point_map, who);
+  } else {
+    const std::vector<CGAL::Simple_cartesian<double>::Point_3> copy = copy_points(points, point_map, who);
+    check_spans_a_surface(copy, who);
+    region.cloud.positions.resize(Eigen::Index(copy.size()), 3);
+    for(std::size_t i = 0; i < copy.size(); ++i) region.cloud.positions.row(Eigen::Index(i)) << copy[i].x(), copy[i].y(), copy[i].z();
+    region.cloud.input_index.resize(copy.size());
+    std::iota(region.cloud.input_index.begin(), region.cloud.input_index.end(), 0);
+  }
   check_neighbor_count(k, region.cloud.size(), who);
   region.row_of = region.cloud.spatial_index();
   if(roi_indices) {
@@ -58,16 +69,62 @@ Region make_region(const PointRange& points, PointMap point_map, unsigned int k,
   return region;
 }
 
-/// The region among the points near it only: those within `margin` neighbourhood radii of a region point
-/// (the radius: the median distance of a region point to its k-th nearest region point), in the cloud's
-/// order, so that a small region of a large model costs what its surroundings cost. The region keeps its
-/// points in the same order, so local anchor indices stay valid. Returns `region` itself when the
-/// surroundings would hold most of the cloud, or too few points for `min_points`.
+/// The region restricted to the cloud rows `kept`, which hold every region row, in that order. `anchors_local`
+/// (indices into the region's rows) follow.
+inline Region ordered_subregion(const Region& region, const std::vector<int>& kept, std::vector<int>& anchors_local)
+{
+  Region local;
+  local.cloud.positions.resize(Eigen::Index(kept.size()), 3);
+  local.cloud.input_index.resize(kept.size());
+  local.row_of.assign(region.row_of.size(), -1);
+  local.in_roi.assign(kept.size(), 0);
+  for(std::size_t s = 0; s < kept.size(); ++s) {
+    const std::size_t row = std::size_t(kept[s]);
+    local.cloud.positions.row(Eigen::Index(s)) = region.cloud.positions.row(Eigen::Index(row));
+    local.cloud.input_index[s] = region.cloud.input_index[row];
+    local.row_of[std::size_t(local.cloud.input_index[s])] = int(s);
+    if(region.in_roi[row]) {
+      local.roi.push_back(int(s));
+      local.in_roi[s] = 1;
+    }
+  }
+  for(int& a : anchors_local) {
+    const int row = local.row_of[std::size_t(region.cloud.input_index[std::size_t(region.roi[std::size_t(a)])])];
+    a = int(std::lower_bound(local.roi.begin(), local.roi.end(), row) - local.roi.begin());
+  }
+  return local;
+}
+
+/// The cloud rows `rows` sorted along a Hilbert curve (the cloud's copies of them checked to span a surface).
 template <typename ConcurrencyTag>
-Region region_surroundings(Region region, std::size_t k, double margin, std::size_t min_points)
+std::vector<int> spatially_sorted_rows(const Matrix_n3& positions, const std::vector<int>& rows, const char* who)
+{
+  std::vector<CGAL::Simple_cartesian<double>::Point_3> copy;
+  copy.reserve(rows.size());
+  for(int row : rows) copy.emplace_back(positions(row, 0), positions(row, 1), positions(row, 2));
+  const std::vector<int> order = sort_spatially<ConcurrencyTag>(copy, who).input_index;
+  std::vector<int> sorted(rows.size());
+  for(std::size_t s = 0; s < rows.size(); ++s) sorted[s] = rows[std::size_t(order[s])];
+  return sorted;
+}
+
+/// The region among the points near it only: those within `margin` neighbourhood radii of a region point
+/// (the radius: the median distance of a region point to its k-th nearest region point), in spatial order, so
+/// that a small region of a large model costs what its surroundings cost. The whole cloud, in spatial order,
+/// when the surroundings would hold most of it, or too few points for `min_points`. `region` may come in any
+/// order (make_region's caller order: only the points near the region get sorted); `anchors_local` follow.
+template <typename ConcurrencyTag>
+Region region_surroundings(const Region& region, std::size_t k, double margin, std::size_t min_points,
+                           std::vector<int>& anchors_local, const char* who)
 {
   const std::size_t n = region.cloud.size(), m = region.roi.size();
-  if(!(margin > 0) || m == n || m <= k) return region;
+  auto whole_cloud = [&] {
+    std::vector<int> everything(n);
+    std::iota(everything.begin(), everything.end(), 0);
+    return ordered_subregion(region, spatially_sorted_rows<ConcurrencyTag>(region.cloud.positions, everything, who),
+                             anchors_local);
+  };
+  if(!(margin > 0) || m == n || m <= k) return whole_cloud();
   Matrix_n3 roi_positions(Eigen::Index(m), 3);
   for(std::size_t r = 0; r < m; ++r) roi_positions.row(Eigen::Index(r)) = region.cloud.positions.row(region.roi[r]);
   // The neighbourhood radius, from up to 2,000 of the region's points.
@@ -80,10 +137,11 @@ Region region_surroundings(Region region, std::size_t k, double margin, std::siz
     radii[q] = (roi_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm();
   std::nth_element(radii.begin(), radii.begin() + std::ptrdiff_t(radii.size() / 2), radii.end());
   const double reach = margin * radii[radii.size() / 2];
-  if(!(reach > 0) || !std::isfinite(reach)) return region;
+  if(!(reach > 0) || !std::isfinite(reach)) return whole_cloud();
 
-  // Only the points in the region's bounding box grown by the reach can be that close: the others are not
-  // searched (on a region of a tenth of a large model, most of the points).
+  // Only the points in the region's bounding box grown by the reach can be that close: the others are neither
+  // sorted nor searched (on a region of a tenth of a large model, most of the points). The candidates are
+  // sorted first, so that the searches run in spatial order and the points kept come out in it.
   const Eigen::RowVector3d low = roi_positions.colwise().minCoeff().array() - reach;
   const Eigen::RowVector3d high = roi_positions.colwise().maxCoeff().array() + reach;
   std::vector<int> candidates;
@@ -91,31 +149,23 @@ Region region_surroundings(Region region, std::size_t k, double margin, std::siz
     const auto p = region.cloud.positions.row(Eigen::Index(i));
     if((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) candidates.push_back(int(i));
   }
+  candidates = spatially_sorted_rows<ConcurrencyTag>(region.cloud.positions, candidates, who);
   Matrix_n3 candidate_positions(Eigen::Index(candidates.size()), 3);
-  for(std::size_t c = 0; c < candidates.size(); ++c)
+  std::vector<int> sorted_roi_rows;
+  for(std::size_t c = 0; c < candidates.size(); ++c) {
     candidate_positions.row(Eigen::Index(c)) = region.cloud.positions.row(candidates[c]);
-  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(roi_positions, candidate_positions, 1);
+    if(region.in_roi[std::size_t(candidates[c])]) sorted_roi_rows.push_back(candidates[c]);
+  }
+  Matrix_n3 sorted_roi_positions(Eigen::Index(sorted_roi_rows.size()), 3);
+  for(std::size_t r = 0; r < sorted_roi_rows.size(); ++r)
+    sorted_roi_positions.row(Eigen::Index(r)) = region.cloud.positions.row(sorted_roi_rows[r]);
+  const Neighbor_graph nearest = k_nearest_samples<ConcurrencyTag>(sorted_roi_positions, candidate_positions, 1);
   std::vector<int> kept;
   for(std::size_t c = 0; c < candidates.size(); ++c)
-    if((candidate_positions.row(Eigen::Index(c)) - roi_positions.row(*nearest.begin(c))).squaredNorm() <= reach * reach)
+    if((candidate_positions.row(Eigen::Index(c)) - sorted_roi_positions.row(*nearest.begin(c))).squaredNorm() <= reach * reach)
       kept.push_back(candidates[c]);
-  if(4 * kept.size() > 3 * n || kept.size() < min_points) return region;
-
-  Region local;
-  local.cloud.positions.resize(Eigen::Index(kept.size()), 3);
-  local.cloud.input_index.resize(kept.size());
-  local.row_of.assign(region.row_of.size(), -1);
-  local.in_roi.assign(kept.size(), 0);
-  for(std::size_t s = 0; s < kept.size(); ++s) {
-    local.cloud.positions.row(Eigen::Index(s)) = region.cloud.positions.row(kept[s]);
-    local.cloud.input_index[s] = region.cloud.input_index[std::size_t(kept[s])];
-    local.row_of[std::size_t(local.cloud.input_index[s])] = int(s);
-    if(region.in_roi[std::size_t(kept[s])]) {
-      local.roi.push_back(int(s));
-      local.in_roi[s] = 1;
-    }
-  }
-  return local;
+  if(4 * kept.size() > 3 * n || kept.size() < min_points) return whole_cloud();
+  return ordered_subregion(region, kept, anchors_local);
 }
 
 /// The anchors' positions in `roi` (local indices); throws if one is not in the region.
