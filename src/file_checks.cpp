@@ -150,7 +150,7 @@ std::uint64_t ply_scalar_size(const std::string& type)
 /// its elements (binary: their records, with empty lists; ASCII: two characters per value). CGAL 5.5's reader
 /// does not check the header: a property before any element made it read before its element array (found by
 /// fuzz/fuzz_point_reader), so a malformed header is refused here first.
-Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std::string& name)
+Announced ply_announced(std::istream& in, const std::string& name)
 {
   Announced a;
   std::string line, format;
@@ -217,7 +217,7 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
       if(!same_float_type("x", "y", "z")) fail("the vertices need x, y and z properties, all float or all double");
       if((vertex_types.count("nx") || vertex_types.count("ny") || vertex_types.count("nz")) && !same_float_type("nx", "ny", "nz"))
         fail("the normals need nx, ny and nz properties, all float or all double");
-      header_bytes = a.header_bytes = std::uint64_t(in.tellg());
+      a.header_bytes = std::uint64_t(in.tellg());
       const std::vector<std::string> positions{"x", "y", "z"}, oriented{"x", "y", "z", "nx", "ny", "nz"};
       a.plain_vertices = format == "binary_little_endian" && elements.size() == 1 && elements[0].name == "vertex" &&
                          (vertex_names == positions || (vertex_names == oriented && same_float_type("x", "nx", "nz")));
@@ -244,15 +244,14 @@ Announced ply_announced(std::istream& in, std::uint64_t& header_bytes, const std
 Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
 {
   std::ifstream in(path, std::ios::binary);
-  std::uint64_t header_bytes = 0;
-  const Announced a = ply_announced(in, header_bytes, path.string());
+  const Announced a = ply_announced(in, path.string());
   check_memory_for(path, a.vertices, bytes_per_point);
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
-  if(!ec && size >= header_bytes && size - header_bytes < a.smallest_bytes)
+  if(!ec && size >= a.header_bytes && size - a.header_bytes < a.smallest_bytes)
     throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
                     std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
-                    " bytes, the file holds " + std::to_string(size - header_bytes) + " after its header)");
+                    " bytes, the file holds " + std::to_string(size - a.header_bytes) + " after its header)");
   return a;
 }
 

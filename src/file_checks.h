@@ -39,7 +39,7 @@ struct Announced
   bool plain_vertices = false;
   bool plain_normals = false;       ///< the plain vertices carry nx ny nz
   std::uint64_t plain_value_bytes = 0; ///< 4 (float) or 8 (double)
-  std::uint64_t header_bytes = 0;
+  std::uint64_t header_bytes = 0;  ///< where the data starts
 };
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
