@@ -148,6 +148,39 @@ TEST(EnhanceGeometricDetails, ASmallRegionOfALargeModelNeedsOnlyItsSurroundings)
       ASSERT_EQ(local[i], sheet.points[i]);
     }
   }
+
+  // Given anchors (a stripe across the disk) follow the region into its sorted surroundings: the result agrees
+  // with the whole model's computation under the same anchors, the stripe barely moves, and the anchors matter.
+  std::vector<char> anchored(sheet.points.size(), 0);
+  for(std::size_t i : disk) anchored[i] = std::abs(sheet.points[i].x()) < 2 ? 1 : 0;
+  const auto is_anchor = boost::make_function_property_map<std::size_t, bool>([&](std::size_t i) { return anchored[i] != 0; });
+  Detail_enhancement_settings margin_40;
+  margin_40.flow_margin = 40;
+  std::vector<Point> anchored_reference = sheet.points, anchored_local = sheet.points;
+  ASSERT_TRUE(enhance_geometric_details(all, 10, disk, 2.0, whole_model, np(anchored_reference).point_is_constrained_map(is_anchor)));
+  const auto r2 = enhance_geometric_details(all, 10, disk, 2.0, margin_40, np(anchored_local).point_is_constrained_map(is_anchor));
+  ASSERT_TRUE(r2);
+  EXPECT_FALSE(r2.default_anchors);
+  EXPECT_LT(r2.computed_points, sheet.points.size() / 2);
+  double anchored_worst = 0, from_default_anchors = 0, stripe = 0, stripe_unanchored = 0;
+  std::size_t stripe_count = 0;
+  for(std::size_t i : disk) {
+    anchored_worst = std::max(anchored_worst, std::sqrt(CGAL::squared_distance(anchored_local[i], anchored_reference[i])));
+    from_default_anchors = std::max(from_default_anchors, std::sqrt(CGAL::squared_distance(anchored_reference[i], reference[i])));
+    if(anchored[i]) {
+      stripe += CGAL::squared_distance(anchored_local[i], sheet.points[i]);
+      stripe_unanchored += CGAL::squared_distance(reference[i], sheet.points[i]);
+      ++stripe_count;
+    }
+  }
+  stripe = std::sqrt(stripe / double(stripe_count));
+  stripe_unanchored = std::sqrt(stripe_unanchored / double(stripe_count));
+  std::printf("[ enhance ] given anchors: %.2e of the displacement RMS from the whole model's; the stripe moves %.2f "
+              "times what it moves unanchored; %.2f of the RMS from the border-anchored result\n", anchored_worst / rms,
+              stripe / stripe_unanchored, from_default_anchors / rms);
+  EXPECT_LT(anchored_worst, 1e-5 * rms);
+  EXPECT_LT(stripe, 0.75 * stripe_unanchored);
+  EXPECT_GT(from_default_anchors, 0.1 * rms);
 }
 
 TEST(EnhanceGeometricDetails, BadInputIsAClearError)
