@@ -123,6 +123,11 @@ protected:
 TEST_F(Determinism, Details) { check("details", "details -i " + scan + " -o OUT --order cubic"); }
 TEST_F(Determinism, Scale) { check("scale", "scale -i " + scan + " -o OUT -s 2.5 --order quadric --roi " + roi()); }
 TEST_F(Determinism, Enhance) { check("enhance", "enhance -i " + scan + " -o OUT -s 1.5"); }
+TEST_F(Determinism, EnhanceRegion)
+{
+  // The base surface's flow runs while the region's system is factored.
+  check("enhance_region", "enhance -i " + scan + " -o OUT -s 1.5 --roi " + roi());
+}
 TEST_F(Determinism, Curvature) { check("curvature", "curvature -i " + scan + " -o OUT"); }
 TEST_F(Determinism, Simplify) { check("simplify", "simplify -i " + scan + " -o OUT"); }
 TEST_F(Determinism, Edit) { check("edit", "edit -i " + scan + " -o OUT --upsample --edit " + path("edit.json")); }

@@ -55,8 +55,9 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
   if(!detail_laplacian<ConcurrencyTag>(cloud, k, settings.details, normals, progress, K, who)) return {};
 
   // sigma = delta - delta~ with delta~ = f(K) p~, so delta' - delta = (s - 1) f(K) (p - p~).
-  const Matrix_n3 base = balanced_flow_base_surface<ConcurrencyTag>(K, cloud.positions, normals, settings.flow);
-  const Matrix_n3 detail_offset = cloud.positions - base;
+  const auto detail_offset = [&] {
+    return Matrix_n3(cloud.positions - balanced_flow_base_surface<ConcurrencyTag>(K, cloud.positions, normals, settings.flow));
+  };
   progress.stage(0.5, 1.0);
   if(!progress.report(0.0)) return {};
 
@@ -65,8 +66,9 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
     // detail equation exactly, so p~ + s (p - p~) is the least-squares solution for any anchors placed on it,
     // with zero residual. It is written directly; no system is assembled or factored (doc/detail_scaling.md,
     // "Anchors").
+    const Matrix_n3 displacement = (s - 1.0) * detail_offset();
     if(!progress.report(1.0)) return {};
-    write_region(points, point_map, cloud, roi, Matrix_n3((s - 1.0) * detail_offset));
+    write_region(points, point_map, cloud, roi, displacement);
     result.completed = true;
     result.region_size = roi.size();
     result.least_squares.unknowns = roi.size();
@@ -75,7 +77,10 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
     return result;
   }
   if(result.default_anchors && settings.anchors_border()) anchors_local = region_border(K, roi, in_roi);
-  const Matrix_n3 change = (s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, detail_offset);
+  // The base surface's flow runs while the system is factored.
+  const auto change = [&] {
+    return Matrix_n3((s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, detail_offset()));
+  };
   const Matrix_n3 anchor_displacement = Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3);
   return solve_and_write_region<ConcurrencyTag>(points, point_map, K, region, anchors_local, change, anchor_displacement,
                                                 settings, progress, result, who);

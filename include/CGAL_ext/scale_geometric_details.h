@@ -65,7 +65,9 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
   if(!progress.report(0.0)) return {};
 
   // delta' - delta = (s - 1) delta on the region; the anchors keep their positions.
-  const Matrix_n3 change = (s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, cloud.positions);
+  const auto change = [&] {
+    return Matrix_n3((s - 1.0) * apply_detail_filter<ConcurrencyTag>(K, settings.details.filter, cloud.positions));
+  };
   return solve_and_write_region<ConcurrencyTag>(points, point_map, K, region, anchors_local, change,
                                                 Matrix_n3::Zero(Eigen::Index(anchors_local.size()), 3), settings,
                                                 progress, result, who);

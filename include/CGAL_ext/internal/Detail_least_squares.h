@@ -435,34 +435,52 @@ try {
   m_statistics.assembly_seconds = seconds_since(start);
 
   const auto factor_start = Clock::now();
-  // Factor P N P^T in the geometric nested-dissection order, which the factorisations keep as given.
-  const std::vector<int> order = geometric_nested_dissection(upper, positions);
+#ifdef CGAL_EXT_USE_CHOLMOD
+  // The preconditioner's matrix (the linear order's, two rings) goes to AMD alone: on nine regions of five
+  // models the geometric dissection needed 1.8-3.5 times its flops (doc/detail_scaling.md, "The solver").
+  const bool amd_only = m_preconditioned;
+#else
+  const bool amd_only = false;
+#endif
+  // The lower triangle of P N P^T for an elimination order (the old row of each new one), which the
+  // factorisations keep as given.
+  const auto in_order = [&](const std::vector<int>& order) {
+    for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
+    Column_matrix twisted{Eigen::Index(n), Eigen::Index(n)};
+    twisted.template selfadjointView<Eigen::Lower>() =
+      Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
+                                      upper.innerIndexPtr(), upper.valuePtr())
+        .template selfadjointView<Eigen::Lower>()
+        .twistedBy(m_new_of);
+    return twisted;
+  };
   m_new_of.indices().resize(Eigen::Index(n));
-  for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
-  Column_matrix normal{Eigen::Index(n), Eigen::Index(n)};
-  normal.template selfadjointView<Eigen::Lower>() =
-    Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
-                                    upper.innerIndexPtr(), upper.valuePtr())
-      .template selfadjointView<Eigen::Lower>()
-      .twistedBy(m_new_of);
-  upper = Sparse_row_matrix();
+  Column_matrix normal;
+  if(amd_only) {
+    m_new_of.setIdentity();
+    normal = Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
+                                             upper.innerIndexPtr(), upper.valuePtr());
+  } else {
+    normal = in_order(geometric_nested_dissection(upper, positions));
+    upper = Sparse_row_matrix();
+  }
 #ifdef CGAL_EXT_USE_CHOLMOD
   m_main = std::make_unique<Main_factor>();
   cholmod_common& common = m_main->cholmod();
   common.print = 0; // a rounding-negative pivot is handled below, not printed
-  // The matrix comes in the geometric nested-dissection order (kept as given: NATURAL); CHOLMOD also tries
-  // AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 % fewer flops than AMD on a
+  // Unless AMD alone orders it, the matrix comes in the geometric nested-dissection order (kept as given:
+  // NATURAL); CHOLMOD also tries AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 % fewer flops than AMD on a
   // 40k-point quadric region of the bunny, AMD 2-4 times fewer on an edit's sample points and 1.5 times fewer
   // on a 100k-point region around the tip of the armadillo's arm (1.8e11 flops against 2.7e11; the halves of
   // a curved region cut across its longest extent meet along a long curve). One AMD analysis costs about 5 %
   // of such a factorisation (doc/detail_scaling.md, "The solver").
-  common.nmethods = 2;
-  common.method[0].ordering = CHOLMOD_NATURAL;
+  common.nmethods = amd_only ? 1 : 2;
+  common.method[0].ordering = amd_only ? CHOLMOD_AMD : CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
   // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
   m_main->analyzePattern(normal);
   check_cholmod("analysing the normal matrix");
-  const bool amd_order = common.selected == 1;
+  const bool amd_order = amd_only || common.selected == 1;
   // N + shift I, not N (N has a unit diagonal here): with the cubic order and no anchors, the region's smoothest
   // modes are almost free and N is singular to rounding, so LL^T of N itself can meet a non-positive pivot (and
   // Eigen's simplicial LDL^T, the other way, took 452 s against 16 s on 97k unknowns). The refinement solves
@@ -477,6 +495,7 @@ try {
     m_main.reset();
 #endif
   if(!m_main) {
+    if(amd_only) normal = in_order(geometric_nested_dissection(upper, positions)); // Eigen's factor keeps the order
     m_fallback = std::make_unique<Fallback_factor>(normal);
     if(m_fallback->info() != Eigen::Success)
       throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "

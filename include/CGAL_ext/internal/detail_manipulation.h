@@ -247,21 +247,38 @@ inline void check_pinned(const Sparse_row_matrix& K, const std::vector<int>& roi
                       "the least-squares system is singular; give anchors in that part or shrink the region");
 }
 
-/// The region's displacements for the detail change `detail_change` (rows of the whole cloud; only the
-/// region's are read) and the anchors' displacements.
+/// A region's least-squares system for a change of its details. The factor needs no right-hand side, so
+/// `solve_and_write_region` computes it while the caller computes the change (enhancement's base surface).
+class Region_system
+{
+public:
+  /// Builds the operator rows of the region `roi` (cloud rows) and its anchors and factors the system.
+  template <typename ConcurrencyTag>
+  void factor(const Sparse_row_matrix& K, const Matrix_n3& positions, const Detail_filter& filter,
+              const std::vector<int>& roi, const std::vector<int>& anchors_local, const Least_squares_settings& settings);
+
+  /// The region's displacements for the detail change `detail_change` (rows of the whole cloud; only the
+  /// region's are read) and the anchors' displacements.
+  template <typename ConcurrencyTag>
+  Matrix_n3 solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                  Least_squares_statistics& statistics);
+
+private:
+  Detail_least_squares m_system;
+  std::vector<int> m_roi;
+  double m_operator_seconds = 0;
+};
+
 template <typename ConcurrencyTag>
-Matrix_n3 solve_region_displacements(const Sparse_row_matrix& K, const Matrix_n3& positions, const Detail_filter& filter,
-                                     const std::vector<int>& roi, const std::vector<int>& anchors_local,
-                                     const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
-                                     const Least_squares_settings& settings, Least_squares_statistics& statistics)
+void Region_system::factor(const Sparse_row_matrix& K, const Matrix_n3& positions, const Detail_filter& filter,
+                           const std::vector<int>& roi, const std::vector<int>& anchors_local,
+                           const Least_squares_settings& settings)
 {
   const auto start = std::chrono::steady_clock::now();
+  m_roi = roi;
   Sparse_row_matrix A = detail_operator_rows<ConcurrencyTag>(K, filter, roi);
-  Matrix_n3 region_positions(Eigen::Index(roi.size()), 3), region_change(Eigen::Index(roi.size()), 3);
-  for(std::size_t r = 0; r < roi.size(); ++r) {
-    region_positions.row(Eigen::Index(r)) = positions.row(roi[r]);
-    region_change.row(Eigen::Index(r)) = detail_change.row(roi[r]);
-  }
+  Matrix_n3 region_positions(Eigen::Index(roi.size()), 3);
+  for(std::size_t r = 0; r < roi.size(); ++r) region_positions.row(Eigen::Index(r)) = positions.row(roi[r]);
   // A large quadric region: conjugate gradients preconditioned by the linear order, c1 K on the region, whose
   // response c1 k matches the quadric's c1 k + c2 k^2 at the smooth end (Least_squares_settings).
   Sparse_row_matrix B;
@@ -273,13 +290,20 @@ Matrix_n3 solve_region_displacements(const Sparse_row_matrix& K, const Matrix_n3
     linear.lambda = 1.0 / filter.coefficients().c1;
     B = detail_operator_rows<ConcurrencyTag>(K, linear, roi);
   }
-  const double operator_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  Detail_least_squares system;
-  system.factor<ConcurrencyTag>(std::move(A), anchors_local, region_positions, settings, false,
-                                preconditioned ? &B : nullptr);
-  Matrix_n3 u = system.solve<ConcurrencyTag>(region_change, anchor_displacement);
-  statistics = system.statistics();
-  statistics.assembly_seconds += operator_seconds;
+  m_operator_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m_system.factor<ConcurrencyTag>(std::move(A), anchors_local, region_positions, settings, false,
+                                  preconditioned ? &B : nullptr);
+}
+
+template <typename ConcurrencyTag>
+Matrix_n3 Region_system::solve(const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                               Least_squares_statistics& statistics)
+{
+  Matrix_n3 region_change(Eigen::Index(m_roi.size()), 3);
+  for(std::size_t r = 0; r < m_roi.size(); ++r) region_change.row(Eigen::Index(r)) = detail_change.row(m_roi[r]);
+  Matrix_n3 u = m_system.solve<ConcurrencyTag>(region_change, anchor_displacement);
+  statistics = m_system.statistics();
+  statistics.assembly_seconds += m_operator_seconds;
   return u;
 }
 
@@ -319,19 +343,27 @@ std::vector<int> region_anchors(const PointRange& points, const AnchorRange* anc
   return {};
 }
 
-/// The shared last steps of scaling and enhancement: check that the anchors pin the region, solve for its
-/// displacements and write them through the point map. `result` carries the anchor choice in and out.
-template <typename ConcurrencyTag, typename PointRange, typename PointMap>
+/// The shared last steps of scaling and enhancement: check that the anchors pin the region, factor its system
+/// while `detail_change()` computes the wanted change of the details (rows of the whole cloud), solve for the
+/// region's displacements and write them through the point map. `result` carries the anchor choice in and out.
+template <typename ConcurrencyTag, typename PointRange, typename PointMap, typename DetailChange>
 Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap point_map, const Sparse_row_matrix& K,
                                                   const Region& region, const std::vector<int>& anchors_local,
-                                                  const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
+                                                  const DetailChange& detail_change,
+                                                  const Matrix_n3& anchor_displacement,
                                                   const Detail_scaling_settings& settings, Progress& progress,
                                                   Detail_manipulation_result result, const char* who)
 {
   check_pinned(K, region.roi, region.in_roi, anchors_local, region.cloud.input_index, who);
-  const Matrix_n3 displacement = solve_region_displacements<ConcurrencyTag>(
-    K, region.cloud.positions, settings.details.filter, region.roi, anchors_local, detail_change, anchor_displacement,
-    settings.least_squares, result.least_squares);
+  Region_system system;
+  Matrix_n3 change;
+  run_concurrently<ConcurrencyTag>(
+    [&] {
+      system.factor<ConcurrencyTag>(K, region.cloud.positions, settings.details.filter, region.roi, anchors_local,
+                                    settings.least_squares);
+    },
+    [&] { change = detail_change(); });
+  const Matrix_n3 displacement = system.solve<ConcurrencyTag>(change, anchor_displacement, result.least_squares);
   if(!progress.report(1.0)) return {};
   write_region(points, point_map, region.cloud, region.roi, displacement);
   result.completed = true;
@@ -343,11 +375,10 @@ Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap p
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_DETAIL_MANIPULATION_INSTANCES(EXTERN, Tag) \
-  EXTERN template Matrix_n3 solve_region_displacements<Tag>(const Sparse_row_matrix&, const Matrix_n3&, \
-                                                            const Detail_filter&, const std::vector<int>&, \
-                                                            const std::vector<int>&, const Matrix_n3&, \
-                                                            const Matrix_n3&, const Least_squares_settings&, \
-                                                            Least_squares_statistics&);
+  EXTERN template void Region_system::factor<Tag>(const Sparse_row_matrix&, const Matrix_n3&, const Detail_filter&, \
+                                                  const std::vector<int>&, const std::vector<int>&, \
+                                                  const Least_squares_settings&); \
+  EXTERN template Matrix_n3 Region_system::solve<Tag>(const Matrix_n3&, const Matrix_n3&, Least_squares_statistics&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DETAIL_MANIPULATION_INSTANCES)
 
 } // namespace internal

@@ -14,6 +14,7 @@
 #ifdef CGAL_LINKED_WITH_TBB
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 #endif
 
 /*
@@ -105,6 +106,35 @@ void for_range(std::size_t begin, std::size_t end, const Body& body)
   }
 #endif
   for(std::size_t i = begin; i != end; ++i) body(i);
+}
+
+/// Runs `background()` and `foreground()` at the same time when ConcurrencyTag says so, else one after the
+/// other: `background` as a task that another thread takes, `foreground` on the calling thread (its parallel
+/// loops share whatever threads are free). For work that leaves a core idle, as CHOLMOD's factorisation does
+/// (doc/design.md, "A region of a large model"). Returns when both are done; an exception of either is
+/// rethrown, the foreground's first.
+template <typename ConcurrencyTag, typename Background, typename Foreground>
+void run_concurrently(const Background& background, const Foreground& foreground)
+{
+#ifdef CGAL_LINKED_WITH_TBB
+  if constexpr(is_parallel<ConcurrencyTag>()) {
+    tbb::task_group group;
+    group.run([&] { background(); });
+    try {
+      foreground();
+    } catch(...) {
+      try {
+        group.wait();
+      } catch(...) {
+      }
+      throw;
+    }
+    group.wait();
+    return;
+  }
+#endif
+  background();
+  foreground();
 }
 
 /// Runs `body(i)` for i in [0, n) in chunks, reporting progress after each chunk.
