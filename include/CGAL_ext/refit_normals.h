@@ -154,7 +154,10 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   const auto normal_map = NP_helper::get_normal_map(points, np);
   const internal::Matrix_n3 normals = internal::gather_normals(points, normal_map, surroundings, who);
 
-  // The moved points and their neighbours, as rows of the surroundings.
+  // The moved points and their neighbours, as rows of the surroundings; a moved point's neighbours are those
+  // already found.
+  std::vector<int> moved_of_row(surroundings.size(), -1);
+  for(std::size_t m = 0; m < moved_rows.size(); ++m) moved_of_row[std::size_t(moved_rows[m])] = int(m);
   std::vector<char> refit(surroundings.size(), 0);
   for(int row : moved_rows) refit[std::size_t(row)] = 1;
   for(int j : neighbors.indices) refit[std::size_t(j)] = 1;
@@ -168,8 +171,12 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     const Eigen::Vector3d p = surroundings.positions.row(row).transpose(), current = normals.row(row).transpose();
     thread_local std::vector<int> near;
     near.clear();
-    tree->nearest(internal::Position_tree::point(surroundings.positions, row), k,
-                  [&](int j, double) { near.push_back(j); });
+    if(moved_of_row[std::size_t(row)] >= 0)
+      near.assign(neighbors.begin(std::size_t(moved_of_row[std::size_t(row)])),
+                  neighbors.end(std::size_t(moved_of_row[std::size_t(row)])));
+    else
+      tree->nearest(internal::Position_tree::point(surroundings.positions, row), k,
+                    [&](int j, double) { near.push_back(j); });
     // The principal plane frames the fit: the old normal may be far from the new surface's (s = 0 on a bump).
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for(int j : near) mean += surroundings.positions.row(j).transpose();
