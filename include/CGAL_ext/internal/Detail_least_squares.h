@@ -469,11 +469,11 @@ try {
   cholmod_common& common = m_main->cholmod();
   common.print = 0; // a rounding-negative pivot is handled below, not printed
   // Unless AMD alone orders it, the matrix comes in the geometric nested-dissection order (kept as given:
-  // NATURAL); CHOLMOD also tries AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 % fewer flops than AMD on a
-  // 40k-point quadric region of the bunny, AMD 2-4 times fewer on an edit's sample points and 1.5 times fewer
-  // on a 100k-point region around the tip of the armadillo's arm (1.8e11 flops against 2.7e11; the halves of
-  // a curved region cut across its longest extent meet along a long curve). One AMD analysis costs about 5 %
-  // of such a factorisation (doc/detail_scaling.md, "The solver").
+  // NATURAL); CHOLMOD also tries AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 %
+  // fewer flops than AMD on a 40k-point quadric region of the bunny, AMD 2-4 times fewer on an edit's sample
+  // points and 1.5 times fewer on a 100k-point region around the tip of the armadillo's arm (1.8e11 flops
+  // against 2.7e11; the halves of a curved region cut across its longest extent meet along a long curve). One
+  // AMD analysis costs about 5 % of such a factorisation (doc/detail_scaling.md, "The solver").
   common.nmethods = amd_only ? 1 : 2;
   common.method[0].ordering = amd_only ? CHOLMOD_AMD : CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
