@@ -515,7 +515,7 @@ int run(int argc, char** argv)
 
   report.add("# Detail-preserving editing benchmark\n\n" + machine_facts());
   report.addf("- medians of %d runs (per drag: %d steps); default "
-      "settings (k = 10 on the SSPs, target 3,000 SSPs, mode-spread threshold 2, 4 diffusion samples, own-origin encoding)\n"
+      "settings (k = 10 on the SSPs, target 3,000 SSPs, mode-spread threshold 2, 6 diffusion samples, own-origin encoding)\n"
       "- edit of a scan: the region is every point within 40 %% of the bounding diagonal of the point farthest along +x, the "
       "handle those within 6 %%; the handle turns by 30 degrees about y and moves by 5 %% of the diagonal\n"
       "- editing the SSPs: operator rows, normal matrix, factorisation and the first solve (the paper's Table 1 column); "
