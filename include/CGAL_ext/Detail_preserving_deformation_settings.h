@@ -115,8 +115,8 @@ struct Detail_preserving_deformation_settings
   /// larger ones.
   unsigned int max_rigid_steps = 1000;
   /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1. More of them make the blend smoother
-  /// and keep the fine details better at the cost of the diffusion's time: 6 changes the region's details 20-30 %
-  /// less than 4 for 20-30 % more time; 8 a further 10-17 % less for as much more (doc/editing.md, "Seamless
+  /// and keep the fine details better at the cost of the diffusion's time: 6 changes the region's details 8-34 %
+  /// less than 4 for 20-30 % more time; 8 a further 4-17 % less for as much more (doc/editing.md, "Seamless
   /// diffusion").
   unsigned int diffusion_samples = 6;
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
