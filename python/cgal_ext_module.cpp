@@ -518,9 +518,10 @@ private:
         else throw py::value_error("diffusion_origin must be \"own\" or \"nearest\", not \"" + o + "\"");
       } else if(key == "diffusion_turn") {
         const std::string t = value.cast<std::string>();
-        if(t == "fitted") s.diffusion_turn = CGAL_ext::Sample_turn::fitted;
+        if(t == "affine") s.diffusion_turn = CGAL_ext::Sample_turn::affine;
+        else if(t == "fitted") s.diffusion_turn = CGAL_ext::Sample_turn::fitted;
         else if(t == "frames") s.diffusion_turn = CGAL_ext::Sample_turn::frames;
-        else throw py::value_error("diffusion_turn must be \"fitted\" or \"frames\", not \"" + t + "\"");
+        else throw py::value_error("diffusion_turn must be \"affine\", \"fitted\" or \"frames\", not \"" + t + "\"");
       }
       else throw py::value_error("unknown setting '" + key + "' (see help(cgal_ext.Deformation))");
     }
@@ -578,7 +579,7 @@ PYBIND11_MODULE(cgal_ext, m)
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
                           "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, strength "
                           "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, diffusion_origin "
-                          "('own', 'nearest'), diffusion_turn ('fitted', 'frames').")
+                          "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")
     .def(py::init<const py::object&, const py::object&, const py::kwargs&>(), "points"_a, "normals"_a = py::none())
     .def("insert_roi", &Deformation::insert_roi, "indices"_a)
     .def("create_handle_group", &Deformation::create_handle_group, "indices"_a)

@@ -54,7 +54,8 @@ struct Edit_command
     if(has("-k")) s.sample_neighbors = k;
     if(has("--strength")) s.strength_distance = strength == "geodesic" ? CGAL_ext::Strength_distance::geodesic : CGAL_ext::Strength_distance::euclidean;
     if(has("--diffusion-origin")) s.diffusion_origin = origin == "nearest" ? CGAL_ext::Diffusion_origin::nearest_sample : CGAL_ext::Diffusion_origin::own_sample;
-    if(has("--diffusion-turn")) s.diffusion_turn = turn == "frames" ? CGAL_ext::Sample_turn::frames : CGAL_ext::Sample_turn::fitted;
+    if(has("--diffusion-turn"))
+      s.diffusion_turn = turn == "frames" ? CGAL_ext::Sample_turn::frames : turn == "fitted" ? CGAL_ext::Sample_turn::fitted : CGAL_ext::Sample_turn::affine;
     if(has("--handle-weight")) s.handle_weight = handle_weight;
     if(has("--max-cluster-size")) s.simplification.max_cluster_size = max_cluster_size;
     if(has("--target")) s.simplification.target_count = target;
@@ -121,8 +122,8 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
                                ->check(CLI::IsMember({"euclidean", "geodesic"}));
   edit.given["--diffusion-origin"] = edit_app->add_option("--diffusion-origin", edit.origin, "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)")
                                        ->check(CLI::IsMember({"own", "nearest"}));
-  edit.given["--diffusion-turn"] = edit_app->add_option("--diffusion-turn", edit.turn, "fitted (each SSP's best rotation of its neighbourhood, default) or frames (the paper's local frames)")
-                                     ->check(CLI::IsMember({"fitted", "frames"}));
+  edit.given["--diffusion-turn"] = edit_app->add_option("--diffusion-turn", edit.turn, "affine (each SSP's best linear map of its neighbourhood, default), fitted (its best rotation) or frames (the paper's local frames)")
+                                     ->check(CLI::IsMember({"affine", "fitted", "frames"}));
   edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles");
   edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
   edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule (default 3000)");

@@ -217,9 +217,10 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
       else throw Cli_error(file + ": diffusion.origin must be \"own\" or \"nearest\"");
     }
     if(d.contains("turn")) {
-      if(d["turn"] == "fitted") settings.diffusion_turn = CGAL_ext::Sample_turn::fitted;
+      if(d["turn"] == "affine") settings.diffusion_turn = CGAL_ext::Sample_turn::affine;
+      else if(d["turn"] == "fitted") settings.diffusion_turn = CGAL_ext::Sample_turn::fitted;
       else if(d["turn"] == "frames") settings.diffusion_turn = CGAL_ext::Sample_turn::frames;
-      else throw Cli_error(file + ": diffusion.turn must be \"fitted\" or \"frames\"");
+      else throw Cli_error(file + ": diffusion.turn must be \"affine\", \"fitted\" or \"frames\"");
     }
   }
   if(edit.contains("simplification")) {

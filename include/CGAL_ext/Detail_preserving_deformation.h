@@ -246,7 +246,7 @@ public:
     m_deformed_points = m_cloud.positions;
     m_deformed_normals = m_normals;
     m_deformed_samples = m_samples;
-    std::fill(m_sample_rotation.begin(), m_sample_rotation.end(), Eigen::Matrix3d::Identity());
+    std::fill(m_sample_map.begin(), m_sample_map.end(), Eigen::Matrix3d::Identity());
     std::fill(m_propagated.begin(), m_propagated.end(), Eigen::Matrix3d::Identity());
     m_has_rigid_rotations = false;
     m_solved_transforms.assign(m_transforms.size(), Transform());
@@ -338,7 +338,8 @@ private:
   std::size_t m_requested_samples = 0;  // what the mode-spread rule asked for
   internal::Sample_system m_system; // graph, Laplacian, region indexing and factored system of the sample points
   std::vector<double> m_d1, m_strength; // per sample point and group
-  std::vector<Eigen::Matrix3d> m_propagated, m_sample_rotation, m_frames; // m_propagated: the details' R_i
+  std::vector<Eigen::Matrix3d> m_propagated, m_frames; // m_propagated: the details' R_i
+  std::vector<Eigen::Matrix3d> m_sample_map; // per sample point, the linear part of its motion (a rotation unless affine)
   bool m_has_rigid_rotations = false; // as-rigid-as-possible: m_propagated holds the last drag's rotations
   std::vector<Transform> m_solved_transforms;   // as-rigid-as-possible: the handles' transforms of the last drag
   Eigen::Vector3d m_handles_centre;             // centroid of the handles' sample points
@@ -501,7 +502,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   Eigen::AlignedBox3d region_box;
   for(int s : m_system.roi) region_box.extend(m_samples.row(s).transpose());
   m_region_size = region_box.diagonal().norm();
-  m_sample_rotation.assign(count, Eigen::Matrix3d::Identity());
+  m_sample_map.assign(count, Eigen::Matrix3d::Identity());
   m_deformed_samples = m_samples;
   m_detail_change.resize(Eigen::Index(m_system.roi.size()), 3);
   m_anchor_displacement.resize(Eigen::Index(m_system.anchors.size()), 3);
@@ -618,10 +619,10 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   if(!m_preprocessed)
     throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
   const auto start = std::chrono::steady_clock::now();
-  // Each region sample point turns by the best rotation of its neighbourhood or by its deformed frame against
-  // its original one (settings.diffusion_turn). A sample point whose neighbourhood did not move (and, with
-  // frames, that was not turned) keeps the identity exactly, so unchanged parts stay bit for bit; fixed sample
-  // points keep theirs (doc/editing.md, "Sample point turns").
+  // Each region sample point carries its points by the best linear map or rotation of its neighbourhood, or
+  // turns by its deformed frame against its original one (settings.diffusion_turn). A sample point whose
+  // neighbourhood did not move (and, with frames, that was not turned) keeps the identity exactly, so unchanged
+  // parts stay bit for bit; fixed sample points keep theirs (doc/editing.md, "Sample point turns").
   std::vector<Eigen::Matrix3d>& rotation = m_group_rotations; // sized by preprocess(): no allocation per drag
   for(std::size_t g = 0; g < m_transforms.size(); ++g) rotation[g] = m_transforms[g].rotation.toRotationMatrix();
   const bool exact_handles = !m_handle_rows.empty();
@@ -629,26 +630,30 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(m_system.roi[r]);
     if(exact_handles && m_sample_label[s] >= first_handle_label) { // moved rigidly by its group, exactly
-      m_sample_rotation[s] = rotation[std::size_t(m_sample_label[s] - first_handle_label)];
+      m_sample_map[s] = rotation[std::size_t(m_sample_label[s] - first_handle_label)];
       return;
     }
-    if(m_settings.diffusion_turn == Sample_turn::fitted) {
+    if(m_settings.diffusion_turn != Sample_turn::frames) {
       // As rigid as possible, the last local step fitted these very rotations to the deformed sample points.
-      m_sample_rotation[s] = rigid_rotations ? m_propagated[s] : fitted_rotation(m_samples, m_deformed_samples, m_system.graph, s);
+      const Eigen::Matrix3d fitted = rigid_rotations ? m_propagated[s] : fitted_rotation(m_samples, m_deformed_samples, m_system.graph, s);
+      // The fitted rotation is the identity exactly where the neighbourhood did not move: keep it so.
+      m_sample_map[s] = m_settings.diffusion_turn == Sample_turn::affine && !fitted.isIdentity(0)
+                          ? fitted_linear_map(m_samples, m_deformed_samples, m_system.graph, s, fitted)
+                          : fitted;
       return;
     }
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));
     for(const int* j = m_system.graph.begin(s); j != m_system.graph.end(s) && !moved; ++j)
       moved = m_deformed_samples.row(*j) != m_samples.row(*j);
     if(!moved) {
-      m_sample_rotation[s].setIdentity();
+      m_sample_map[s].setIdentity();
       return;
     }
     const Eigen::Vector3d hint = m_propagated[s] * m_sample_normals.row(Eigen::Index(s)).transpose();
-    m_sample_rotation[s] = m_frame_builder.frame(m_deformed_samples, s, hint) * m_frames[s].transpose();
+    m_sample_map[s] = m_frame_builder.frame(m_deformed_samples, s, hint) * m_frames[s].transpose();
   });
   m_stencil.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_samples, m_deformed_samples,
-                                           m_sample_rotation,
+                                           m_sample_map,
                                            m_settings.diffusion_origin == Diffusion_origin::nearest_sample
                                              ? Offset_origin::nearest_sample
                                              : Offset_origin::own_sample,

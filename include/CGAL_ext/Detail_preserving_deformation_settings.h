@@ -53,17 +53,22 @@ enum class Diffusion_origin
 /*!
   \ingroup PkgCGALExtRef
   How the turn of a sample point is measured when the deformation is diffused from the sample points to
-  every point (Miao et al. 2007, Sect. 6.2). Both give the identity exactly where nothing around the sample
-  point moved and the exact rotation where its neighbourhood moved rigidly.
+  every point (Miao et al. 2007, Sect. 6.2). All three give the identity exactly where nothing around the
+  sample point moved and the exact rotation where its neighbourhood moved rigidly.
 */
 enum class Sample_turn
 {
   frames, ///< the paper's: a local frame built the same way before and after the edit (the normal of a plane
           ///< fitted to the sample point and its graph neighbours, the first axis toward one reference
           ///< neighbour), turned by `F' F^T`; its twist about the normal hangs on that one neighbour
-  fitted  ///< the rotation that best maps the edges to the sample point's graph neighbours onto their deformed
+  fitted, ///< the rotation that best maps the edges to the sample point's graph neighbours onto their deformed
           ///< edges, in the least-squares sense (as the local step of `as_rigid_as_possible`): every neighbour
           ///< counts, which changes the details less (doc/editing.md, "Sample point turns")
+  affine  ///< the linear map (rotation and stretch) that best maps those edges onto their deformed edges, held
+          ///< to the fitted rotation along directions the edges do not span: where the edit stretches the
+          ///< surface, neighbouring sample points then agree on how the points between them move, and the
+          ///< blend adds no wrinkles (doc/editing.md, "Sample point turns"). Normals follow the blended map's
+          ///< cofactor, so they stay normal to the stretched surface
 };
 
 /*!
@@ -120,8 +125,8 @@ struct Detail_preserving_deformation_settings
   /// diffusion").
   unsigned int diffusion_samples = 6;
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
-  /// How each region sample point's turn is measured for the diffusion.
-  Sample_turn diffusion_turn = Sample_turn::fitted;
+  /// How each region sample point's turn (and, affine, its stretch) is measured for the diffusion.
+  Sample_turn diffusion_turn = Sample_turn::affine;
 
   Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
 

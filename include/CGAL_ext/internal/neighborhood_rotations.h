@@ -46,6 +46,29 @@ Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed
   return moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
 }
 
+/// The linear map `A` that best maps the edges `e_j` from sample point `s` to its graph neighbours onto their
+/// deformed edges `e'_j`, held to the neighbourhood's `rotation` where the edges do not span space:
+/// `min sum_j |A e_j - e'_j|^2 + mu |A - rotation|^2`, so `A = (sum_j e'_j e_j^T + mu R)(sum_j e_j e_j^T + mu I)^-1`,
+/// with `mu` a tenth of `sum_j |e_j|^2`: a flat neighbourhood leaves its normal direction to `R`, and a
+/// neighbourhood whose sample points the solve moved unevenly passes on less of that unevenness (doc/editing.md,
+/// "Sample point turns"). A neighbourhood moved rigidly gives that rotation. (A template for the reason
+/// `best_rotation` is one.)
+template <typename Positions>
+Eigen::Matrix3d fitted_linear_map(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
+                                  const Eigen::Matrix3d& rotation)
+{
+  const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), image = Eigen::Matrix3d::Zero();
+  for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+    const Eigen::RowVector3d e = rest.row(*j) - p;
+    spread += e.transpose() * e;
+    image += (deformed.row(*j) - q).transpose() * e;
+  }
+  const double mu = 0.1 * spread.trace();
+  if(!(mu > 0)) return rotation; // no edges, or all of length zero
+  return (image + mu * rotation) * (spread + mu * Eigen::Matrix3d::Identity()).inverse();
+}
+
 /// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`,
 /// written to `rotations[s]`.
 template <typename ConcurrencyTag>

@@ -110,22 +110,23 @@ public:
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m);
 
-  /// Moves every point by its sample points' motions: sample point j moves from `s_j` to `s'_j` and turns by
-  /// `rotation[j]` (its deformed frame times its original frame transposed), so the offset `p - o` seen from
-  /// the origin `o` becomes `R_j (p - o)` seen from `o'`; the results are blended by weight. Written as
-  /// displacements, `sum_j w_j ((s'_o - s_o) + (R_j - I)(p - o))`, so sample points with `R = I` and `s' = s`
-  /// contribute an exact zero and a point whose sample points all stayed keeps its position and normal bit
-  /// for bit. Normals turn by the blended rotation. Per point: one blend of 3x3 matrices, no allocation.
+  /// Moves every point by its sample points' motions: sample point j moves from `s_j` to `s'_j` and maps
+  /// offsets by `map[j]` (a rotation, or a rotation with stretch), so the offset `p - o` seen from the origin
+  /// `o` becomes `A_j (p - o)` seen from `o'`; the results are blended by weight. Written as displacements,
+  /// `sum_j w_j ((s'_o - s_o) + (A_j - I)(p - o))`, so sample points with `A = I` and `s' = s` contribute an
+  /// exact zero and a point whose sample points all stayed keeps its position and normal bit for bit. Normals
+  /// follow the blended map's cofactor matrix (`det(A) A^-T`, A itself for a rotation), so they stay normal
+  /// to a stretched surface. Per point: one blend of 3x3 matrices, no allocation.
   /// Only the points listed in `active` are computed (all when it is null): the others keep whatever
   /// `out_points` / `out_normals` hold.
   template <typename ConcurrencyTag>
   void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
-             const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
+             const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& map,
              Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr);
 
 private:
-  std::vector<Eigen::Matrix3d> m_turn; // per sample point, R - I
-  Matrix_n3 m_constant;                // per sample point, (s' - s) - (R - I) s
+  std::vector<Eigen::Matrix3d> m_turn; // per sample point, A - I
+  Matrix_n3 m_constant;                // per sample point, (s' - s) - (A - I) s
 };
 
 template <typename ConcurrencyTag>
@@ -160,17 +161,17 @@ void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_p
 
 template <typename ConcurrencyTag>
 void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
-                              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& rotation,
+                              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& map,
                               Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
                               const std::vector<int>* active)
 {
-  // Per sample point: D = R - I and, for offsets from the sample point itself, the constant part of its
+  // Per sample point: D = A - I and, for offsets from the sample point itself, the constant part of its
   // displacement `(s' - s) - D s`, so that a point's displacement is `(sum w D) p + sum w e`.
-  const std::size_t count = rotation.size();
+  const std::size_t count = map.size();
   m_turn.resize(count);
   m_constant.resize(Eigen::Index(count), 3);
   for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
-    m_turn[j] = rotation[j] - Eigen::Matrix3d::Identity();
+    m_turn[j] = map[j] - Eigen::Matrix3d::Identity();
     const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
     const Eigen::Vector3d moved = deformed_sample_positions.row(Eigen::Index(j)).transpose() - s;
     m_constant.row(Eigen::Index(j)) = (moved - m_turn[j] * s).transpose();
@@ -210,9 +211,12 @@ void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals,
         out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
         continue;
       }
+      // The cofactor matrix of the blended map I + turn, column by column: the cross products of the others.
+      const Eigen::Matrix3d blended = Eigen::Matrix3d::Identity() + turn;
       const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
       out_points.row(Eigen::Index(i)) = (p + displacement).transpose();
-      out_normals.row(Eigen::Index(i)) = (n + turn * n).transpose();
+      out_normals.row(Eigen::Index(i)) = (n.x() * blended.col(1).cross(blended.col(2)) + n.y() * blended.col(2).cross(blended.col(0)) +
+                                          n.z() * blended.col(0).cross(blended.col(1))).transpose();
       turned[turned_count++] = i;
     }
     for(std::size_t t = 0; t < turned_count; ++t) out_normals.row(Eigen::Index(turned[t])).normalize();
