@@ -327,8 +327,8 @@ TEST(DetailPreservingDeformation, FittedSampleTurnsChangeThePointDetailsLessThan
   // its frames, whose twist hangs on one reference neighbour (doc/editing.md, "Sample point turns"); as rigid as
   // possible, the best linear map changes them less again, as it follows the stretch of the solve. Measured,
   // frames / fitted / affine: propagated 0.196 / 0.165 / 0.166, as rigid as possible 0.091 / 0.074 / 0.069 (on
-  // this bumpy tube of about four points per sample point, the propagated solve's stretch is not smooth, and
-  // the affine maps gain nothing there; on the benchmark's models they do, in both modes).
+  // this bumpy tube of about four points per sample point the affine maps gain nothing propagated; on the
+  // benchmark's models they do, in both modes).
   namespace in = CGAL_ext::internal;
   const Tentacle t(12000);
   const std::size_t n = t.shape.points.size();
@@ -826,7 +826,7 @@ TEST(DetailPreservingDeformation, AffineSampleMapsCarryAStretch)
   // tilts it (x grows by a tenth, z by 0.3 x). Each sample point's best rotation cannot follow the stretch, and
   // neighbouring sample points disagree on how the points between them move: every kNN edge comes out wrong.
   // The best linear map follows it (doc/editing.md, "Sample point turns"), and the normals, turned by the
-  // blended map's cofactor, stay normal to the moved plane (turned by the map itself, they would not).
+  // blended map's cofactor, stay normal to the moved plane.
   namespace in = CGAL_ext::internal;
   std::mt19937 rng(5);
   const Jittered_plane plane(150, 5, rng);
