@@ -146,7 +146,7 @@ public:
 
 private:
   // Per sample point, its displacement as an affine function of the point: the 4x4 matrix [A - I, c; 0, 1] with
-  // c = (s' - s) - (A - I) s (column-major, two cache lines). Blending the records of a point's stencil by weight
+  // c = (s' - s) - (A - I) s (column-major, 128 bytes). Blending the records of a point's stencil by weight
   // blends the maps, the constants and, in the corner, the weights' sum.
   std::vector<Eigen::Matrix4d> m_records;
 
