@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include <cmath>
@@ -818,6 +819,47 @@ TEST(DetailPreservingDeformation, DiffusionOfASmoothBendIsContinuous)
               error, stretch, rms, error_before, stretch_before, rms_before);
   EXPECT_LT(stretch, 1.2);
   EXPECT_LT(error, 0.5 * error_before);
+}
+
+TEST(DetailPreservingDeformation, BestRotationIsTheSingularValueDecompositionsRotation)
+{
+  // The closed-form best rotation against the SVD's V U^T (reflection flipped): neighbourhoods of 10 edges,
+  // spread in space, flat (one axis zero) and nearly flat, turned by a random rotation with noise, some mirrored;
+  // a rigid turn without noise; collinear edges (rank 1, the SVD's path).
+  namespace in = CGAL_ext::internal;
+  auto svd_rotation = [](const Eigen::Matrix3d& c) {
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(c, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d v = svd.matrixV();
+    if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
+    return Eigen::Matrix3d(v * svd.matrixU().transpose());
+  };
+  std::mt19937 rng(21);
+  std::normal_distribution<double> g;
+  double largest = 0, rigid = 0, collinear = 0;
+  for(int t = 0; t < 3000; ++t) {
+    const Eigen::Matrix3d R = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+    const double thickness = t % 3 == 0 ? 0.0 : t % 3 == 1 ? 1e-3 : 0.5;
+    const double mirror = t % 7 == 0 ? -1.0 : 1.0;
+    Eigen::Matrix3d noisy = Eigen::Matrix3d::Zero(), exact = Eigen::Matrix3d::Zero(), line = Eigen::Matrix3d::Zero();
+    for(int k = 0; k < 10; ++k) {
+      const Eigen::Vector3d e(g(rng), g(rng), thickness * g(rng));
+      Eigen::Vector3d moved = R * e + 0.05 * Eigen::Vector3d(g(rng), g(rng), g(rng));
+      moved.x() *= mirror;
+      noisy += e * moved.transpose();
+      exact += e * (R * e).transpose();
+      const Eigen::Vector3d along = g(rng) * Eigen::Vector3d(1, 2, 3);
+      line += along * (R * along).transpose();
+    }
+    const Eigen::Matrix3d fitted = in::best_rotation(noisy);
+    largest = std::max(largest, (fitted - svd_rotation(noisy)).cwiseAbs().maxCoeff());
+    ASSERT_LT((fitted * fitted.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-13);
+    ASSERT_NEAR(fitted.determinant(), 1.0, 1e-13);
+    rigid = std::max(rigid, (in::best_rotation(exact) - R).cwiseAbs().maxCoeff());
+    collinear = std::max(collinear, (in::best_rotation(line) - svd_rotation(line)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(largest, 1e-10);
+  EXPECT_LT(rigid, 1e-10);
+  EXPECT_LT(collinear, 1e-12);
 }
 
 TEST(DetailPreservingDeformation, AffineSampleMapsCarryAStretch)

@@ -8,6 +8,8 @@
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
 
@@ -20,14 +22,33 @@ namespace internal {
 /// The rotation `R` that minimises `sum_j |R e_j - e'_j|^2` given `covariance = sum_j e_j e'_j^T`: `V U^T` for
 /// `covariance = U S V^T`, with the singular vector of the smallest singular value flipped where that product
 /// would be a reflection (Sorkine and Alexa 2007). A flat neighbourhood (rank 2) still gives one rotation.
-/// (A template, so that only the files that call it instantiate the SVD.)
+/// The right singular vectors come from the closed-form eigenvectors of `C^T C` (C the covariance), the left
+/// ones of the two largest singular values from `C v` (Gram-Schmidt), the third from their cross product with
+/// the handedness of V: half the time of Eigen's JacobiSVD (0.39 against 0.81 us), within 5e-12 of it on
+/// random and flat neighbourhoods (doc/editing.md, "As rigid as possible"). A neighbourhood of rank 1 or less
+/// (collinear edges), where the second vector is lost to rounding, takes the SVD. (A template, so that only the
+/// files that call it instantiate the solvers.)
 template <typename Matrix3>
 Matrix3 best_rotation(const Matrix3& covariance)
 {
-  const Eigen::JacobiSVD<Matrix3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Matrix3 v = svd.matrixV();
-  if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
-  return v * svd.matrixU().transpose();
+  Eigen::SelfAdjointEigenSolver<Matrix3> eigen;
+  eigen.computeDirect(covariance.transpose() * covariance); // eigenvalues ascending
+  const Matrix3& v = eigen.eigenvectors();
+  const Eigen::Vector3d largest = covariance * v.col(2), middle = covariance * v.col(1);
+  const double largest_norm = largest.norm();
+  const Eigen::Vector3d u2 = largest / largest_norm;
+  Eigen::Vector3d u1 = middle - u2.dot(middle) * u2;
+  const double middle_norm = u1.norm();
+  if(!(middle_norm > 1e-6 * largest_norm)) {
+    const Eigen::JacobiSVD<Matrix3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Matrix3 flipped = svd.matrixV();
+    if((flipped * svd.matrixU().transpose()).determinant() < 0) flipped.col(2) = -flipped.col(2);
+    return flipped * svd.matrixU().transpose();
+  }
+  u1 /= middle_norm;
+  // (u0, u1, u2) as handed as V's columns, so that R = sum_k v_k u_k^T is a rotation, not a reflection.
+  const Eigen::Vector3d u0 = v.col(0).dot(v.col(1).cross(v.col(2))) * u1.cross(u2);
+  return v.col(2) * u2.transpose() + v.col(1) * u1.transpose() + v.col(0) * u0.transpose();
 }
 
 /// The best rotation of the edges from sample point `s` to its graph neighbours, from `rest` to `deformed`
