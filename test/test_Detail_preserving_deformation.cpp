@@ -827,12 +827,7 @@ TEST(DetailPreservingDeformation, BestRotationIsTheSingularValueDecompositionsRo
   // spread in space, flat (one axis zero) and nearly flat, turned by a random rotation with noise, some mirrored;
   // a rigid turn without noise; collinear edges (rank 1, the SVD's path).
   namespace in = CGAL_ext::internal;
-  auto svd_rotation = [](const Eigen::Matrix3d& c) {
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(c, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d v = svd.matrixV();
-    if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
-    return Eigen::Matrix3d(v * svd.matrixU().transpose());
-  };
+  auto svd_rotation = [](const Eigen::Matrix3d& c) { return in::best_rotation_by_svd(c); };
   std::mt19937 rng(21);
   std::normal_distribution<double> g;
   double largest = 0, rigid = 0, collinear = 0;

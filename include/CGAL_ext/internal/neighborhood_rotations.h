@@ -28,6 +28,16 @@ namespace internal {
 /// random and flat neighbourhoods (doc/editing.md, "As rigid as possible"). A neighbourhood of rank 1 or less
 /// (collinear edges), where the second vector is lost to rounding, takes the SVD. (A template, so that only the
 /// files that call it instantiate the solvers.)
+/// `best_rotation_by_svd` is the same rotation from Eigen's JacobiSVD.
+template <typename Matrix3>
+Matrix3 best_rotation_by_svd(const Matrix3& covariance)
+{
+  const Eigen::JacobiSVD<Matrix3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix3 v = svd.matrixV();
+  if((v * svd.matrixU().transpose()).determinant() < 0) v.col(2) = -v.col(2);
+  return v * svd.matrixU().transpose();
+}
+
 template <typename Matrix3>
 Matrix3 best_rotation(const Matrix3& covariance)
 {
@@ -39,12 +49,7 @@ Matrix3 best_rotation(const Matrix3& covariance)
   const Eigen::Vector3d u2 = largest / largest_norm;
   Eigen::Vector3d u1 = middle - u2.dot(middle) * u2;
   const double middle_norm = u1.norm();
-  if(!(middle_norm > 1e-6 * largest_norm)) {
-    const Eigen::JacobiSVD<Matrix3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Matrix3 flipped = svd.matrixV();
-    if((flipped * svd.matrixU().transpose()).determinant() < 0) flipped.col(2) = -flipped.col(2);
-    return flipped * svd.matrixU().transpose();
-  }
+  if(!(middle_norm > 1e-6 * largest_norm)) return best_rotation_by_svd(covariance); // also a zero covariance
   u1 /= middle_norm;
   // (u0, u1, u2) as handed as V's columns, so that R = sum_k v_k u_k^T is a rotation, not a reflection.
   const Eigen::Vector3d u0 = v.col(0).dot(v.col(1).cross(v.col(2))) * u1.cross(u2);
