@@ -453,11 +453,24 @@ public:
   /// float64 arrays, reused from drag to drag), else into new arrays.
   py::tuple diffuse(const py::object& points_out, const py::object& normals_out)
   {
+    return results([&] { m_deformation->diffuse(); }, points_out, normals_out);
+  }
+
+  /// restore_details(), then the points and normals as diffuse() gives them.
+  py::tuple restore_details(const py::object& points_out, const py::object& normals_out)
+  {
+    return results([&] { m_deformation->restore_details(); }, points_out, normals_out);
+  }
+
+  /// Runs `step`, then copies every point's and normal's deformed position out.
+  template <typename Step>
+  py::tuple results(const Step& step, const py::object& points_out, const py::object& normals_out)
+  {
     const std::size_t n = size();
     auto [points, points_view] = output_rows3(points_out, "points_out", n);
     auto [normals, normals_view] = output_rows3(normals_out, "normals_out", n);
     without_gil([&, points_view = points_view, normals_view = normals_view] {
-      m_deformation->diffuse();
+      step();
       // Out of the object's spatial order into the caller's, in parallel.
       CGAL_ext::internal::for_range<CGAL::Parallel_if_available_tag>(0, n, [&](std::size_t i) {
         const Eigen::Vector3d p = m_deformation->deformed_point(i), v = m_deformation->deformed_normal(i);
@@ -478,6 +491,7 @@ public:
                     "roi_samples"_a = s.roi_samples, "handle_samples"_a = s.handle_samples,
                     "clustering_seconds"_a = s.clustering_seconds, "preprocess_seconds"_a = s.preprocess_seconds,
                     "deform_seconds"_a = s.deform_seconds, "diffuse_seconds"_a = s.diffuse_seconds,
+                    "restore_seconds"_a = s.restore_seconds,
                     "rigid_iterations"_a = s.rigid_iterations, "displacement_ratio"_a = s.displacement_ratio,
                     "factor_seconds"_a = s.least_squares.factor_seconds,
                     "relative_residual"_a = s.least_squares.relative_residual);
@@ -511,6 +525,7 @@ private:
       } else if(key == "target_count") s.simplification.target_count = as_count(value.cast<long long>(), "target_count");
       else if(key == "max_cluster_size") s.simplification.max_cluster_size = as_count(value.cast<long long>(), "max_cluster_size");
       else if(key == "diffusion_samples") s.diffusion_samples = as_count(value.cast<long long>(), "diffusion_samples");
+      else if(key == "detail_sweeps") s.detail_sweeps = as_count(value.cast<long long>(), "detail_sweeps");
       else if(key == "diffusion_origin") {
         const std::string o = value.cast<std::string>();
         if(o == "own") s.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
@@ -578,7 +593,7 @@ PYBIND11_MODULE(cgal_ext, m)
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
                           "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, strength "
-                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, diffusion_origin "
+                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_sweeps, diffusion_origin "
                           "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")
     .def(py::init<const py::object&, const py::object&, const py::kwargs&>(), "points"_a, "normals"_a = py::none())
     .def("insert_roi", &Deformation::insert_roi, "indices"_a)
@@ -588,6 +603,9 @@ PYBIND11_MODULE(cgal_ext, m)
     .def("deform", &Deformation::deform)
     .def("diffuse", &Deformation::diffuse, "points_out"_a = py::none(), "normals_out"_a = py::none(),
          "The deformed points and normals (n, 3), written into points_out / normals_out when given.")
+    .def("restore_details", &Deformation::restore_details, "points_out"_a = py::none(), "normals_out"_a = py::none(),
+         "After diffuse(): puts back the fine details the diffusion smoothed (detail_sweeps Jacobi sweeps; "
+         "call it once a drag ends), then returns the points and normals as diffuse() does.")
     .def("statistics", &Deformation::statistics)
     .def("__len__", &Deformation::size);
 }

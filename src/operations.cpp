@@ -178,6 +178,10 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
     deformation.diffuse(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points))
                                    .normal_map(CGAL::make_property_map(out.normals)));
   });
+  if(edit.settings.detail_sweeps > 0)
+    rep.time("restore_details", [&] {
+      deformation.restore_details(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points)));
+    });
   std::vector<double> moved(n), status(n, 0.0), sample(n);
   for(std::size_t i = 0; i < n; ++i) {
     moved[i] = std::sqrt(CGAL::squared_distance(out.points[i], cloud.points[i]));

@@ -688,6 +688,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
     deformation.set_handle_transform(g, R, Eigen::Vector3d(0, 0, 1) - R * Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d(0.1, 0, 0.2));
     EXPECT_TRUE(deformation.deform());
     deformation.diffuse(points, points.parameters());
+    deformation.restore_details(points, points.parameters());
     ssps = deformation.number_of_sample_points();
     roi_ssps = deformation.number_of_roi_sample_points();
     return std::vector<Point>(points.points().begin(), points.points().end());

@@ -6,6 +6,7 @@
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -238,6 +239,23 @@ public:
   template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
   void diffuse(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values());
 
+  /*!
+    Puts back the fine details that `diffuse()` smooths out where neighbouring sample points move differently:
+    `settings().detail_sweeps` Jacobi sweeps of `x_i = mean_j x_j + R_i (p_i - mean_j p_j)` over every point
+    the last `diffuse()` moved, `j` over the point's neighbours in the point-set Laplacian's graph (10 nearest,
+    symmetrised) and `R_i` the rotation of its neighbourhood after `diffuse()`. Handle points (exact handles),
+    points that did not move and the fixed part pin the sweeps and keep their positions bit for bit; a rigid
+    motion stays exact to rounding. Normals keep the diffusion's. It costs a few diffusions (the first call
+    after preprocessing also finds the points' neighbours), so call it once a drag ends, not per drag; the
+    next `diffuse()` starts from the blend again (doc/editing.md, "Restoring the details").
+    \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.
+  */
+  void restore_details();
+
+  /// `restore_details()`, then writes every point and normal as `diffuse(points, np)` does.
+  template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
+  void restore_details(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values());
+
   /// Handle transforms back to the identity and every point back to its input position and normal; the
   /// preprocessing is kept.
   void reset()
@@ -248,7 +266,7 @@ public:
     m_deformed_samples = m_samples;
     std::fill(m_sample_map.begin(), m_sample_map.end(), Eigen::Matrix3d::Identity());
     std::fill(m_propagated.begin(), m_propagated.end(), Eigen::Matrix3d::Identity());
-    m_has_rigid_rotations = false;
+    m_has_rigid_rotations = m_diffused = false;
     m_solved_transforms.assign(m_transforms.size(), Transform());
   }
   /// @}
@@ -315,6 +333,9 @@ private:
   }
 
   void check_selection() const;
+  // Writes every deformed point, and normal when `np` names a normal map, through `np`'s maps.
+  template <typename PointRange, typename NamedParameters>
+  void write_deformed(PointRange& points, const NamedParameters& np) const;
   void cluster(internal::Progress& progress);
   void build_strength_field();
 
@@ -348,6 +369,9 @@ private:
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
+  internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
+  bool m_has_relaxation = false;
+  bool m_diffused = false; // diffuse() ran since preprocess() or reset(): the stencil holds its motions
   std::vector<Eigen::Matrix3d> m_group_rotations; // per handle group, filled by each diffuse()
   Matrix_n3 m_anchor_displacement, m_detail_change, m_previous_samples; // per-edit buffers
   Matrix_n3 m_deformed_points, m_deformed_normals;
@@ -494,6 +518,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
     for(std::size_t row = 0; row < m_cloud.size(); ++row)
       if(m_label[row] >= first_handle_label) m_handle_rows.push_back(int(row));
 
+  m_has_relaxation = m_diffused = false;
   m_propagated.assign(count, Eigen::Matrix3d::Identity());
   m_has_rigid_rotations = false;
   m_solved_transforms.assign(m_transforms.size(), Transform());
@@ -665,19 +690,64 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
     m_deformed_points.row(row) = (rotation[g] * m_cloud.positions.row(row).transpose() + m_transforms[g].translation).transpose();
     m_deformed_normals.row(row) = (rotation[g] * m_normals.row(row).transpose()).transpose();
   });
+  m_diffused = true;
   m_statistics.diffuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::restore_details()
+{
+  using namespace internal;
+  if(!m_preprocessed)
+    throw Invalid_input(std::string(who) + ": restore_details() needs preprocess() or deform() first");
+  if(!m_diffused)
+    throw Invalid_input(std::string(who) + ": restore_details() works on the result of diffuse(); call diffuse() first");
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t neighbors = std::min<std::size_t>(10, m_cloud.size() - 1);
+  if(neighbors == 0 || m_settings.detail_sweeps == 0) return;
+  if(!m_has_relaxation) {
+    // The region's moving points without the exact handles, which follow their transforms.
+    std::vector<char> pinned(m_cloud.size(), 0);
+    for(int row : m_handle_rows) pinned[std::size_t(row)] = 1;
+    std::vector<int> rows;
+    for(int row : m_active_points)
+      if(m_label[std::size_t(row)] != fixed_label && !pinned[std::size_t(row)]) rows.push_back(row);
+    m_relaxation.template setup<ConcurrencyTag>(m_cloud.positions, std::move(rows), neighbors);
+    m_has_relaxation = true;
+  }
+  m_relaxation.template apply<ConcurrencyTag>(m_cloud.positions, m_settings.detail_sweeps, m_deformed_points);
+  m_statistics.restore_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 template <typename ConcurrencyTag>
 template <typename PointRange, typename NamedParameters>
 void Detail_preserving_deformation<ConcurrencyTag>::diffuse(PointRange& points, const NamedParameters& np)
 {
-  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
   const std::size_t n = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
   if(n != m_cloud.size())
     throw Invalid_input(std::string(who) + ": diffuse() was given " + std::to_string(n) + " points, but the deformation has " +
                         std::to_string(m_cloud.size()));
   diffuse();
+  write_deformed(points, np);
+}
+
+template <typename ConcurrencyTag>
+template <typename PointRange, typename NamedParameters>
+void Detail_preserving_deformation<ConcurrencyTag>::restore_details(PointRange& points, const NamedParameters& np)
+{
+  const std::size_t n = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
+  if(n != m_cloud.size())
+    throw Invalid_input(std::string(who) + ": restore_details() was given " + std::to_string(n) +
+                        " points, but the deformation has " + std::to_string(m_cloud.size()));
+  restore_details();
+  write_deformed(points, np);
+}
+
+template <typename ConcurrencyTag>
+template <typename PointRange, typename NamedParameters>
+void Detail_preserving_deformation<ConcurrencyTag>::write_deformed(PointRange& points, const NamedParameters& np) const
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
   const auto point_map = NP_helper::get_point_map(points, np);
   using Point = typename boost::property_traits<std::remove_const_t<decltype(point_map)>>::value_type;
   constexpr bool with_normals =

@@ -127,6 +127,11 @@ struct Detail_preserving_deformation_settings
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
   /// How each region sample point's turn (and, affine, its stretch) is measured for the diffusion.
   Sample_turn diffusion_turn = Sample_turn::affine;
+  /// Jacobi sweeps of `Detail_preserving_deformation::restore_details()`, which puts back the fine details the
+  /// diffusion's blend smooths out (0: it leaves the diffused points). Each sweep takes off less than the one
+  /// before; 8 bring the change of the fine details to or below CGAL's mesh ARAP in as-rigid-as-possible mode
+  /// (doc/editing.md, "Restoring the details").
+  unsigned int detail_sweeps = 8;
 
   Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
 
@@ -194,6 +199,8 @@ struct Detail_preserving_deformation_statistics
   /// cactus").
   double displacement_ratio = 0;
   double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
+  /// Last `restore_details()`, with the search for the points' neighbours when it was the first after preprocessing.
+  double restore_seconds = 0;
 };
 
 } // namespace CGAL_ext

@@ -115,7 +115,11 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     assert deformation.preprocess()
     deformation.set_handle_transform(group, R, t)
     deformation.deform()
-    moved, moved_normals = deformation.diffuse()
+    diffused, _ = deformation.diffuse()
+    # The program restores the fine details once the edit is done, as an interactive caller would when a drag ends.
+    moved, moved_normals = deformation.restore_details()
+    assert deformation.statistics()["restore_seconds"] > 0
+    assert np.max(np.linalg.norm(moved - diffused, axis=1)) > 0
     assert_close(moved, xyz(out), 2.0)
     assert_close(moved_normals, normals_of(out), 2.0)
     handles = status == 2
@@ -126,7 +130,7 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     P, N = np.empty_like(points), np.empty_like(normals)
     returned = deformation.diffuse(P, N)
     assert returned[0] is P and returned[1] is N
-    assert np.array_equal(P, moved) and np.array_equal(N, moved_normals)
+    assert np.array_equal(P, diffused) and np.array_equal(N, moved_normals)
     with pytest.raises(ValueError, match="rows"):
         deformation.diffuse(P[:10], N)
     P.flags.writeable = False
