@@ -48,10 +48,11 @@ int main(int argc, char** argv)
     deformation.set_handle_transform(handle, R, pivot - R * pivot + Eigen::Vector3d(0, 0, 0.1 * height));
     if(!deformation.deform()) return 1; // preprocesses first
     deformation.diffuse(points, points.parameters());
+    deformation.restore_details(points, points.parameters()); // the fine details the blend smoothed
     const auto& st = deformation.statistics();
     std::cout << st.points << " points, " << st.samples << " sample points (" << st.roi_samples << " in the region): "
               << "preprocess " << st.preprocess_seconds << " s, deform " << st.deform_seconds << " s, diffuse "
-              << st.diffuse_seconds << " s\n";
+              << st.diffuse_seconds << " s, restore details " << st.restore_seconds << " s\n";
   } catch(const std::exception& e) { // Invalid_input or Numerical_failure
     std::cerr << e.what() << "\n";
     return 1;

@@ -55,7 +55,9 @@ int main(int argc, char** argv)
       std::cout << "frame " << frame << ": deform " << 1e3 * deformation.statistics().deform_seconds << " ms, diffuse "
                 << 1e3 * deformation.statistics().diffuse_seconds << " ms\n";
     }
-    deformation.diffuse(points, points.parameters()); // the final frame into the point set
+    // The drag ended: its fine details restored, into the point set.
+    deformation.restore_details(points, points.parameters());
+    std::cout << "details restored in " << 1e3 * deformation.statistics().restore_seconds << " ms\n";
   } catch(const std::exception& e) {
     std::cerr << e.what() << "\n";
     return 1;

@@ -425,6 +425,16 @@ const std::vector<Row>& catalogue()
        Point_set other = sphere(1000);
        EXPECT_INVALID_INPUT(d.diffuse(other, other.parameters()), "was given 1000 points");
      }},
+    {"restore_details_before_diffuse", [] {
+       Point_set set = sphere();
+       Detail_preserving_deformation<> d(set, {}, set.parameters());
+       select_cap(d, set);
+       ASSERT_TRUE(d.deform());
+       EXPECT_INVALID_INPUT(d.restore_details(), "call diffuse() first");
+       d.diffuse();
+       Point_set other = sphere(1000);
+       EXPECT_INVALID_INPUT(d.restore_details(other, other.parameters()), "was given 1000 points");
+     }},
 
     // ---- The program ----
     {"cli_empty_file", [] {
