@@ -78,8 +78,6 @@ public:
     m_end = std::move(fill);
   }
 
-  std::size_t size() const { return m_rows.size(); }
-
   /// `sweeps` sweeps on `positions` (every row; only the relaxed ones change). A row that is still at its
   /// `rest` position with all its neighbours keeps it bit for bit.
   template <typename ConcurrencyTag>
