@@ -491,7 +491,8 @@ public:
                     "roi_samples"_a = s.roi_samples, "handle_samples"_a = s.handle_samples,
                     "clustering_seconds"_a = s.clustering_seconds, "preprocess_seconds"_a = s.preprocess_seconds,
                     "deform_seconds"_a = s.deform_seconds, "diffuse_seconds"_a = s.diffuse_seconds,
-                    "restore_seconds"_a = s.restore_seconds,
+                    "restore_seconds"_a = s.restore_seconds, "restore_iterations"_a = s.restore_iterations,
+                    "restore_residual"_a = s.restore_residual,
                     "rigid_iterations"_a = s.rigid_iterations, "displacement_ratio"_a = s.displacement_ratio,
                     "factor_seconds"_a = s.least_squares.factor_seconds,
                     "relative_residual"_a = s.least_squares.relative_residual);
@@ -525,7 +526,9 @@ private:
       } else if(key == "target_count") s.simplification.target_count = as_count(value.cast<long long>(), "target_count");
       else if(key == "max_cluster_size") s.simplification.max_cluster_size = as_count(value.cast<long long>(), "max_cluster_size");
       else if(key == "diffusion_samples") s.diffusion_samples = as_count(value.cast<long long>(), "diffusion_samples");
-      else if(key == "detail_sweeps") s.detail_sweeps = as_count(value.cast<long long>(), "detail_sweeps");
+      else if(key == "detail_iterations") s.detail_iterations = as_count(value.cast<long long>(), "detail_iterations");
+      else if(key == "detail_tolerance") s.detail_tolerance = value.cast<double>();
+      else if(key == "detail_anchor") s.detail_anchor = value.cast<double>();
       else if(key == "diffusion_origin") {
         const std::string o = value.cast<std::string>();
         if(o == "own") s.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
@@ -593,7 +596,8 @@ PYBIND11_MODULE(cgal_ext, m)
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
                           "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, strength "
-                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_sweeps, diffusion_origin "
+                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_iterations, "
+                          "detail_tolerance, detail_anchor, diffusion_origin "
                           "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")
     .def(py::init<const py::object&, const py::object&, const py::kwargs&>(), "points"_a, "normals"_a = py::none())
     .def("insert_roi", &Deformation::insert_roi, "indices"_a)
@@ -604,8 +608,8 @@ PYBIND11_MODULE(cgal_ext, m)
     .def("diffuse", &Deformation::diffuse, "points_out"_a = py::none(), "normals_out"_a = py::none(),
          "The deformed points and normals (n, 3), written into points_out / normals_out when given.")
     .def("restore_details", &Deformation::restore_details, "points_out"_a = py::none(), "normals_out"_a = py::none(),
-         "After diffuse(): puts back the fine details the diffusion smoothed (detail_sweeps Jacobi sweeps; "
-         "call it once a drag ends), then returns the points and normals as diffuse() does.")
+         "After diffuse(): puts back the fine details the diffusion smoothed (conjugate gradients, at most "
+         "detail_iterations; call it once a drag ends), then returns the points and normals as diffuse() does.")
     .def("statistics", &Deformation::statistics)
     .def("__len__", &Deformation::size);
 }

@@ -21,7 +21,7 @@ struct Edit_command
   double lambda = 0, mu = 0, handle_weight = 0;
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
   std::size_t max_cluster_size = 0, target = 0;
-  unsigned int rigid_iterations = 0, detail_sweeps = 0;
+  unsigned int rigid_iterations = 0, detail_iterations = 0;
   std::string rotations;
   bool upsample = false;
   std::map<std::string, CLI::Option*> given;
@@ -61,7 +61,7 @@ struct Edit_command
     if(has("--target")) s.simplification.target_count = target;
     if(has("--rotations")) s.rotations = detail_rotation(rotations, "--rotations");
     if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
-    if(has("--detail-sweeps")) s.detail_sweeps = detail_sweeps;
+    if(has("--detail-iterations")) s.detail_iterations = detail_iterations;
     s.validate();
     ensure_normals(cloud, progress, rep);
 
@@ -94,6 +94,12 @@ struct Edit_command
     if(rep.data()["displacement_ratio"].get<double>() > swing_warning_ratio)
       std::fprintf(stderr, "point-detail: warning: parts of the region moved %.1f times as far as any handle (the solve "
                    "swings them; try --order quadric or --rotations arap)\n", rep.data()["displacement_ratio"].get<double>());
+    if(rep.data().contains("restore_details") &&
+       rep.data()["restore_details"]["residual"].get<double>() > description.settings.detail_tolerance)
+      std::fprintf(stderr, "point-detail: warning: putting back the fine details stopped after %u iterations at a residual "
+                   "of %.2g (tolerance %.2g); raise --detail-iterations\n",
+                   rep.data()["restore_details"]["iterations"].get<unsigned>(),
+                   rep.data()["restore_details"]["residual"].get<double>(), description.settings.detail_tolerance);
   }
 };
 
@@ -132,8 +138,8 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
     ->check(CLI::IsMember({"none", "propagate", "arap"}));
   edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
     ->check(CLI::Range(1u, 1000u));
-  edit.given["--detail-sweeps"] = edit_app->add_option("--detail-sweeps", edit.detail_sweeps, "sweeps that put back the fine details the diffusion smoothed (default 8, 0: none)")
-    ->check(CLI::Range(0u, 1000u));
+  edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")
+    ->check(CLI::Range(0u, 100000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
   return {edit_app, [command, &common] { command->run(common); }};

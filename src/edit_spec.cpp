@@ -209,9 +209,10 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("diffusion")) {
     const json& d = edit["diffusion"];
-    check_keys(d, {"samples", "origin", "turn", "detail_sweeps"}, file + ": diffusion");
+    check_keys(d, {"samples", "origin", "turn", "detail_iterations"}, file + ": diffusion");
     if(d.contains("samples")) settings.diffusion_samples = unsigned(whole(d["samples"], file + ": diffusion.samples"));
-    if(d.contains("detail_sweeps")) settings.detail_sweeps = unsigned(whole(d["detail_sweeps"], file + ": diffusion.detail_sweeps"));
+    if(d.contains("detail_iterations"))
+      settings.detail_iterations = unsigned(whole(d["detail_iterations"], file + ": diffusion.detail_iterations"));
     if(d.contains("origin")) {
       if(d["origin"] == "own") settings.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
       else if(d["origin"] == "nearest") settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;

@@ -178,7 +178,7 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
     deformation.diffuse(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points))
                                    .normal_map(CGAL::make_property_map(out.normals)));
   });
-  if(edit.settings.detail_sweeps > 0)
+  if(edit.settings.detail_iterations > 0)
     rep.time("restore_details", [&] {
       deformation.restore_details(all, CGAL::parameters::point_map(CGAL::make_property_map(out.points)));
     });
@@ -223,6 +223,8 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["max_handle_point_error"] = handle_error;
   r["displacement_ratio"] = st.displacement_ratio;
   if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) r["rigid_iterations"] = st.rigid_iterations;
+  if(edit.settings.detail_iterations > 0)
+    r["restore_details"] = {{"iterations", st.restore_iterations}, {"residual", st.restore_residual}};
 }
 
 Coloring edit_coloring(const Point_cloud& out)

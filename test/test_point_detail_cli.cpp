@@ -728,6 +728,8 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_GE(report["displacement_ratio"].get<double>(), 1.0);
   EXPECT_GT(report["table1"]["editing_ssps_s"].get<double>(), 0.0);
   EXPECT_GE(report["table1"]["diffusion_s"].get<double>(), 0.0);
+  EXPECT_GT(report["restore_details"]["iterations"].get<unsigned>(), 0u);
+  EXPECT_LE(report["restore_details"]["residual"].get<double>(), settings.detail_tolerance);
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
 
   // As rigid as possible, chosen on the command line over the file, as the library does it.
@@ -741,6 +743,15 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   const std::vector<Point> rigid_points(rigid.points().begin(), rigid.points().end());
   EXPECT_LT(max_distance(rigid_points, library_edit(settings)), 1e-12);
   EXPECT_GT(max_distance(rigid_points, std::vector<Point>(output.points().begin(), output.points().end())), 1e-3);
+  // Two iterations of the restore: what the library gives with two, and a warning that it stopped early.
+  const Program_run capped = run("edit -i " + in + " -o " + path("capped.ply") + " --edit " + path("edit.json") +
+                                 " --rotations arap --rigid-iterations 2 --detail-iterations 2");
+  ASSERT_EQ(capped.exit_code, 0) << capped.output;
+  EXPECT_NE(capped.output.find("stopped after 2 iterations"), std::string::npos) << capped.output;
+  CGAL::Point_set_3<Point> capped_set;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("capped.ply"), capped_set));
+  settings.detail_iterations = 2;
+  EXPECT_LT(max_distance(std::vector<Point>(capped_set.points().begin(), capped_set.points().end()), library_edit(settings)), 1e-12);
   // A misspelt mode is named.
   {
     std::ofstream edit(path("bad.json"));
@@ -749,7 +760,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   const Program_run bad = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad.json"));
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("rotations must be \"none\", \"propagate\" or \"arap\""), std::string::npos) << bad.output;
-  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "bad.json"});
+  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "bad.json"});
 }
 
 TEST_F(Cli, EditBySelAndDefAndItsMistakes)

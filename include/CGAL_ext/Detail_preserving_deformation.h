@@ -240,15 +240,17 @@ public:
   void diffuse(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values());
 
   /*!
-    Puts back the fine details that `diffuse()` smooths out where neighbouring sample points move differently:
-    `settings().detail_sweeps` Jacobi sweeps of `x_i = mean_j x_j + R_i (p_i - mean_j p_j)` over every point
-    the last `diffuse()` moved, `j` over the point's neighbours in the point-set Laplacian's graph (10 nearest,
-    symmetrised) and `R_i` the rotation of its neighbourhood after `diffuse()`. Handle points (exact handles),
-    points that did not move and the fixed part pin the sweeps and keep their positions bit for bit; a rigid
-    motion stays exact to rounding. Normals keep the diffusion's. It costs about twenty diffusions (0.19-0.26 s
-    at 1.66M points; the first call after preprocessing also finds the points' neighbours, 0.9-1.2 s), so call
-    it once a drag ends, not per drag; the next `diffuse()` starts from the blend again (doc/editing.md,
-    "Restoring the details").
+    Puts back the fine details that `diffuse()` smooths out where neighbouring sample points move differently.
+    Over every point the last `diffuse()` moved it solves `(1 + a) x_i - mean_j x_j = R_i (p_i - mean_j p_j) +
+    a y_i`, `j` over the point's neighbours in the point-set Laplacian's graph (10 nearest, symmetrised), `y_i`
+    where `diffuse()` put it, `R_i` the rotation of its neighbourhood there and `a` = `settings().detail_anchor`:
+    the details finer than about `1 / sqrt(a)` point spacings come back, the coarser shape stays the
+    diffusion's. Jacobi-preconditioned conjugate gradients, up to `settings().detail_iterations` of them or
+    to `settings().detail_tolerance` (`statistics()` reports both). Handle points (exact handles), points that
+    did not move and the fixed part pin the solve and keep their positions bit for bit; a rigid motion stays
+    exact to rounding. Normals keep the diffusion's. At 1.66M points it takes 0.25-0.41 s (the first call after
+    preprocessing also finds the points' neighbours, 1.1-1.2 s), so call it once a drag ends, not per drag; the
+    next `diffuse()` starts from the blend again (doc/editing.md, "Restoring the details").
     \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.
   */
   void restore_details();
@@ -704,8 +706,10 @@ void Detail_preserving_deformation<ConcurrencyTag>::restore_details()
   if(!m_diffused)
     throw Invalid_input(std::string(who) + ": restore_details() works on the result of diffuse(); call diffuse() first");
   const auto start = std::chrono::steady_clock::now();
+  m_statistics.restore_iterations = 0;
+  m_statistics.restore_residual = 0;
   const std::size_t neighbors = std::min<std::size_t>(10, m_cloud.size() - 1);
-  if(neighbors == 0 || m_settings.detail_sweeps == 0) return;
+  if(neighbors == 0 || m_settings.detail_iterations == 0) return;
   if(!m_has_relaxation) {
     // The region's moving points without the exact handles, which follow their transforms.
     std::vector<char> pinned(m_cloud.size(), 0);
@@ -716,7 +720,11 @@ void Detail_preserving_deformation<ConcurrencyTag>::restore_details()
     m_relaxation.template setup<ConcurrencyTag>(m_cloud.positions, std::move(rows), neighbors);
     m_has_relaxation = true;
   }
-  m_relaxation.template apply<ConcurrencyTag>(m_cloud.positions, m_settings.detail_sweeps, m_deformed_points);
+  const auto outcome = m_relaxation.template apply<ConcurrencyTag>(
+    m_cloud.positions, m_settings.detail_anchor, m_settings.detail_iterations, m_settings.detail_tolerance,
+    m_deformed_points);
+  m_statistics.restore_iterations = outcome.iterations;
+  m_statistics.restore_residual = outcome.residual;
   m_statistics.restore_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -119,6 +119,8 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     # The program restores the fine details once the edit is done, as an interactive caller would when a drag ends.
     moved, moved_normals = deformation.restore_details()
     assert deformation.statistics()["restore_seconds"] > 0
+    assert deformation.statistics()["restore_iterations"] > 0
+    assert deformation.statistics()["restore_residual"] <= 1e-2  # the default detail_tolerance
     assert np.max(np.linalg.norm(moved - diffused, axis=1)) > 0
     assert_close(moved, xyz(out), 2.0)
     assert_close(moved_normals, normals_of(out), 2.0)

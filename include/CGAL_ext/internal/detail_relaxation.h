@@ -9,24 +9,40 @@
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/Core>
+#include <Eigen/StdVector>
 
 #include <algorithm>
+#include <cmath>
+#include <numeric>
 #include <vector>
 
 namespace CGAL_ext {
 namespace internal {
 
 /// Puts back the fine details that a blend of sample-point motions smooths out (doc/editing.md, "Restoring
-/// the details"): Jacobi sweeps of `x_i = mean_j x_j + R_i d_i` over the relaxed rows, with `j` over the
-/// row's neighbours in the symmetrised k-nearest-neighbour graph at rest (the point-set Laplacian's, uniform
-/// weights), `d_i = p_i - mean_j p_j` its detail at rest and `R_i` the rotation that best carries its
-/// neighbourhood's edges to where they are before the sweeps. Every other point holds still and pins the
-/// sweeps. A rigid motion (`x = R p + t`) is a fixed point, so it stays exact to rounding; the sweep averages
-/// with weights that sum to one, so it never amplifies, and its first sweeps take out the wrinkles the blend
-/// left at the scale of a few points.
+/// the details"). Over the relaxed rows that moved, it solves
+///
+///     (1 + a) x_i - mean_j x_j = R_i d_i + a y_i
+///
+/// with `j` over the row's neighbours in the symmetrised k-nearest-neighbour graph at rest (the point-set
+/// Laplacian's, uniform weights), `d_i = p_i - mean_j p_j` its detail at rest, `y_i` where the blend put it and
+/// `R_i` the rotation that best carries its neighbourhood's edges there; every other point holds still and
+/// pins the solve. The anchor `a` keeps what is coarser than about `1 / sqrt(a)` point spacings where the blend
+/// put it (the blend is right at the sample points' scale) and restores the details below. Scaled by each
+/// row's degree the system is symmetric positive definite (the anchor makes it so even for a part that no
+/// pinned point touches) with a condition number of about 2 / a, so Jacobi-preconditioned conjugate gradients
+/// reach a residual of 1 % in 6-20 iterations whatever the number of points. A rigid motion (`y = R p + t`) solves it already and stays exact to rounding.
 class Detail_relaxation
 {
 public:
+  /// Iterations and final residual of the last `apply()`.
+  struct Outcome
+  {
+    unsigned int iterations = 0;
+    /// Residual over the right-hand side's details, `|r| / |deg R d|` (0 when nothing moved).
+    double residual = 0;
+  };
+
   /// Relaxes `rows` of `points` (rest positions), each over its `k` nearest points and those that have it
   /// among their `k` nearest (of the relaxed rows: the graph is symmetrised within them).
   template <typename ConcurrencyTag>
@@ -48,7 +64,8 @@ public:
       });
     }
     // Symmetrise: j joins row i's neighbours when i is among j's nearest and j is relaxed too.
-    std::vector<int> relaxed_index(std::size_t(points.rows()), -1);
+    m_free_index.assign(std::size_t(points.rows()), -1);
+    std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
     for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
     std::vector<int> degree(n, int(k));
     for(std::size_t r = 0; r < n; ++r)
@@ -63,6 +80,7 @@ public:
         m_neighbors.indices[std::size_t(fill[r]++)] = *j;
         if(relaxed_index[std::size_t(*j)] >= 0) m_neighbors.indices[std::size_t(fill[std::size_t(relaxed_index[std::size_t(*j)])]++)] = m_rows[r];
       }
+    for(int row : m_rows) relaxed_index[std::size_t(row)] = -1;
     m_details.resize(Eigen::Index(n), 3);
     for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
       int* first = m_neighbors.indices.data() + m_neighbors.offsets[r];
@@ -78,15 +96,17 @@ public:
     m_end = std::move(fill);
   }
 
-  /// `sweeps` sweeps on `positions` (every row; only the relaxed ones change). A row that is still at its
-  /// `rest` position with all its neighbours keeps it bit for bit.
+  /// Solves the system above on `positions` (every row; only the relaxed rows that moved change) with anchor
+  /// `anchor` > 0, until the residual is at most `tolerance` of the details or after `max_iterations`. A row
+  /// that is still at its `rest` position with all its neighbours keeps it bit for bit.
   template <typename ConcurrencyTag>
-  void apply(const Matrix_n3& rest, unsigned int sweeps, Matrix_n3& positions)
+  Outcome apply(const Matrix_n3& rest, double anchor, unsigned int max_iterations, double tolerance,
+                Matrix_n3& positions)
   {
+    // The unknowns: relaxed rows that moved or have a neighbour that moved, with their targets R_i d_i.
     const std::size_t n = m_rows.size();
     m_target.resize(Eigen::Index(n), 3);
-    m_next.resize(Eigen::Index(n), 3);
-    m_moving.resize(n);
+    std::vector<char> moving(n);
     for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
       const Eigen::Index row = m_rows[r];
       const Eigen::RowVector3d p = rest.row(row), x = positions.row(row);
@@ -96,23 +116,112 @@ public:
         covariance += (rest.row(*j) - p).transpose() * (positions.row(*j) - x);
         moved = moved || positions.row(*j) != rest.row(*j);
       }
-      m_moving[r] = moved;
+      moving[r] = moved;
       if(moved) m_target.row(Eigen::Index(r)) = m_details.row(Eigen::Index(r)) * best_rotation(covariance).transpose();
     });
-    for(unsigned int sweep = 0; sweep < sweeps; ++sweep) {
-      for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
-        if(!m_moving[r]) return;
-        Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
-        for(const int* j = begin(r); j != end(r); ++j) sum += positions.row(*j);
-        m_next.row(Eigen::Index(r)) = sum / double(end(r) - begin(r)) + m_target.row(Eigen::Index(r));
+    m_free.clear();
+    for(std::size_t r = 0; r < n; ++r)
+      if(moving[r]) {
+        m_free_index[std::size_t(m_rows[r])] = int(m_free.size());
+        m_free.push_back(int(r));
+      }
+    const std::size_t m = m_free.size();
+    if(m == 0) return Outcome();
+
+    // Degree-scaled system A x = b over the unknowns: A = (1 + a) D - (adjacency among the unknowns).
+    m_adjacency.offsets.assign(m + 1, 0);
+    for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
+      int count = 0;
+      for(const int* j = begin(std::size_t(m_free[f])); j != end(std::size_t(m_free[f])); ++j)
+        count += m_free_index[std::size_t(*j)] >= 0;
+      m_adjacency.offsets[f + 1] = count;
+    });
+    std::partial_sum(m_adjacency.offsets.begin(), m_adjacency.offsets.end(), m_adjacency.offsets.begin());
+    m_adjacency.indices.resize(std::size_t(m_adjacency.offsets[m]));
+    m_x.resize(Eigen::Index(m), 3);
+    m_residual.resize(Eigen::Index(m), 3);
+    m_direction.resize(Eigen::Index(m), 3);
+    m_product.resize(Eigen::Index(m), 3);
+    m_diagonal.resize(Eigen::Index(m));
+    // x starts where the blend put the points; its residual b - A x is deg_i (R_i d_i - (x_i - mean_j x_j)).
+    using Row = Eigen::RowVector3d;
+    const double target_norm = std::sqrt(block_sum<ConcurrencyTag, Row>(m, [&](std::size_t f) {
+      const std::size_t r = std::size_t(m_free[f]);
+      const Eigen::Index F = Eigen::Index(f);
+      int* out = m_adjacency.indices.data() + m_adjacency.offsets[f];
+      Row sum = Row::Zero();
+      for(const int* j = begin(r); j != end(r); ++j) {
+        sum += positions.row(*j);
+        if(m_free_index[std::size_t(*j)] >= 0) *out++ = m_free_index[std::size_t(*j)];
+      }
+      const double degree = double(end(r) - begin(r));
+      m_x.row(F) = positions.row(m_rows[r]);
+      m_diagonal(F) = (1 + anchor) * degree;
+      const Row target = degree * m_target.row(Eigen::Index(r));
+      m_residual.row(F) = target - degree * m_x.row(F) + sum;
+      m_direction.row(F) = m_residual.row(F) / m_diagonal(F);
+      return Row(target.cwiseAbs2());
+    }).sum());
+    for(int r : m_free) m_free_index[std::size_t(m_rows[std::size_t(r)])] = -1;
+
+    // Jacobi-preconditioned conjugate gradients, the three coordinates side by side. The sums add fixed blocks
+    // in a fixed order: the result does not depend on the number of threads.
+    using Rows = Eigen::Matrix<double, 2, 3>;
+    Rows sums = block_sum<ConcurrencyTag, Rows>(m, [&](std::size_t f) {
+      const Row r = m_residual.row(Eigen::Index(f));
+      return Rows((Rows() << r.cwiseProduct(m_direction.row(Eigen::Index(f))), r.cwiseAbs2()).finished());
+    });
+    Outcome outcome;
+    outcome.residual = target_norm > 0 ? std::sqrt(sums.row(1).sum()) / target_norm : 0;
+    while(outcome.residual > tolerance && outcome.iterations < max_iterations) {
+      const Row curvature = block_sum<ConcurrencyTag, Row>(m, [&](std::size_t f) {
+        const Eigen::Index F = Eigen::Index(f);
+        Row product = m_diagonal(F) * m_direction.row(F);
+        for(const int* j = m_adjacency.begin(f); j != m_adjacency.end(f); ++j) product -= m_direction.row(*j);
+        m_product.row(F) = product;
+        return Row(product.cwiseProduct(m_direction.row(F)));
       });
-      for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
-        if(m_moving[r]) positions.row(m_rows[r]) = m_next.row(Eigen::Index(r));
+      const Row alpha = (curvature.array() > 0).select(sums.row(0).array() / curvature.array(), 0.);
+      const Row previous = sums.row(0);
+      sums = block_sum<ConcurrencyTag, Rows>(m, [&](std::size_t f) {
+        const Eigen::Index F = Eigen::Index(f);
+        m_x.row(F) += alpha.cwiseProduct(m_direction.row(F));
+        m_residual.row(F) -= alpha.cwiseProduct(m_product.row(F));
+        const Row r = m_residual.row(F);
+        return Rows((Rows() << r.cwiseAbs2() / m_diagonal(F), r.cwiseAbs2()).finished());
       });
+      const Row beta = (previous.array() > 0).select(sums.row(0).array() / previous.array(), 0.);
+      for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
+        const Eigen::Index F = Eigen::Index(f);
+        m_direction.row(F) = m_residual.row(F) / m_diagonal(F) + beta.cwiseProduct(m_direction.row(F));
+      });
+      ++outcome.iterations;
+      outcome.residual = std::sqrt(sums.row(1).sum()) / target_norm;
     }
+    for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
+      positions.row(m_rows[std::size_t(m_free[f])]) = m_x.row(Eigen::Index(f));
+    });
+    return outcome;
   }
 
 private:
+  static constexpr std::size_t block_size = 256;
+
+  // The sum of body(f) over f in [0, m), by blocks of block_size in a fixed order.
+  template <typename ConcurrencyTag, typename Value, typename Body>
+  static Value block_sum(std::size_t m, const Body& body)
+  {
+    std::vector<Value, Eigen::aligned_allocator<Value>> partial((m + block_size - 1) / block_size);
+    for_range<ConcurrencyTag>(0, partial.size(), [&](std::size_t block) {
+      Value sum = Value::Zero();
+      for(std::size_t f = block * block_size; f < std::min(m, (block + 1) * block_size); ++f) sum += body(f);
+      partial[block] = sum;
+    });
+    Value total = Value::Zero();
+    for(const Value& value : partial) total += value;
+    return total;
+  }
+
   const int* begin(std::size_t r) const { return m_neighbors.begin(r); }
   const int* end(std::size_t r) const { return m_neighbors.indices.data() + m_end[r]; }
 
@@ -120,8 +229,13 @@ private:
   Neighbor_graph m_neighbors;  // per relaxed row, its symmetrised neighbours (sorted, up to m_end)
   std::vector<int> m_end;      // per relaxed row, the end of its neighbours in m_neighbors.indices
   Matrix_n3 m_details;         // per relaxed row, d_i at rest
-  Matrix_n3 m_target, m_next;  // per call: R_i d_i, and a sweep's new positions
-  std::vector<char> m_moving;  // per call
+  Matrix_n3 m_target;          // per relaxed row: R_i d_i (per call)
+  // Per call, the unknowns: their relaxed rows, their neighbours among them, the conjugate gradients' vectors.
+  std::vector<int> m_free;
+  std::vector<int> m_free_index; // per point, its unknown or -1 (all -1 between calls)
+  Neighbor_graph m_adjacency;
+  Matrix_n3 m_x, m_residual, m_direction, m_product;
+  Eigen::VectorXd m_diagonal;
 };
 
 } // namespace internal
