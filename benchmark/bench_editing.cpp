@@ -357,8 +357,8 @@ void compare_with_arap(const std::string& name, const Point_cloud& cloud, const 
     const double first_restore = d->statistics().restore_seconds;
     d->diffuse();
     d->restore_details();
-    row(std::string(v.what) + ", then restore_details (" + std::to_string(e.settings.detail_sweeps) +
-          " sweeps; first call, later call)", d->number_of_sample_points(), first_restore, d->statistics().restore_seconds,
+    row(std::string(v.what) + ", then restore_details (" + std::to_string(d->statistics().restore_iterations) +
+          " iterations; first call, later call)", d->number_of_sample_points(), first_restore, d->statistics().restore_seconds,
         NAN, deformed_points(*d), sre);
   }
 }
