@@ -518,6 +518,7 @@ private:
         else if(r == "arap") s.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
         else throw py::value_error("rotations must be \"none\", \"propagate\" or \"arap\", not \"" + r + "\"");
       } else if(key == "rigid_iterations") s.rigid_iterations = as_count(value.cast<long long>(), "rigid_iterations");
+      else if(key == "rigid_rotation_smoothing") s.rigid_rotation_smoothing = value.cast<double>();
       else if(key == "strength") {
         const std::string d = value.cast<std::string>();
         if(d == "euclidean") s.strength_distance = CGAL_ext::Strength_distance::euclidean;
@@ -595,7 +596,7 @@ PYBIND11_MODULE(cgal_ext, m)
 
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
-                          "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, strength "
+                          "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, rigid_rotation_smoothing, strength "
                           "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_iterations, "
                           "detail_tolerance, detail_anchor, diffusion_origin "
                           "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")

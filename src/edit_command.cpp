@@ -18,7 +18,7 @@ struct Edit_command
 {
   std::string input, output, edit, sel, def, png, report, view = "front";
   std::string order, strength, origin, turn;
-  double lambda = 0, mu = 0, handle_weight = 0;
+  double lambda = 0, mu = 0, handle_weight = 0, rigid_smoothing = 0;
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
   std::size_t max_cluster_size = 0, target = 0;
   unsigned int rigid_iterations = 0, detail_iterations = 0;
@@ -61,6 +61,7 @@ struct Edit_command
     if(has("--target")) s.simplification.target_count = target;
     if(has("--rotations")) s.rotations = detail_rotation(rotations, "--rotations");
     if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
+    if(has("--rigid-smoothing")) s.rigid_rotation_smoothing = rigid_smoothing;
     if(has("--detail-iterations")) s.detail_iterations = detail_iterations;
     s.validate();
     ensure_normals(cloud, progress, rep);
@@ -138,6 +139,8 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
     ->check(CLI::IsMember({"none", "propagate", "arap"}));
   edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
     ->check(CLI::Range(1u, 1000u));
+  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: CGAL's SRE_ARAP energy; default 0)")
+    ->check(CLI::NonNegativeNumber);
   edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")
     ->check(CLI::Range(0u, 100000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");

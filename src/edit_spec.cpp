@@ -152,6 +152,7 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   }
   const std::string file = path.filename().string();
   check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
+                    "rigid_rotation_smoothing",
                     "diffusion", "simplification"}, file);
   const std::filesystem::path base = path.parent_path();
   Edit_description out;
@@ -207,6 +208,8 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     settings.rotations = detail_rotation(edit["rotations"].get<std::string>(), file + ": rotations");
   }
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
+  if(edit.contains("rigid_rotation_smoothing"))
+    settings.rigid_rotation_smoothing = number(edit["rigid_rotation_smoothing"], file + ": rigid_rotation_smoothing");
   if(edit.contains("diffusion")) {
     const json& d = edit["diffusion"];
     check_keys(d, {"samples", "origin", "turn", "detail_iterations"}, file + ": diffusion");

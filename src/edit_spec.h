@@ -43,7 +43,7 @@ CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::st
   `{"roi": [SPEC...], "handles": [{"select": [SPEC...], "translation": [x,y,z],
     "rotation": {"axis": [x,y,z], "degrees": a} | "quaternion": [w,x,y,z] | "matrix": [[..],[..],[..]],
     "pivot": [x,y,z]}], "filter": {"order", "lambda", "mu"}, "k", "strength_distance", "handle_weight",
-    "rotations" ("none" | "propagate" | "arap"), "rigid_iterations", "diffusion": {"samples", "origin", "turn", "detail_iterations"}, "simplification": {"max_cluster_size",
+    "rotations" ("none" | "propagate" | "arap"), "rigid_iterations", "rigid_rotation_smoothing", "diffusion": {"samples", "origin", "turn", "detail_iterations"}, "simplification": {"max_cluster_size",
     "target_count", "mode_threshold"}}`. SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
   relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos).
   Throws Cli_error naming the key and the problem.

@@ -752,6 +752,17 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   ASSERT_TRUE(CGAL::IO::read_point_set(path("capped.ply"), capped_set));
   settings.detail_iterations = 2;
   EXPECT_LT(max_distance(std::vector<Point>(capped_set.points().begin(), capped_set.points().end()), library_edit(settings)), 1e-12);
+  // SRE-ARAP's smooth-rotation term, as the library does it.
+  const Program_run smooth = run("edit -i " + in + " -o " + path("smooth.ply") + " --edit " + path("edit.json") +
+                                 " --rotations arap --rigid-iterations 2 --rigid-smoothing 1");
+  ASSERT_EQ(smooth.exit_code, 0) << smooth.output;
+  CGAL::Point_set_3<Point> smooth_set;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("smooth.ply"), smooth_set));
+  settings.detail_iterations = CGAL_ext::Detail_preserving_deformation_settings().detail_iterations;
+  settings.rigid_rotation_smoothing = 1;
+  const std::vector<Point> smooth_points(smooth_set.points().begin(), smooth_set.points().end());
+  EXPECT_LT(max_distance(smooth_points, library_edit(settings)), 1e-12);
+  EXPECT_GT(max_distance(smooth_points, rigid_points), 1e-6);
   // A misspelt mode is named.
   {
     std::ofstream edit(path("bad.json"));
@@ -760,7 +771,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   const Program_run bad = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad.json"));
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("rotations must be \"none\", \"propagate\" or \"arap\""), std::string::npos) << bad.output;
-  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "bad.json"});
+  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "smooth.ply", "bad.json"});
 }
 
 TEST_F(Cli, EditBySelAndDefAndItsMistakes)

@@ -377,6 +377,7 @@ private:
   bool m_diffused = false; // diffuse() ran since preprocess() or reset(): the stencil holds its motions
   std::vector<Eigen::Matrix3d> m_group_rotations; // per handle group, filled by each diffuse()
   Matrix_n3 m_anchor_displacement, m_detail_change, m_previous_samples; // per-edit buffers
+  std::vector<Eigen::Matrix3d> m_previous_rotations;                    // per-edit buffer
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
 };
@@ -622,8 +623,10 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
       pull_anchors(along);
       iterations_used += rigid_iterations<ConcurrencyTag>(m_system, m_samples, m_anchor_displacement,
                                                           m_settings.rigid_iterations,
-                                                          m_settings.rigid_tolerance * m_region_size, m_propagated,
-                                                          m_deformed_samples, m_detail_change, m_previous_samples);
+                                                          m_settings.rigid_tolerance * m_region_size,
+                                                          m_settings.rigid_rotation_smoothing, m_propagated,
+                                                          m_deformed_samples, m_detail_change, m_previous_samples,
+                                                          m_previous_rotations);
     }
     m_solved_transforms = m_transforms;
     m_statistics.rigid_iterations = iterations_used;

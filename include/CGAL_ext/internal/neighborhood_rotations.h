@@ -96,14 +96,39 @@ Eigen::Matrix3d fitted_linear_map(const Positions& rest, const Positions& deform
 }
 
 /// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`,
-/// written to `rotations[s]`.
+/// written to `rotations[s]`. With `smoothing` > 0, the smooth-rotation term of SRE-ARAP (Levi and Gotsman
+/// 2015; CGAL's `SRE_ARAP`) joins each fit: the covariance gains `smoothing * mean_j |e_j|^2 * R_j^T` for
+/// each neighbour j, `R_j` its rotation before this step (`previous`, a buffer), so every rotation is pulled
+/// toward its neighbours' by a weight that is the same at every sampling density. A neighbourhood that did
+/// not move among neighbours that did not turn keeps the identity exactly.
 template <typename ConcurrencyTag>
 void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed, const Neighbor_graph& graph,
-                                const std::vector<int>& rows, std::vector<Eigen::Matrix3d>& rotations)
+                                const std::vector<int>& rows, double smoothing, std::vector<Eigen::Matrix3d>& rotations,
+                                std::vector<Eigen::Matrix3d>& previous)
 {
+  if(!(smoothing > 0)) {
+    for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
+      const std::size_t s = std::size_t(rows[r]);
+      rotations[s] = fitted_rotation(rest, deformed, graph, s);
+    });
+    return;
+  }
+  previous = rotations;
   for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(rows[r]);
-    rotations[s] = fitted_rotation(rest, deformed, graph, s);
+    const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
+    bool moved = p != q;
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero(), turns = Eigen::Matrix3d::Zero();
+    double spread = 0;
+    for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+      moved = moved || rest.row(*j) != deformed.row(*j) || !previous[std::size_t(*j)].isIdentity(0);
+      covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
+      spread += (rest.row(*j) - p).squaredNorm();
+      turns += previous[std::size_t(*j)].transpose();
+    }
+    const double degree = double(graph.end(s) - graph.begin(s));
+    rotations[s] = moved ? best_rotation(Eigen::Matrix3d(covariance + smoothing * spread / degree * turns))
+                         : Eigen::Matrix3d::Identity();
   });
 }
 
@@ -148,7 +173,8 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template void fit_neighborhood_rotations<Tag>(const Matrix_n3&, const Matrix_n3&, const Neighbor_graph&, \
-                                                       const std::vector<int>&, std::vector<Eigen::Matrix3d>&); \
+                                                       const std::vector<int>&, double, std::vector<Eigen::Matrix3d>&, \
+                                                       std::vector<Eigen::Matrix3d>&); \
   EXTERN template Matrix_n3 rigid_edge_change<Tag>(const std::vector<std::pair<int, int>>&, const Matrix_n3&, \
                                                    const std::vector<Eigen::Matrix3d>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES)

@@ -70,19 +70,22 @@ inline Rigid_transform rigid_step(const Rigid_transform& from, const Rigid_trans
 
 /// One step: at most `iterations` alternations of the global solve (the edges' right-hand side turned by
 /// `rotations`, the handles pulled by `anchor_displacement`) and the local fit of `rotations` to its result;
-/// with `tolerance` > 0, it stops once no region sample point moved more than `tolerance` in an iteration.
-/// `edge_change` and `previous` are buffers. Returns the iterations taken.
+/// with `tolerance` > 0, it stops once no region sample point moved more than `tolerance` in an iteration;
+/// `smoothing` is the rotation fit's (`fit_neighborhood_rotations`). `edge_change`, `previous` and
+/// `previous_rotations` are buffers. Returns the iterations taken.
 template <typename ConcurrencyTag>
 unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, const Matrix_n3& anchor_displacement,
-                              unsigned int iterations, double tolerance, std::vector<Eigen::Matrix3d>& rotations,
-                              Matrix_n3& deformed, Matrix_n3& edge_change, Matrix_n3& previous)
+                              unsigned int iterations, double tolerance, double smoothing,
+                              std::vector<Eigen::Matrix3d>& rotations, Matrix_n3& deformed, Matrix_n3& edge_change,
+                              Matrix_n3& previous, std::vector<Eigen::Matrix3d>& previous_rotations)
 {
   unsigned int used = 0;
   for(unsigned int iteration = 0; iteration < iterations; ++iteration) {
     edge_change = rigid_edge_change<ConcurrencyTag>(system.rigid_edges, samples, rotations);
     if(tolerance > 0) previous = deformed;
     system.solve<ConcurrencyTag>(samples, edge_change, anchor_displacement, deformed);
-    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.roi, rotations);
+    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.roi, smoothing, rotations,
+                                               previous_rotations);
     ++used;
     if(!(tolerance > 0)) continue;
     double moved = 0;
