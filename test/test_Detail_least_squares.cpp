@@ -16,6 +16,7 @@
 
 #include <cstdlib>
 #include <random>
+#include <thread>
 
 using namespace CGAL_ext;
 using namespace CGAL_ext::internal;
@@ -284,5 +285,26 @@ TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheSt
   Detail_least_squares system;
   factor(system);
   EXPECT_EQ((system.solve<CGAL::Sequential_tag>(r, t) - expected).norm(), 0.0);
+}
+#endif
+
+#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+// The factorisation serialises CHOLMOD's OpenMP regions (which compete with OpenBLAS's threads for the cores)
+// for the calling thread only, and restores what that thread had.
+TEST(DetailLeastSquares, FactorisationSerialisesTheOpenMPRegionsOfItsOwnThreadOnly)
+{
+  using Get = int (*)();
+  const auto max_active_levels = reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+  if(!max_active_levels) GTEST_SKIP() << "CHOLMOD brought no OpenMP runtime";
+  const int before = max_active_levels();
+  ASSERT_GT(before, 0);
+  {
+    const Serial_openmp_regions serial;
+    EXPECT_EQ(max_active_levels(), 0);
+    int elsewhere = -1;
+    std::thread([&] { elsewhere = max_active_levels(); }).join();
+    EXPECT_EQ(elsewhere, before);
+  }
+  EXPECT_EQ(max_active_levels(), before);
 }
 #endif

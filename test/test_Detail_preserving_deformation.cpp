@@ -523,7 +523,9 @@ TEST(DetailPreservingDeformation, DetailRestorationSolvesItsSystem)
     EXPECT_LT(std::sqrt(residual / size), 1e-9);
     std::printf("%s: bump error %.2e, restored %.2e (%u iterations)\n", bend ? "bent" : "turned",
                 flattened / double(rows.size()), restored / double(rows.size()), outcome.iterations);
-    if(!bend) EXPECT_LT(restored, 0.3 * flattened); // 0.21: the anchor keeps a/(a + lambda) of the flattening
+    if(!bend) {
+      EXPECT_LT(restored, 0.3 * flattened); // 0.21: the anchor keeps a/(a + lambda) of the flattening
+    }
   }
 }
 

@@ -14,6 +14,10 @@
 #include <Eigen/SparseCholesky>
 #ifdef CGAL_EXT_USE_CHOLMOD
 #include <Eigen/CholmodSupport>
+#if __has_include(<dlfcn.h>)
+#include <dlfcn.h>
+#define CGAL_EXT_SERIAL_OPENMP_REGIONS
+#endif
 #endif
 
 #include <algorithm>
@@ -76,6 +80,48 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
   }
   return B;
 }
+
+#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+/// While it lives, the OpenMP regions the calling thread opens run on that thread alone (the OpenMP runtime's
+/// `max-active-levels` of this thread set to 0; other threads are untouched). CHOLMOD 3 runs parts of its
+/// supernodal factorisation in OpenMP regions of a fixed four threads, which on a machine with few cores fight
+/// OpenBLAS's threads, idle but spinning, for the cores: a 28,270-unknown factorisation took 0.50-0.81 s on
+/// two cores, 0.32-0.52 s with the regions serial (doc/design.md, "Editing's factorisation"). The runtime is
+/// looked up, not linked: without one loaded (a CHOLMOD built without OpenMP) this does nothing.
+class Serial_openmp_regions
+{
+  using Get = int (*)();
+  using Set = void (*)(int);
+  struct Runtime
+  {
+    Get get = reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+    Set set = reinterpret_cast<Set>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
+  };
+  static const Runtime& runtime()
+  {
+    static const Runtime found;
+    return found;
+  }
+
+public:
+  Serial_openmp_regions()
+  {
+    if(runtime().get && runtime().set) {
+      m_saved = runtime().get();
+      runtime().set(0);
+    }
+  }
+  ~Serial_openmp_regions()
+  {
+    if(runtime().get && runtime().set) runtime().set(m_saved);
+  }
+  Serial_openmp_regions(const Serial_openmp_regions&) = delete;
+  Serial_openmp_regions& operator=(const Serial_openmp_regions&) = delete;
+
+private:
+  int m_saved = 1;
+};
+#endif
 
 /*
   The least-squares core of detail scaling, enhancement and editing:
@@ -477,6 +523,9 @@ try {
   common.nmethods = amd_only ? 1 : 2;
   common.method[0].ordering = amd_only ? CHOLMOD_AMD : CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
+#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+  const Serial_openmp_regions serial_openmp;
+#endif
   // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
   m_main->analyzePattern(normal);
   check_cholmod("analysing the normal matrix");
