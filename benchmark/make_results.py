@@ -26,6 +26,8 @@ EDITING_COLUMNS = {
                "drag_max_s"],
     "scaling": ["model", "order", "solver", "points", "ssps", "roi_ssps", "preprocess_s", "editing_ssps_s",
                 "drag_median_s", "drag_min_s", "drag_max_s", "cg_iterations"],
+    "large_system": ["model", "points", "ssp_target", "ssps", "unknowns", "normal_nonzeros", "assembly_s", "factor_s",
+                     "factor_min_s", "factor_max_s"],
     "arap": ["model", "method", "preprocess_s", "deform_s", "hausdorff_to_sre_arap", "detail_change",
              "handle_error", "ssps", "stretch_p99", "hausdorff_to_sre_arap_1000_iterations", "per_drag_s"],
     "cactus": ["turn_degrees", "method", "hausdorff_to_sre_arap", "hausdorff_to_converged_sre_arap",

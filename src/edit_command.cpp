@@ -139,7 +139,7 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
     ->check(CLI::IsMember({"none", "propagate", "arap"}));
   edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
     ->check(CLI::Range(1u, 1000u));
-  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: CGAL's SRE_ARAP energy; default 0)")
+  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: CGAL's SRE_ARAP energy, with --rigid-iterations 10 or more; default 0)")
     ->check(CLI::NonNegativeNumber);
   edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")
     ->check(CLI::Range(0u, 100000u));
