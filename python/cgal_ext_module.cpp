@@ -519,6 +519,12 @@ private:
         else throw py::value_error("rotations must be \"none\", \"propagate\" or \"arap\", not \"" + r + "\"");
       } else if(key == "rigid_iterations") s.rigid_iterations = as_count(value.cast<long long>(), "rigid_iterations");
       else if(key == "rigid_rotation_smoothing") s.rigid_rotation_smoothing = value.cast<double>();
+      else if(key == "rigid_edge_weights") {
+        const std::string w = value.cast<std::string>();
+        if(w == "uniform") s.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::uniform;
+        else if(w == "cotangent") s.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::cotangent;
+        else throw py::value_error("rigid_edge_weights must be \"uniform\" or \"cotangent\", not \"" + w + "\"");
+      }
       else if(key == "strength") {
         const std::string d = value.cast<std::string>();
         if(d == "euclidean") s.strength_distance = CGAL_ext::Strength_distance::euclidean;
@@ -596,7 +602,8 @@ PYBIND11_MODULE(cgal_ext, m)
 
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
-                          "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, rigid_rotation_smoothing, strength "
+                          "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, rigid_rotation_smoothing, "
+                          "rigid_edge_weights ('uniform', 'cotangent'), strength "
                           "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_iterations, "
                           "detail_tolerance, detail_anchor, diffusion_origin "
                           "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")

@@ -22,7 +22,7 @@ struct Edit_command
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
   std::size_t max_cluster_size = 0, target = 0;
   unsigned int rigid_iterations = 0, detail_iterations = 0;
-  std::string rotations;
+  std::string rotations, rigid_weights;
   bool upsample = false;
   std::map<std::string, CLI::Option*> given;
   Render_settings render;
@@ -62,6 +62,7 @@ struct Edit_command
     if(has("--rotations")) s.rotations = detail_rotation(rotations, "--rotations");
     if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
     if(has("--rigid-smoothing")) s.rigid_rotation_smoothing = rigid_smoothing;
+    if(has("--rigid-weights")) s.rigid_edge_weights = rigid_edge_weights(rigid_weights, "--rigid-weights");
     if(has("--detail-iterations")) s.detail_iterations = detail_iterations;
     s.validate();
     ensure_normals(cloud, progress, rep);
@@ -141,6 +142,8 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
     ->check(CLI::Range(1u, 1000u));
   edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: CGAL's SRE_ARAP energy, with --rigid-iterations 10 or more; default 0)")
     ->check(CLI::NonNegativeNumber);
+  edit.given["--rigid-weights"] = edit_app->add_option("--rigid-weights", edit.rigid_weights, "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent (from each SSP's Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)")
+    ->check(CLI::IsMember({"uniform", "cotangent"}));
   edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")
     ->check(CLI::Range(0u, 100000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");

@@ -141,6 +141,13 @@ CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::st
   throw Cli_error(where + " must be \"none\", \"propagate\" or \"arap\", not \"" + name + "\"");
 }
 
+CGAL_ext::Rigid_edge_weights rigid_edge_weights(const std::string& name, const std::string& where)
+{
+  if(name == "uniform") return CGAL_ext::Rigid_edge_weights::uniform;
+  if(name == "cotangent") return CGAL_ext::Rigid_edge_weights::cotangent;
+  throw Cli_error(where + " must be \"uniform\" or \"cotangent\", not \"" + name + "\"");
+}
+
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
 {
   std::ifstream in = open_input(path);
@@ -152,7 +159,7 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   }
   const std::string file = path.filename().string();
   check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
-                    "rigid_rotation_smoothing",
+                    "rigid_rotation_smoothing", "rigid_edge_weights",
                     "diffusion", "simplification"}, file);
   const std::filesystem::path base = path.parent_path();
   Edit_description out;
@@ -210,6 +217,10 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("rigid_rotation_smoothing"))
     settings.rigid_rotation_smoothing = number(edit["rigid_rotation_smoothing"], file + ": rigid_rotation_smoothing");
+  if(edit.contains("rigid_edge_weights")) {
+    const json& w = edit["rigid_edge_weights"];
+    settings.rigid_edge_weights = rigid_edge_weights(w.is_string() ? w.get<std::string>() : "", file + ": rigid_edge_weights");
+  }
   if(edit.contains("diffusion")) {
     const json& d = edit["diffusion"];
     check_keys(d, {"samples", "origin", "turn", "detail_iterations"}, file + ": diffusion");

@@ -222,7 +222,10 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["handle_constraints"] = std::isinf(edit.settings.handle_weight) ? nlohmann::json("exact") : nlohmann::json(edit.settings.handle_weight);
   r["max_handle_point_error"] = handle_error;
   r["displacement_ratio"] = st.displacement_ratio;
-  if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) r["rigid_iterations"] = st.rigid_iterations;
+  if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) {
+    r["rigid_iterations"] = st.rigid_iterations;
+    r["rigid_edge_weights"] = edit.settings.rigid_edge_weights == CGAL_ext::Rigid_edge_weights::cotangent ? "cotangent" : "uniform";
+  }
   if(edit.settings.detail_iterations > 0)
     r["restore_details"] = {{"iterations", st.restore_iterations}, {"residual", st.restore_residual}};
 }

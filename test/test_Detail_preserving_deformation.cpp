@@ -94,6 +94,18 @@ Settings with_order(Detail_order order, CGAL_ext::Detail_rotation rotations = CG
 
 constexpr CGAL_ext::Detail_rotation both_rotations[] = {CGAL_ext::Detail_rotation::propagated,
                                                         CGAL_ext::Detail_rotation::as_rigid_as_possible};
+using CGAL_ext::Rigid_edge_weights;
+constexpr Rigid_edge_weights both_rigid_weights[] = {Rigid_edge_weights::uniform, Rigid_edge_weights::cotangent};
+
+/// The tentacle's tip turned by 70 degrees about y through its centre, deformed with `settings`.
+std::unique_ptr<Deformation> bend_tip_by_70_degrees(const Tentacle& t, const Settings& settings)
+{
+  const std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
+  auto d = t.edit(settings);
+  d->set_handle_transform(0, turn.first, turn.second);
+  EXPECT_TRUE(d->deform());
+  return d;
+}
 
 } // namespace
 
@@ -102,9 +114,12 @@ TEST(DetailPreservingDeformation, UnmovedHandlesReturnEveryPointExactly)
   const Tentacle t(2500);
   for(auto turn : {CGAL_ext::Sample_turn::frames, CGAL_ext::Sample_turn::fitted, CGAL_ext::Sample_turn::affine})
   for(auto rotations : both_rotations)
+  for(auto weights : both_rigid_weights)
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
+    if(weights == Rigid_edge_weights::cotangent && rotations != CGAL_ext::Detail_rotation::as_rigid_as_possible) continue;
     Settings settings = with_order(order, rotations);
     settings.diffusion_turn = turn;
+    settings.rigid_edge_weights = weights;
     auto d = t.edit(settings);
     ASSERT_TRUE(d->deform());
     d->diffuse();
@@ -126,11 +141,15 @@ TEST(DetailPreservingDeformation, WholeModelMovesRigidlyWithItsHandles)
   for(auto turn : {CGAL_ext::Sample_turn::frames, CGAL_ext::Sample_turn::fitted, CGAL_ext::Sample_turn::affine})
   for(auto rotations : both_rotations)
   for(double smoothing : {0.0, 1.0})
+  for(auto weights : both_rigid_weights)
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
-    if(smoothing > 0 && rotations != CGAL_ext::Detail_rotation::as_rigid_as_possible) continue;
+    const bool rigid = rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible;
+    if((smoothing > 0 || weights == Rigid_edge_weights::cotangent) && !rigid) continue;
+    if(weights == Rigid_edge_weights::cotangent && order != Detail_order::quadric) continue; // ARAP ignores the order
     Settings settings = with_order(order, rotations);
     settings.diffusion_turn = turn;
     settings.rigid_rotation_smoothing = smoothing; // SRE-ARAP's term, with as rigid as possible
+    settings.rigid_edge_weights = weights;
     settings.simplification.max_cluster_size = 6; // clustered: the points are not their own sample points
     Deformation d(t.all(), settings, t.np());
     d.insert_roi_points(t.all());
@@ -179,8 +198,12 @@ TEST(DetailPreservingDeformation, HandlePointsEndExactlyOnTheirTargets)
   const auto [R0, t0] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.6, Eigen::Vector3d(0.1, 0.2, 0.05));
   const auto [R1, t1] = turn_about(Eigen::Vector3d(-0.2, 0, 0.55), Eigen::Vector3d(1, 0, 0), -0.2, Eigen::Vector3d(0, 0.05, 0));
   for(auto rotations : both_rotations)
+  for(auto weights : both_rigid_weights)
     for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
-      auto d = t.edit(with_order(order, rotations));
+      if(weights == Rigid_edge_weights::cotangent && rotations != CGAL_ext::Detail_rotation::as_rigid_as_possible) continue;
+      Settings settings = with_order(order, rotations);
+      settings.rigid_edge_weights = weights;
+      auto d = t.edit(settings);
       const std::size_t g1 = d->create_handle_group();
       d->insert_handle_points(g1, ring);
       d->set_handle_transform(0, R0, t0);
@@ -197,7 +220,8 @@ TEST(DetailPreservingDeformation, HandlePointsEndExactlyOnTheirTargets)
         if(d->is_handle_sample_point(s))
           error = std::max(error, (d->deformed_sample_position(s) - d->handle_target(d->handle_group_of(s), d->sample_position(s))).norm());
       const std::string what = std::string(CGAL_ext::Detail_filter::order_name(order)) +
-                               (rotations == CGAL_ext::Detail_rotation::propagated ? ", propagated" : ", ARAP");
+                               (rotations == CGAL_ext::Detail_rotation::propagated ? ", propagated" : ", ARAP") +
+                               (weights == Rigid_edge_weights::cotangent ? ", cotangent weights" : "");
       EXPECT_LT(error, 1e-9 * t.diagonal) << what;
       EXPECT_LT(normal_error, 1e-12) << what;
       EXPECT_LE(d->statistics().least_squares.unknowns, d->number_of_roi_sample_points() - d->statistics().handle_samples)
@@ -836,30 +860,31 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleApproachesItsFixedPointWithMo
   // alternation minimises one energy; a variant that rotated the details instead drifted away with more
   // iterations). The reference: 100 iterations per step (on 1,500 points they land 1e-4 of the diagonal from
   // the fixed point, where no iteration moves a sample point more than 1e-7 of the region).
+  // The same with cotangent weights, which change the energy, not the alternation.
   const Tentacle t(1000);
-  const std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
-  auto solve = [&](unsigned iterations, double tolerance) {
-    Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
-    settings.rigid_iterations = iterations;
-    settings.rigid_tolerance = tolerance;
-    auto d = t.edit(settings);
-    d->set_handle_transform(0, turn.first, turn.second);
-    EXPECT_TRUE(d->deform());
-    return d;
-  };
-  const auto reference = solve(100, 0);
-  double previous = INFINITY;
-  for(const unsigned iterations : {3u, 10u, 30u}) {
-    const auto d = solve(iterations, 0);
-    double distance = 0;
-    for(std::size_t s = 0; s < d->number_of_sample_points(); ++s)
-      distance = std::max(distance, (d->deformed_sample_position(s) - reference->deformed_sample_position(s)).norm());
-    std::printf("as rigid as possible, 70 degrees, %u iterations per step: %.4f of the diagonal from 100\n", iterations,
-                distance / t.diagonal);
-    EXPECT_LT(distance, 0.7 * previous) << iterations << " iterations";
-    previous = distance;
+  for(auto weights : both_rigid_weights) {
+    auto solve = [&](unsigned iterations, double tolerance) {
+      Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
+      settings.rigid_iterations = iterations;
+      settings.rigid_tolerance = tolerance;
+      settings.rigid_edge_weights = weights;
+      return bend_tip_by_70_degrees(t, settings);
+    };
+    const char* what = weights == Rigid_edge_weights::cotangent ? "cotangent" : "uniform";
+    const auto reference = solve(100, 0);
+    double previous = INFINITY;
+    for(const unsigned iterations : {3u, 10u, 30u}) {
+      const auto d = solve(iterations, 0);
+      double distance = 0;
+      for(std::size_t s = 0; s < d->number_of_sample_points(); ++s)
+        distance = std::max(distance, (d->deformed_sample_position(s) - reference->deformed_sample_position(s)).norm());
+      std::printf("as rigid as possible (%s weights), 70 degrees, %u iterations per step: %.4f of the diagonal from 100\n",
+                  what, iterations, distance / t.diagonal);
+      EXPECT_LT(distance, 0.7 * previous) << iterations << " iterations, " << what << " weights";
+      previous = distance;
+    }
+    EXPECT_LT(previous, 0.01 * t.diagonal) << what;
   }
-  EXPECT_LT(previous, 0.01 * t.diagonal);
 }
 
 TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
@@ -876,15 +901,11 @@ TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
     d->diffuse();
     for(std::size_t i = 0; i < t.shape.points.size(); ++i) ASSERT_EQ(d->deformed_point(i), t.point(i)) << i;
   }
-  const std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
   auto solve = [&](unsigned iterations, double smoothing) {
     Settings s = settings;
     s.rigid_iterations = iterations;
     s.rigid_rotation_smoothing = smoothing;
-    auto d = t.edit(s);
-    d->set_handle_transform(0, turn.first, turn.second);
-    EXPECT_TRUE(d->deform());
-    return d;
+    return bend_tip_by_70_degrees(t, s);
   };
   auto distance = [](const std::unique_ptr<Deformation>& a, const std::unique_ptr<Deformation>& b) {
     double largest = 0;

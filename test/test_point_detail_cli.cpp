@@ -763,6 +763,18 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   const std::vector<Point> smooth_points(smooth_set.points().begin(), smooth_set.points().end());
   EXPECT_LT(max_distance(smooth_points, library_edit(settings)), 1e-12);
   EXPECT_GT(max_distance(smooth_points, rigid_points), 1e-6);
+  // Cotangent edge weights, as the library does them; the report names them.
+  const Program_run cotangent = run("edit -i " + in + " -o " + path("cotangent.ply") + " --edit " + path("edit.json") +
+                                    " --rotations arap --rigid-iterations 2 --rigid-weights cotangent --report " + path("cotangent.json"));
+  ASSERT_EQ(cotangent.exit_code, 0) << cotangent.output;
+  CGAL::Point_set_3<Point> cotangent_set;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("cotangent.ply"), cotangent_set));
+  settings.rigid_rotation_smoothing = 0;
+  settings.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::cotangent;
+  const std::vector<Point> cotangent_points(cotangent_set.points().begin(), cotangent_set.points().end());
+  EXPECT_LT(max_distance(cotangent_points, library_edit(settings)), 1e-12);
+  EXPECT_GT(max_distance(cotangent_points, rigid_points), 1e-6);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("cotangent.json")))["rigid_edge_weights"], "cotangent");
   // A misspelt mode is named.
   {
     std::ofstream edit(path("bad.json"));
@@ -771,7 +783,16 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   const Program_run bad = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad.json"));
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("rotations must be \"none\", \"propagate\" or \"arap\""), std::string::npos) << bad.output;
-  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "smooth.ply", "bad.json"});
+  {
+    std::ofstream edit(path("bad_weights.json"));
+    edit << R"({"handles": [{"select": ["sphere:0,0,1,0.25"], "translation": [0.1, 0, 0.2]}], "rigid_edge_weights": "cot"})";
+  }
+  const Program_run bad_weights = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad_weights.json"));
+  EXPECT_NE(bad_weights.exit_code, 0);
+  EXPECT_NE(bad_weights.output.find("rigid_edge_weights must be \"uniform\" or \"cotangent\", not \"cot\""), std::string::npos)
+    << bad_weights.output;
+  expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "smooth.ply", "cotangent.ply",
+               "cotangent.json", "bad.json", "bad_weights.json"});
 }
 
 TEST_F(Cli, EditBySelAndDefAndItsMistakes)

@@ -51,7 +51,9 @@ namespace CGAL_ext {
     3t^2 - 2t^3`: `Q_i = nlerp(identity, Q_handle, f)`. Several groups share the pull in proportion to
     `1 / d1_g` (a handle SSP follows its own group only).
   - Or, `Detail_rotation::as_rigid_as_possible`, each `R_i` is the best rotation of the SSP's neighbourhood
-    edges from rest to the solved shape, alternated with the solve (same factorisation) a few times per drag.
+    edges from rest to the solved shape, alternated with the solve (same factorisation) a few times per drag;
+    the edges weigh the same, or (`Rigid_edge_weights::cotangent`) by the cotangent weights of each SSP's
+    Voronoi cell in its tangent plane.
   - Every point follows its `m` nearest SSPs through their local frames (normal refitted after the edit,
     first axis toward a fixed reference neighbour), blended by weights `(1 - d_j / d_max)^2` that vanish at
     the (m+1)-th nearest SSP, so the motion is continuous in space; normals turn with the blended rotation.
@@ -491,8 +493,9 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
                         "of sample points (" + std::to_string(count) + "); lower it, or make the clusters smaller");
   std::vector<int> point_of_sample(count);
   for(std::size_t s = 0; s < count; ++s) point_of_sample[s] = m_cloud.input_index[std::size_t(m_sample_first_row[s])];
-  m_system.setup<ConcurrencyTag>(m_samples, m_sample_label, point_of_sample, k, m_settings.filter,
+  m_system.setup<ConcurrencyTag>(m_samples, m_sample_normals, m_sample_label, point_of_sample, k, m_settings.filter,
                                  m_settings.rotations == Detail_rotation::as_rigid_as_possible,
+                                 m_settings.rigid_edge_weights == Rigid_edge_weights::cotangent,
                                  m_settings.least_squares, m_settings.handle_weight, who);
   const bool exact_handles = std::isinf(m_settings.handle_weight);
   if(!progress.report(0.6)) return false;

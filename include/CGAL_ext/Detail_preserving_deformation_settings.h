@@ -40,6 +40,21 @@ enum class Detail_rotation
 
 /*!
   \ingroup PkgCGALExtRef
+  How `Detail_rotation::as_rigid_as_possible` weighs the edges of the sample points' neighbour graph, in its
+  rotation fits and its solve alike.
+*/
+enum class Rigid_edge_weights
+{
+  uniform,  ///< every edge 1 (Sorkine and Alexa's uniform variant on the kNN graph)
+  cotangent ///< the point-set analogue of the mesh's cotangent weights: each sample point's Voronoi cell among
+            ///< its graph neighbours in its tangent plane, an edge's weight the length of the cell's side it
+            ///< crosses over its own (on a planar Delaunay 1-ring exactly `(cot a + cot b) / 2`), the mean of
+            ///< both ends' values. Less dependent on the graph's size k, and nearer a mesh ARAP on large
+            ///< bends (doc/editing.md, "As rigid as possible")
+};
+
+/*!
+  \ingroup PkgCGALExtRef
   Where a point's offset is measured from when the deformation is diffused from the sample points to every
   point (Miao et al. 2007, Sect. 6.2). Both reproduce rigid motions exactly and keep points whose sample
   points did not move in place; they differ in how they blend bending.
@@ -118,6 +133,8 @@ struct Detail_preserving_deformation_settings
   /// rotations): with 3 it lands farther from SRE_ARAP than plain ARAP on most scans (doc/editing.md, "As rigid
   /// as possible").
   double rigid_rotation_smoothing = 0;
+  /// With `as_rigid_as_possible`: the weights of the graph's edges.
+  Rigid_edge_weights rigid_edge_weights = Rigid_edge_weights::uniform;
   /// With `as_rigid_as_possible`: the largest turn of a handle group in one step of `deform()`, in degrees, > 0.
   /// ARAP's energy is not convex: a large change of the handles taken at once can land in another minimum.
   double rigid_step_degrees = 10;

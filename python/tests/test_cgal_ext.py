@@ -96,6 +96,7 @@ def test_upsampling_is_the_programs(sphere, tmp_path):
 @pytest.mark.parametrize("options, settings", [
     ((), {}),
     (("--diffusion-turn", "frames", "--diffusion-origin", "nearest"), {"diffusion_turn": "frames", "diffusion_origin": "nearest"}),
+    (("--rotations", "arap", "--rigid-weights", "cotangent"), {"rotations": "arap", "rigid_edge_weights": "cotangent"}),
 ])
 def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, settings):
     points, normals = sphere
@@ -157,6 +158,7 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), ValueError, "unknown setting 'rotation'"),
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_turn="twisted"), ValueError, "diffusion_turn must be"),
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_origin="far"), ValueError, "diffusion_origin must be"),
+    (lambda p, n: cgal_ext.Deformation(p, n, rigid_edge_weights="cot"), ValueError, "rigid_edge_weights must be"),
 ])
 def test_bad_input_is_a_value_error_naming_it(sphere, call, error, needle):
     points, normals = sphere

@@ -6,6 +6,7 @@
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/tangent_cotangent_weights.h>
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
@@ -13,6 +14,7 @@
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
 
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -56,18 +58,21 @@ Matrix3 best_rotation(const Matrix3& covariance)
   return v.col(2) * u2.transpose() + v.col(1) * u1.transpose() + v.col(0) * u0.transpose();
 }
 
-/// The best rotation of the edges from sample point `s` to its graph neighbours, from `rest` to `deformed`
-/// (uniform weights). A sample point whose neighbourhood did not move gets the identity exactly, so unmoved
-/// parts stay exact. (A template for the reason `best_rotation` is one.)
+/// The best rotation of the edges from sample point `s` to its graph neighbours, from `rest` to `deformed`,
+/// each edge weighted by `weights` (one per entry of `graph.indices`; null: uniform). A sample point whose
+/// neighbourhood did not move gets the identity exactly, so unmoved parts stay exact. (A template for the
+/// reason `best_rotation` is one.)
 template <typename Positions>
-Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s)
+Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
+                                const double* weights = nullptr)
 {
   const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
   bool moved = p != q;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
     moved = moved || rest.row(*j) != deformed.row(*j);
-    covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
+    const double w = weights ? weights[j - graph.indices.data()] : 1.0;
+    covariance += w * (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
   }
   return moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
 }
@@ -95,21 +100,24 @@ Eigen::Matrix3d fitted_linear_map(const Positions& rest, const Positions& deform
   return (image + mu * rotation) * (spread + mu * Eigen::Matrix3d::Identity()).inverse();
 }
 
-/// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`,
-/// written to `rotations[s]`. With `smoothing` > 0, the smooth-rotation term of SRE-ARAP (Levi and Gotsman
-/// 2015; CGAL's `SRE_ARAP`) joins each fit: the covariance gains `smoothing * mean_j |e_j|^2 * R_j^T` for
-/// each neighbour j, `R_j` its rotation before this step (`previous`, a buffer), so every rotation is pulled
-/// toward its neighbours' by a weight that is the same at every sampling density. A neighbourhood that did
-/// not move among neighbours that did not turn keeps the identity exactly.
+/// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`
+/// under the edge `weights` (empty: uniform), written to `rotations[s]`. With `smoothing` > 0, the
+/// smooth-rotation term of SRE-ARAP (Levi and Gotsman 2015; CGAL's `SRE_ARAP`) joins each fit: the covariance
+/// gains `smoothing * sum_j w_j |e_j|^2 / d * R_j^T` for each of the d neighbours j that the term visits (all
+/// of them; with weights, those of the Voronoi cell, as SRE-ARAP visits the 1-ring), `R_j` its rotation before
+/// this step (`previous`, a buffer), so every rotation is pulled toward its neighbours' by a weight that is the
+/// same at every sampling density. A neighbourhood that did not move among neighbours that did not turn keeps
+/// the identity exactly.
 template <typename ConcurrencyTag>
 void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed, const Neighbor_graph& graph,
-                                const std::vector<int>& rows, double smoothing, std::vector<Eigen::Matrix3d>& rotations,
-                                std::vector<Eigen::Matrix3d>& previous)
+                                const std::vector<double>& weights, const std::vector<int>& rows, double smoothing,
+                                std::vector<Eigen::Matrix3d>& rotations, std::vector<Eigen::Matrix3d>& previous)
 {
+  const double* w = weights.empty() ? nullptr : weights.data();
   if(!(smoothing > 0)) {
     for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
       const std::size_t s = std::size_t(rows[r]);
-      rotations[s] = fitted_rotation(rest, deformed, graph, s);
+      rotations[s] = fitted_rotation(rest, deformed, graph, s, w);
     });
     return;
   }
@@ -119,36 +127,44 @@ void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed
     const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
     bool moved = p != q;
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero(), turns = Eigen::Matrix3d::Zero();
-    double spread = 0;
+    double spread = 0, degree = 0;
     for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
       moved = moved || rest.row(*j) != deformed.row(*j) || !previous[std::size_t(*j)].isIdentity(0);
-      covariance += (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
-      spread += (rest.row(*j) - p).squaredNorm();
+      const double weight = w ? w[j - graph.indices.data()] : 1.0;
+      covariance += weight * (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
+      spread += weight * (rest.row(*j) - p).squaredNorm();
+      if(w && !(weight > least_cotangent_weight)) continue; // not a Delaunay neighbour
       turns += previous[std::size_t(*j)].transpose();
+      ++degree;
     }
-    const double degree = double(graph.end(s) - graph.begin(s));
-    rotations[s] = moved ? best_rotation(Eigen::Matrix3d(covariance + smoothing * spread / degree * turns))
-                         : Eigen::Matrix3d::Identity();
+    const double pull = degree > 0 ? smoothing * spread / degree : 0.0;
+    rotations[s] = moved ? best_rotation(Eigen::Matrix3d(covariance + pull * turns)) : Eigen::Matrix3d::Identity();
   });
 }
 
-/// The global step of as-rigid-as-possible editing as least squares: one row `u_i - u_j` per edge `i < j` of
-/// the (symmetric) graph with an end in the region, on the region's columns (`local[s]`, -1 outside; fixed
-/// sample points do not move). Its normal matrix is the graph Laplacian of the region, and the solution for
-/// the right-hand side of `rigid_edge_change` minimises the ARAP energy (Sorkine and Alexa 2007) for given
-/// rotations, so the alternation with `fit_neighborhood_rotations` never increases it.
-inline Sparse_row_matrix rigid_edge_rows(const Neighbor_graph& graph, const std::vector<int>& local, std::size_t region_size,
-                                         std::vector<std::pair<int, int>>& edges)
+/// The global step of as-rigid-as-possible editing as least squares: one row `sqrt(w_ij) (u_i - u_j)` per
+/// edge `i < j` of the (symmetric) graph with an end in the region, on the region's columns (`local[s]`, -1
+/// outside; fixed sample points do not move), `w_ij` from `weights` (one per entry of `graph.indices`, equal
+/// both ways; empty: 1). Writes the edges and their `sqrt(w_ij)` (`scales`, empty when uniform). Its normal
+/// matrix is the region's weighted graph Laplacian, and the solution for the right-hand side of
+/// `rigid_edge_change` minimises the ARAP energy (Sorkine and Alexa 2007) for given rotations, so the
+/// alternation with `fit_neighborhood_rotations` under the same weights never increases it.
+inline Sparse_row_matrix rigid_edge_rows(const Neighbor_graph& graph, const std::vector<double>& weights,
+                                         const std::vector<int>& local, std::size_t region_size,
+                                         std::vector<std::pair<int, int>>& edges, std::vector<double>& scales)
 {
   edges.clear();
+  scales.clear();
   std::vector<Eigen::Triplet<double, int>> entries;
   for(std::size_t i = 0; i < graph.size(); ++i)
     for(const int* j = graph.begin(i); j != graph.end(i); ++j) {
       if(*j <= int(i) || (local[i] < 0 && local[std::size_t(*j)] < 0)) continue;
       const int row = int(edges.size());
+      const double scale = weights.empty() ? 1.0 : std::sqrt(weights[std::size_t(j - graph.indices.data())]);
       edges.emplace_back(int(i), *j);
-      if(local[i] >= 0) entries.emplace_back(row, local[i], 1.0);
-      if(local[std::size_t(*j)] >= 0) entries.emplace_back(row, local[std::size_t(*j)], -1.0);
+      if(!weights.empty()) scales.push_back(scale);
+      if(local[i] >= 0) entries.emplace_back(row, local[i], scale);
+      if(local[std::size_t(*j)] >= 0) entries.emplace_back(row, local[std::size_t(*j)], -scale);
     }
   Sparse_row_matrix A(Eigen::Index(edges.size()), Eigen::Index(region_size));
   A.setFromTriplets(entries.begin(), entries.end());
@@ -156,16 +172,17 @@ inline Sparse_row_matrix rigid_edge_rows(const Neighbor_graph& graph, const std:
 }
 
 /// Right-hand side of the global step: for each edge, `((R_i + R_j) / 2 - I)(s_i - s_j)`, the change of the
-/// edge both ends' rotations ask for on average.
+/// edge both ends' rotations ask for on average, times its `scales` entry (empty: 1).
 template <typename ConcurrencyTag>
-Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const Matrix_n3& rest,
-                            const std::vector<Eigen::Matrix3d>& rotations)
+Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const std::vector<double>& scales,
+                            const Matrix_n3& rest, const std::vector<Eigen::Matrix3d>& rotations)
 {
   Matrix_n3 change(Eigen::Index(edges.size()), 3);
   for_range<ConcurrencyTag>(0, edges.size(), [&](std::size_t e) {
     const auto [i, j] = edges[e];
     const Eigen::Matrix3d half_turn = 0.5 * (rotations[std::size_t(i)] + rotations[std::size_t(j)]) - Eigen::Matrix3d::Identity();
-    change.row(Eigen::Index(e)) = (half_turn * (rest.row(i) - rest.row(j)).transpose()).transpose();
+    const double scale = scales.empty() ? 1.0 : scales[e];
+    change.row(Eigen::Index(e)) = scale * (half_turn * (rest.row(i) - rest.row(j)).transpose()).transpose();
   });
   return change;
 }
@@ -173,10 +190,10 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template void fit_neighborhood_rotations<Tag>(const Matrix_n3&, const Matrix_n3&, const Neighbor_graph&, \
-                                                       const std::vector<int>&, double, std::vector<Eigen::Matrix3d>&, \
-                                                       std::vector<Eigen::Matrix3d>&); \
-  EXTERN template Matrix_n3 rigid_edge_change<Tag>(const std::vector<std::pair<int, int>>&, const Matrix_n3&, \
-                                                   const std::vector<Eigen::Matrix3d>&);
+                                                       const std::vector<double>&, const std::vector<int>&, double, \
+                                                       std::vector<Eigen::Matrix3d>&, std::vector<Eigen::Matrix3d>&); \
+  EXTERN template Matrix_n3 rigid_edge_change<Tag>(const std::vector<std::pair<int, int>>&, const std::vector<double>&, \
+                                                   const Matrix_n3&, const std::vector<Eigen::Matrix3d>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES)
 
 } // namespace internal

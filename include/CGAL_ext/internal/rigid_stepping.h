@@ -81,11 +81,11 @@ unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, c
 {
   unsigned int used = 0;
   for(unsigned int iteration = 0; iteration < iterations; ++iteration) {
-    edge_change = rigid_edge_change<ConcurrencyTag>(system.rigid_edges, samples, rotations);
+    edge_change = rigid_edge_change<ConcurrencyTag>(system.rigid_edges, system.rigid_edge_scales, samples, rotations);
     if(tolerance > 0) previous = deformed;
     system.solve<ConcurrencyTag>(samples, edge_change, anchor_displacement, deformed);
-    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.roi, smoothing, rotations,
-                                               previous_rotations);
+    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.edge_weights, system.roi,
+                                               smoothing, rotations, previous_rotations);
     ++used;
     if(!(tolerance > 0)) continue;
     double moved = 0;

@@ -12,6 +12,7 @@
 #include <CGAL_ext/internal/detail_manipulation.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/tangent_cotangent_weights.h>
 
 #include <cmath>
 #include <utility>
@@ -38,16 +39,20 @@ public:
   std::vector<int> anchors;        ///< rows in `roi` of the handle sample points
   std::vector<int> anchor_group;   ///< their handle groups
   std::vector<std::pair<int, int>> rigid_edges; ///< as-rigid-as-possible: the graph's edges, one equation each
+  /// As-rigid-as-possible with cotangent weights: one per entry of `graph.indices` (empty: uniform).
+  std::vector<double> edge_weights;
+  std::vector<double> rigid_edge_scales; ///< the square roots of `rigid_edges`' weights (empty: uniform)
   Matrix_n3 details;               ///< `f(K) s` on the region's rows
 
   /// Builds the graph (`k` neighbours) and Laplacian of `samples`, indexes the region and handles by `labels`,
   /// checks that every part of the region is pinned (`point_of_sample` names a point of each sample point in
   /// the messages) and factors the normal equations: of the details of `filter`, or with `rigid` of the graph's
-  /// edges. A finite `handle_weight` makes the handles the paper's soft constraints, infinity exact ones.
+  /// edges, weighted by `cotangent_weights` (from the sample points' `normals`) or uniformly. A finite
+  /// `handle_weight` makes the handles the paper's soft constraints, infinity exact ones.
   template <typename ConcurrencyTag>
-  void setup(const Matrix_n3& samples, const std::vector<int>& labels, const std::vector<int>& point_of_sample,
-             std::size_t k, const Detail_filter& filter, bool rigid, Least_squares_settings least_squares,
-             double handle_weight, const char* who)
+  void setup(const Matrix_n3& samples, const Matrix_n3& normals, const std::vector<int>& labels,
+             const std::vector<int>& point_of_sample, std::size_t k, const Detail_filter& filter, bool rigid,
+             bool cotangent_weights, Least_squares_settings least_squares, double handle_weight, const char* who)
   {
     const std::size_t count = std::size_t(samples.rows());
     Progress silent;
@@ -83,9 +88,12 @@ public:
     const bool exact_handles = std::isinf(handle_weight);
     if(!exact_handles) least_squares.detail_weight /= handle_weight;
     // As-rigid-as-possible editing solves for the edges of the sample points' graph instead of their details.
-    if(rigid)
-      m_solver.factor<ConcurrencyTag>(rigid_edge_rows(graph, roi_local, roi.size(), rigid_edges), anchors,
-                                      region_positions, least_squares, exact_handles);
+    edge_weights.clear();
+    if(rigid && cotangent_weights) edge_weights = cotangent_edge_weights<ConcurrencyTag>(samples, normals, graph);
+    if(rigid) {
+      Sparse_row_matrix rows = rigid_edge_rows(graph, edge_weights, roi_local, roi.size(), rigid_edges, rigid_edge_scales);
+      m_solver.factor<ConcurrencyTag>(std::move(rows), anchors, region_positions, least_squares, exact_handles);
+    }
     else
       m_solver.factor<ConcurrencyTag>(detail_operator_rows<ConcurrencyTag>(K, filter, roi), anchors,
                                       region_positions, least_squares, exact_handles);
