@@ -80,13 +80,14 @@ TEST(TangentCotangentWeights, CellsOfAJitteredPlaneCloseAndAgreeFromBothEnds)
   const std::vector<double> w = weights_of(points, normal, 12, graph);
 
   std::vector<double> one_sided;
+  in::Labelled_polygon cell;
   double interior_area = 0;
   for(std::size_t i = 0; i < uv.size(); ++i) {
     const int r = int(i) / n, c = int(i) % n;
     if(r < 4 || r >= n - 4 || c < 4 || c >= n - 4) continue;
     std::vector<Eigen::Vector2d> offsets;
     for(const int* j = graph.begin(i); j != graph.end(i); ++j) offsets.push_back(uv[std::size_t(*j)] - uv[i]);
-    in::tangent_cotangent_weights(offsets, one_sided);
+    in::tangent_cotangent_weights(offsets, one_sided, cell);
     Eigen::Vector2d linear = Eigen::Vector2d::Zero();
     double area = 0;
     for(std::size_t e = 0; e < offsets.size(); ++e) {
@@ -108,13 +109,14 @@ TEST(TangentCotangentWeights, BorderPointsAndDegenerateNeighbourhoodsStayFinite)
   // A point on a border (all neighbours on one side), a neighbour straight along the normal, and a point with
   // no spread at all.
   std::vector<double> w;
-  in::tangent_cotangent_weights({{1, 0}, {1, 1}, {0, 1}, {0, 0}}, w);
+  in::Labelled_polygon cell;
+  in::tangent_cotangent_weights({{1, 0}, {1, 1}, {0, 1}, {0, 0}}, w, cell);
   ASSERT_EQ(w.size(), 4u);
   for(double x : w) EXPECT_TRUE(std::isfinite(x) && x >= 0);
   EXPECT_GT(w[0], 0);
   EXPECT_GT(w[2], 0);
   EXPECT_EQ(w[3], 0); // the point itself, seen along the normal: no direction
-  in::tangent_cotangent_weights({{0, 0}, {0, 0}}, w);
+  in::tangent_cotangent_weights({{0, 0}, {0, 0}}, w, cell);
   EXPECT_EQ(w, std::vector<double>(2, 0.0));
 }
 

@@ -24,12 +24,15 @@ namespace internal {
 constexpr double least_cotangent_weight = 1e-3;
 
 /// A convex polygon in the plane, each edge labelled by the half-plane that cut it (-1: the starting disc).
+/// One polygon serves point after point (`reset`), so the clipping allocates nothing once warm.
 class Labelled_polygon
 {
 public:
-  /// The regular polygon of `sides` sides circumscribing the circle of `radius` about the origin.
-  Labelled_polygon(double radius, int sides)
+  /// Makes it the regular polygon of `sides` sides circumscribing the circle of `radius` about the origin.
+  void reset(double radius, int sides)
   {
+    m_vertices.clear();
+    m_labels.clear();
     constexpr double pi = 3.14159265358979323846;
     const double r = radius / std::cos(pi / sides);
     for(int s = 0; s < sides; ++s) {
@@ -76,14 +79,16 @@ private:
 /// plane, coordinates in that plane): the length of the edge its Voronoi cell among them shares with each,
 /// over the distance to it, which on a planar Delaunay triangulation is `(cot a + cot b) / 2` of the edge; 0
 /// for a neighbour whose bisector does not bound the cell. The cell is clipped to the disc through the farthest
-/// neighbour, which bounds it where the point lies on a border. Written to `weights` (one per offset).
-inline void tangent_cotangent_weights(const std::vector<Eigen::Vector2d>& offsets, std::vector<double>& weights)
+/// neighbour, which bounds it where the point lies on a border. Written to `weights` (one per offset); `cell`
+/// is scratch space.
+inline void tangent_cotangent_weights(const std::vector<Eigen::Vector2d>& offsets, std::vector<double>& weights,
+                                      Labelled_polygon& cell)
 {
   weights.assign(offsets.size(), 0.0);
   double radius = 0;
   for(const Eigen::Vector2d& q : offsets) radius = std::max(radius, q.norm());
   if(!(radius > 0)) return;
-  Labelled_polygon cell(radius, 32);
+  cell.reset(radius, 32);
   for(std::size_t j = 0; j < offsets.size(); ++j) {
     const double length = offsets[j].norm();
     if(length > 1e-9 * radius) cell.clip(offsets[j], 0.5 * offsets[j].squaredNorm(), int(j)); // the bisector
@@ -105,13 +110,15 @@ std::vector<double> cotangent_edge_weights(const Matrix_n3& positions, const Mat
   for_range<ConcurrencyTag>(0, graph.size(), [&](std::size_t i) {
     const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose().normalized();
     const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-    std::vector<Eigen::Vector2d> offsets;
-    std::vector<double> weights;
+    thread_local std::vector<Eigen::Vector2d> offsets; // scratch, reused from point to point
+    thread_local std::vector<double> weights;
+    thread_local Labelled_polygon cell;
+    offsets.clear();
     for(const int* j = graph.begin(i); j != graph.end(i); ++j) {
       const Eigen::Vector3d e = (positions.row(*j) - positions.row(Eigen::Index(i))).transpose();
       offsets.emplace_back(e.dot(t1), e.dot(t2));
     }
-    tangent_cotangent_weights(offsets, weights);
+    tangent_cotangent_weights(offsets, weights, cell);
     std::copy(weights.begin(), weights.end(), one_sided.begin() + graph.offsets[i]);
   });
   // The same edge seen from its other end: graph rows are sorted, so a binary search finds it.
