@@ -10,7 +10,9 @@
 
 #include <Eigen/SparseCore>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 namespace CGAL_ext {
@@ -106,12 +108,21 @@ Eigen::VectorXd bicgstab_jacobi(const Sparse_row_matrix& M, const Eigen::VectorX
 template <typename ConcurrencyTag, typename Dense>
 Dense neighbor_average(const Sparse_row_matrix& K, Dense X, unsigned int sweeps)
 {
+  // Plain arrays, not Eigen's row expressions, for the reason edge_covariance (neighborhood_rotations.h) uses
+  // them; the same arithmetic, entry by entry.
+  static_assert(Dense::IsRowMajor || Dense::ColsAtCompileTime == 1, "rows of contiguous coordinates");
+  const std::ptrdiff_t columns = std::ptrdiff_t(X.cols());
   Dense next(X.rows(), X.cols());
   for(unsigned int sweep = 0; sweep < sweeps; ++sweep) {
+    const double* x = X.data();
+    double* y = next.data();
     for_range<ConcurrencyTag>(0, std::size_t(K.rows()), [&](std::size_t i) {
-      next.row(Eigen::Index(i)) = X.row(Eigen::Index(i));
-      for(int e = K.outerIndexPtr()[i]; e < K.outerIndexPtr()[i + 1]; ++e)
-        next.row(Eigen::Index(i)) -= K.valuePtr()[e] * X.row(K.innerIndexPtr()[e]);
+      double* out = y + std::ptrdiff_t(i) * columns;
+      std::copy_n(x + std::ptrdiff_t(i) * columns, columns, out);
+      for(int e = K.outerIndexPtr()[i]; e < K.outerIndexPtr()[i + 1]; ++e) {
+        const double w = K.valuePtr()[e], *neighbour = x + std::ptrdiff_t(K.innerIndexPtr()[e]) * columns;
+        for(std::ptrdiff_t c = 0; c < columns; ++c) out[c] -= w * neighbour[c];
+      }
     });
     X.swap(next);
   }

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -99,44 +100,54 @@ template <typename ConcurrencyTag>
 bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, const Mean_shift_settings& settings,
                       Progress& progress, Matrix_n7& modes, std::vector<int>& iterations)
 {
-  using Row7 = Eigen::Matrix<double, 1, 7>;
   const std::size_t n = std::size_t(features.rows());
   modes.resize(features.rows(), 7);
   iterations.assign(n, 0);
   const bool gaussian = settings.kernel == Mean_shift_kernel::gaussian;
   const double tolerance2 = settings.tolerance * settings.tolerance;
+  // Plain arrays of seven, not Eigen's small expressions: the same time in a Release build, half of it under
+  // the sanitizers, where each expression's temporary is a checked copy (doc/design.md, "Build time").
+  const double* f = features.data();
+  auto squared_distance = [](const double* a, const double* b, int from, int to) {
+    double d2 = 0;
+    for(int c = from; c < to; ++c) d2 += (a[c] - b[c]) * (a[c] - b[c]);
+    return d2;
+  };
   return for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
-    Row7 mode = features.row(Eigen::Index(i));
+    double mode[7];
+    std::copy_n(f + 7 * i, 7, mode);
     int anchor = int(i);
     int step = 0;
     while(step < int(settings.max_iterations)) {
       ++step;
-      Row7 sum = Row7::Zero();
+      double sum[7] = {0, 0, 0, 0, 0, 0, 0};
       double weight_sum = 0;
       auto visit = [&](int j) {
-        const auto q = features.row(j);
-        const double ds2 = (mode.head<3>() - q.head<3>()).squaredNorm();
-        const double dr2 = (mode.tail<4>() - q.tail<4>()).squaredNorm();
+        const double* q = f + 7 * std::ptrdiff_t(j);
+        const double ds2 = squared_distance(mode, q, 0, 3), dr2 = squared_distance(mode, q, 3, 7);
         const double w = gaussian ? std::exp(-0.5 * (ds2 + dr2)) : (ds2 <= 1 && dr2 <= 1 ? 1.0 : 0.0);
-        sum.noalias() += w * q;
+        for(int c = 0; c < 7; ++c) sum[c] += w * q[c];
         weight_sum += w;
       };
       visit(anchor);
       for(const int* j = graph.begin(std::size_t(anchor)); j != graph.end(std::size_t(anchor)); ++j) visit(*j);
       if(!(weight_sum > 0)) break; // no sample within the kernel's reach: the mode stays
-      const Row7 next = sum / weight_sum;
-      const double shift2 = (next - mode).squaredNorm();
-      mode = next;
+      double shift2 = 0;
+      for(int c = 0; c < 7; ++c) {
+        const double next = sum[c] / weight_sum;
+        shift2 += (next - mode[c]) * (next - mode[c]);
+        mode[c] = next;
+      }
       int nearest = anchor;
-      double nearest_d2 = (mode.head<3>() - features.row(anchor).head<3>()).squaredNorm();
+      double nearest_d2 = squared_distance(mode, f + 7 * std::ptrdiff_t(anchor), 0, 3);
       for(const int* j = graph.begin(std::size_t(anchor)); j != graph.end(std::size_t(anchor)); ++j) {
-        const double d2 = (mode.head<3>() - features.row(*j).head<3>()).squaredNorm();
+        const double d2 = squared_distance(mode, f + 7 * std::ptrdiff_t(*j), 0, 3);
         if(d2 < nearest_d2) { nearest_d2 = d2; nearest = *j; }
       }
       anchor = nearest;
       if(shift2 < tolerance2) break;
     }
-    modes.row(Eigen::Index(i)) = mode;
+    std::copy_n(mode, 7, modes.data() + 7 * i);
     iterations[i] = step;
   });
 }

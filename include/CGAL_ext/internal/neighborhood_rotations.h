@@ -14,7 +14,9 @@
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <utility>
 #include <vector>
 
@@ -58,6 +60,31 @@ Matrix3 best_rotation(const Matrix3& covariance)
   return v.col(2) * u2.transpose() + v.col(1) * u1.transpose() + v.col(0) * u0.transpose();
 }
 
+/// `sum_j w_j e_j e'_j^T` over the edges `e_j` from sample point `s` to its graph neighbours and their deformed
+/// `e'_j`, each weighted by `weights` (one per entry of `graph.indices`; null: uniform), into the row-major
+/// `covariance`; returns whether `s` or a neighbour moved. Plain arrays, not Eigen's small expressions: the
+/// same time in a Release build, half of it under the sanitizers, where each expression's temporary is a
+/// checked copy (doc/design.md, "Build time").
+template <typename Positions>
+bool edge_covariance(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
+                     const double* weights, double covariance[9])
+{
+  static_assert(Positions::IsRowMajor && Positions::ColsAtCompileTime == 3, "rows of three contiguous coordinates");
+  const double *p = rest.data() + 3 * s, *q = deformed.data() + 3 * s;
+  bool moved = p[0] != q[0] || p[1] != q[1] || p[2] != q[2];
+  std::fill(covariance, covariance + 9, 0.0);
+  for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+    const double *a = rest.data() + 3 * std::ptrdiff_t(*j), *b = deformed.data() + 3 * std::ptrdiff_t(*j);
+    moved = moved || a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+    const double w = weights ? weights[j - graph.indices.data()] : 1.0;
+    const double e[3] = {w * (a[0] - p[0]), w * (a[1] - p[1]), w * (a[2] - p[2])};
+    const double f[3] = {b[0] - q[0], b[1] - q[1], b[2] - q[2]};
+    for(int r = 0; r < 3; ++r)
+      for(int c = 0; c < 3; ++c) covariance[3 * r + c] += e[r] * f[c];
+  }
+  return moved;
+}
+
 /// The best rotation of the edges from sample point `s` to its graph neighbours, from `rest` to `deformed`,
 /// each edge weighted by `weights` (one per entry of `graph.indices`; null: uniform). A sample point whose
 /// neighbourhood did not move gets the identity exactly, so unmoved parts stay exact. (A template for the
@@ -66,15 +93,9 @@ template <typename Positions>
 Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
                                 const double* weights = nullptr)
 {
-  const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
-  bool moved = p != q;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
-    moved = moved || rest.row(*j) != deformed.row(*j);
-    const double w = weights ? weights[j - graph.indices.data()] : 1.0;
-    covariance += w * (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
-  }
-  return moved ? best_rotation(covariance) : Eigen::Matrix3d::Identity();
+  double covariance[9];
+  if(!edge_covariance(rest, deformed, graph, s, weights, covariance)) return Eigen::Matrix3d::Identity();
+  return best_rotation(Eigen::Matrix3d(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(covariance)));
 }
 
 /// The linear map `A` that best maps the edges `e_j` from sample point `s` to its graph neighbours onto their
@@ -124,20 +145,22 @@ void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed
   previous = rotations;
   for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
     const std::size_t s = std::size_t(rows[r]);
-    const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
-    bool moved = p != q;
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero(), turns = Eigen::Matrix3d::Zero();
+    double edges[9];
+    bool moved = edge_covariance(rest, deformed, graph, s, w, edges);
+    Eigen::Matrix3d turns = Eigen::Matrix3d::Zero();
+    const double* p = rest.data() + 3 * s;
     double spread = 0, degree = 0;
     for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
-      moved = moved || rest.row(*j) != deformed.row(*j) || !previous[std::size_t(*j)].isIdentity(0);
+      moved = moved || !previous[std::size_t(*j)].isIdentity(0);
       const double weight = w ? w[j - graph.indices.data()] : 1.0;
-      covariance += weight * (rest.row(*j) - p).transpose() * (deformed.row(*j) - q);
-      spread += weight * (rest.row(*j) - p).squaredNorm();
+      const double* a = rest.data() + 3 * std::ptrdiff_t(*j);
+      spread += weight * ((a[0] - p[0]) * (a[0] - p[0]) + (a[1] - p[1]) * (a[1] - p[1]) + (a[2] - p[2]) * (a[2] - p[2]));
       if(w && !(weight > least_cotangent_weight)) continue; // not a Delaunay neighbour
       turns += previous[std::size_t(*j)].transpose();
       ++degree;
     }
     const double pull = degree > 0 ? smoothing * spread / degree : 0.0;
+    const Eigen::Matrix3d covariance = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(edges);
     rotations[s] = moved ? best_rotation(Eigen::Matrix3d(covariance + pull * turns)) : Eigen::Matrix3d::Identity();
   });
 }
@@ -179,10 +202,18 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
 {
   Matrix_n3 change(Eigen::Index(edges.size()), 3);
   for_range<ConcurrencyTag>(0, edges.size(), [&](std::size_t e) {
+    // Plain arrays for the reason edge_covariance uses them; the rotations are column-major.
     const auto [i, j] = edges[e];
-    const Eigen::Matrix3d half_turn = 0.5 * (rotations[std::size_t(i)] + rotations[std::size_t(j)]) - Eigen::Matrix3d::Identity();
+    const double *a = rotations[std::size_t(i)].data(), *b = rotations[std::size_t(j)].data();
+    const double *x = rest.data() + 3 * std::ptrdiff_t(i), *y = rest.data() + 3 * std::ptrdiff_t(j);
+    const double d[3] = {x[0] - y[0], x[1] - y[1], x[2] - y[2]};
     const double scale = scales.empty() ? 1.0 : scales[e];
-    change.row(Eigen::Index(e)) = scale * (half_turn * (rest.row(i) - rest.row(j)).transpose()).transpose();
+    double* out = change.data() + 3 * e;
+    for(int r = 0; r < 3; ++r) {
+      double sum = 0;
+      for(int c = 0; c < 3; ++c) sum += (0.5 * (a[3 * c + r] + b[3 * c + r]) - (r == c ? 1.0 : 0.0)) * d[c];
+      out[r] = scale * sum;
+    }
   });
   return change;
 }
