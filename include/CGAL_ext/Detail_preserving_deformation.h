@@ -301,7 +301,8 @@ public:
     return r < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(m_system.details.row(r).transpose());
   }
   /// The rotation of sample point `s`'s detail in the last `deform()`: propagated, or fitted to the result in
-  /// as-rigid-as-possible mode (the identity outside the region).
+  /// as-rigid-as-possible mode (the identity outside the region, but for the fixed sample points next to it in
+  /// as-rigid-as-possible mode, whose rotations the energy fits too; they still carry their points unturned).
   Eigen::Matrix3d propagated_rotation(std::size_t s) const { return m_propagated.at(s); }
   /// The strength `f = beta(d0 / (d0 + d1))` of handle group `g` at sample point `s`.
   double strength(std::size_t s, std::size_t g) const { return m_strength.at(s * m_transforms.size() + g); }

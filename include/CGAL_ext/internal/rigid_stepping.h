@@ -69,7 +69,8 @@ inline Rigid_transform rigid_step(const Rigid_transform& from, const Rigid_trans
 }
 
 /// One step: at most `iterations` alternations of the global solve (the edges' right-hand side turned by
-/// `rotations`, the handles pulled by `anchor_displacement`) and the local fit of `rotations` to its result;
+/// `rotations`, the handles pulled by `anchor_displacement`) and the local fit of `rotations` to its result
+/// (the region's and the fixed ring's around it, `Sample_system::rigid_rotation_rows`);
 /// with `tolerance` > 0, it stops once no region sample point moved more than `tolerance` in an iteration;
 /// `smoothing` is the rotation fit's (`fit_neighborhood_rotations`). `edge_change`, `previous` and
 /// `previous_rotations` are buffers. Returns the iterations taken.
@@ -84,8 +85,8 @@ unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, c
     edge_change = rigid_edge_change<ConcurrencyTag>(system.rigid_edges, system.rigid_edge_scales, samples, rotations);
     if(tolerance > 0) previous = deformed;
     system.solve<ConcurrencyTag>(samples, edge_change, anchor_displacement, deformed);
-    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.edge_weights, system.roi,
-                                               smoothing, rotations, previous_rotations);
+    fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.edge_weights,
+                                               system.rigid_rotation_rows, smoothing, rotations, previous_rotations);
     ++used;
     if(!(tolerance > 0)) continue;
     double moved = 0;

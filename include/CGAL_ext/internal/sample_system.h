@@ -42,6 +42,10 @@ public:
   /// As-rigid-as-possible with cotangent weights: one per entry of `graph.indices` (empty: uniform).
   std::vector<double> edge_weights;
   std::vector<double> rigid_edge_scales; ///< the square roots of `rigid_edges`' weights (empty: uniform)
+  /// As-rigid-as-possible: the sample points whose rotations the local step fits, the region's and the fixed
+  /// ones an edge joins to it (their rotations are free in the energy, as CGAL's mesh ARAP fits the ring
+  /// around its region; held at the identity, they bend the region's edge toward them).
+  std::vector<int> rigid_rotation_rows;
   Matrix_n3 details;               ///< `f(K) s` on the region's rows
 
   /// Builds the graph (`k` neighbours) and Laplacian of `samples`, indexes the region and handles by `labels`,
@@ -92,6 +96,15 @@ public:
     if(rigid && cotangent_weights) edge_weights = cotangent_edge_weights<ConcurrencyTag>(samples, normals, graph);
     if(rigid) {
       Sparse_row_matrix rows = rigid_edge_rows(graph, edge_weights, roi_local, roi.size(), rigid_edges, rigid_edge_scales);
+      rigid_rotation_rows = roi;
+      std::vector<char> listed(roi_local.size(), 0);
+      for(int r : roi) listed[std::size_t(r)] = 1;
+      for(const auto& [i, j] : rigid_edges)
+        for(const int end : {i, j})
+          if(!listed[std::size_t(end)]) {
+            listed[std::size_t(end)] = 1;
+            rigid_rotation_rows.push_back(end);
+          }
       m_solver.factor<ConcurrencyTag>(std::move(rows), anchors, region_positions, least_squares, exact_handles);
     }
     else
