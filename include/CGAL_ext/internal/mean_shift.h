@@ -125,6 +125,9 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
     constexpr int block = 32;
     alignas(16) double weight[block];
     int candidate[block];
+    constexpr int max_kept = 64;
+    double spatial[max_kept];
+    bool reuse_spatial = false;
     while(step < int(settings.max_iterations)) {
       ++step;
       double sum[7] = {0, 0, 0, 0, 0, 0, 0};
@@ -137,7 +140,8 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
           // Candidate 0 is the anchor itself, then its neighbours.
           const int j = b + c == 0 ? anchor : neighbors[b + c - 1];
           const double* q = f + 7 * std::ptrdiff_t(j);
-          const double ds2 = squared_distance(mode, q, 0, 3), dr2 = squared_distance(mode, q, 3, 7);
+          const double ds2 = reuse_spatial ? spatial[b + c] : squared_distance(mode, q, 0, 3);
+          const double dr2 = squared_distance(mode, q, 3, 7);
           candidate[c] = j;
           weight[c] = gaussian ? -0.5 * (ds2 + dr2) : (ds2 <= 1 && dr2 <= 1 ? 1.0 : 0.0);
         }
@@ -161,12 +165,17 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
         shift2 += (next - mode[c]) * (next - mode[c]);
         mode[c] = next;
       }
+      // The spatial distances of the new mode to the candidates, kept for the next step when the anchor stays.
+      const bool keep = degree < max_kept;
       int nearest = anchor;
       double nearest_d2 = squared_distance(mode, f + 7 * std::ptrdiff_t(anchor), 0, 3);
-      for(const int* j = neighbors; j != neighbors + degree; ++j) {
-        const double d2 = squared_distance(mode, f + 7 * std::ptrdiff_t(*j), 0, 3);
-        if(d2 < nearest_d2) { nearest_d2 = d2; nearest = *j; }
+      if(keep) spatial[0] = nearest_d2;
+      for(int c = 0; c < degree; ++c) {
+        const double d2 = squared_distance(mode, f + 7 * std::ptrdiff_t(neighbors[c]), 0, 3);
+        if(keep) spatial[c + 1] = d2;
+        if(d2 < nearest_d2) { nearest_d2 = d2; nearest = neighbors[c]; }
       }
+      reuse_spatial = keep && nearest == anchor;
       anchor = nearest;
       if(shift2 < tolerance2) break;
     }
