@@ -146,7 +146,8 @@ struct Detail_settings
   Detail_filter filter;
   Laplacian_weights weights;
   Laplacian_neighborhood neighborhood = Laplacian_neighborhood::k_nearest;
-  Mean_shift_settings mean_shift; ///< used by `Laplacian_neighborhood::mean_shift` only
+  /// Used by `Laplacian_neighborhood::mean_shift` only, which compares the modes' range parts.
+  Mean_shift_settings mean_shift = range_part_mean_shift_settings();
 
   Detail_settings(const Detail_filter& f = {}, const Laplacian_weights& w = {}) : filter(f), weights(w) {}
 

@@ -510,7 +510,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
     });
   }
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
-                                           std::min<std::size_t>(m_settings.diffusion_samples, count));
+                                           std::min<std::size_t>(m_settings.diffusion_samples, count), &m_sample_of);
   // Points carried by fixed sample points only never move: each drag skips them.
   m_active_points.clear();
   for(std::size_t row = 0; row < m_cloud.size(); ++row)

@@ -32,6 +32,21 @@ enum class Mean_shift_kernel
 
 /*!
   \ingroup PkgCGALExtRef
+  What the stopping test of the mean shift measures.
+*/
+enum class Mean_shift_stop
+{
+  /// The step of the whole mode: position, normal and curvature (modes wanted in full,
+  /// `compute_mean_shift_modes`).
+  whole_mode,
+  /// The step of the range part only, normal and curvature: what the clustering and the mean-shift
+  /// neighbourhoods compare. Where normals and curvature vary little, the position part drifts along the
+  /// surface for many steps after the range part has settled (doc/simplification.md, "When a mode stops").
+  range_part
+};
+
+/*!
+  \ingroup PkgCGALExtRef
   Settings of the joint spatial-range mean shift (Miao et al. 2007, Sect. 5.1; Comaniciu and Meer 2002)
   over the 7D features `(x, y, z, n_x, n_y, n_z, c H)` of the points: position, unit normal and mean
   curvature `H` scaled by `c`. A value of 0 for a bandwidth or for `curvature_scale` selects the automatic
@@ -50,8 +65,10 @@ struct Mean_shift_settings
   double spatial_bandwidth = 0; ///< `h_s`, in the points' units; 0 = the average spacing
   double range_bandwidth = 0.5; ///< `h_r`, over the normal and the scaled curvature; > 0
   double curvature_scale = 0;   ///< `c`, multiplies `H` in the range part; 0 = `0.5 / H90`
-  /// The iteration stops when the mode moves by less than this, in bandwidths (normalised 7D units).
+  /// The iteration stops when the mode (or its range part, see `stop`) moves by less than this, in
+  /// bandwidths (normalised 7D units).
   double tolerance = 1e-3;
+  Mean_shift_stop stop = Mean_shift_stop::whole_mode; ///< what `tolerance` measures
   unsigned int max_iterations = 30; ///< iteration cap per point, >= 1
 
   /// Throws `Invalid_input` for negative, zero (the range bandwidth) or non-finite values.
@@ -72,6 +89,15 @@ struct Mean_shift_settings
     if(max_iterations < 1) throw Invalid_input("mean shift settings: max_iterations must be at least 1");
   }
 };
+
+/// The settings of a mean shift whose modes are compared by their range parts only (stopped by
+/// `Mean_shift_stop::range_part`): the default of `Simplification_settings` and `Detail_settings`.
+inline Mean_shift_settings range_part_mean_shift_settings()
+{
+  Mean_shift_settings settings;
+  settings.stop = Mean_shift_stop::range_part;
+  return settings;
+}
 
 /*!
   \ingroup PkgCGALExtRef

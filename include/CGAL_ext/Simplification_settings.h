@@ -41,7 +41,7 @@ struct Simplification_settings
   /// With `target_count`: the mode-spread rule adds at most this fraction of `target_count` sample points, >= 0.
   double variation_budget = 0.5;
   unsigned int mean_shift_neighbors = default_mean_shift_neighbors; ///< candidates of the mean shift, >= 5
-  Mean_shift_settings mean_shift;
+  Mean_shift_settings mean_shift = range_part_mean_shift_settings(); ///< the modes' range parts decide the splits
 
   void validate() const
   {

@@ -42,6 +42,54 @@ TEST(NeighborGraph, KNearestAreTheBruteForceNearestInOrder)
   }
 }
 
+namespace {
+
+// The k nearest samples of a query by brute force, ties broken by row.
+std::vector<int> brute_force_nearest(const Matrix_n3& samples, const Eigen::RowVector3d& query, std::size_t k)
+{
+  std::vector<std::pair<double, int>> all;
+  for(Eigen::Index j = 0; j < samples.rows(); ++j) all.emplace_back((samples.row(j) - query).squaredNorm(), int(j));
+  std::sort(all.begin(), all.end());
+  std::vector<int> nearest;
+  for(std::size_t m = 0; m < k; ++m) nearest.push_back(all[m].second);
+  return nearest;
+}
+
+} // namespace
+
+TEST(NeighborGraph, NearestSamplesByOwnerAreTheBruteForceNearestForAnyOwner)
+{
+  Matrix_n3 samples = random_cloud(300, 3), queries = random_cloud(3000, 4);
+  samples.row(7) = samples.row(3); // coincident samples: a tie the rows break
+  queries.row(0) = samples.row(5);
+  const std::size_t k = 7;
+  // Owners as a clustering gives them (the nearest sample), and arbitrary ones (far from their queries).
+  std::vector<int> nearest_owner(3000), any_owner(3000);
+  std::mt19937 rng(5);
+  for(std::size_t q = 0; q < 3000; ++q) {
+    nearest_owner[q] = brute_force_nearest(samples, queries.row(Eigen::Index(q)), 1)[0];
+    any_owner[q] = int(rng() % 300);
+  }
+  for(const auto* owner : {&nearest_owner, &any_owner}) {
+    const Neighbor_graph graph =
+      k_nearest_samples_by_owner<CGAL::Parallel_if_available_tag>(samples, queries, *owner, k);
+    ASSERT_EQ(graph.size(), 3000u);
+    for(std::size_t q = 0; q < graph.size(); ++q) {
+      ASSERT_EQ(graph.degree(q), int(k));
+      const std::vector<int> expected = brute_force_nearest(samples, queries.row(Eigen::Index(q)), k);
+      EXPECT_EQ(std::vector<int>(graph.begin(q), graph.end(q)), expected) << "query " << q;
+    }
+  }
+  // And the tree's queries find the same rows but at ties.
+  const Neighbor_graph by_tree = k_nearest_samples<CGAL::Sequential_tag>(samples, queries, k);
+  const Neighbor_graph by_owner = k_nearest_samples_by_owner<CGAL::Sequential_tag>(samples, queries, nearest_owner, k);
+  for(std::size_t e = 0; e < by_tree.indices.size(); ++e) {
+    const Eigen::RowVector3d query = queries.row(Eigen::Index(e / k));
+    EXPECT_EQ((samples.row(by_tree.indices[e]) - query).squaredNorm(),
+              (samples.row(by_owner.indices[e]) - query).squaredNorm());
+  }
+}
+
 TEST(NeighborGraph, SymmetrizeIsTheUnionOfTheGraphAndItsTranspose)
 {
   const Matrix_n3 points = random_cloud(300, 2);

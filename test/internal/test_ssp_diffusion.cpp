@@ -59,6 +59,19 @@ TEST(DiffusionStencil, WeightsArePositiveSumToOneAndFallWithDistance)
   }
 }
 
+TEST(DiffusionStencil, EachPointsOwnSamplePointGivesTheSameStencil)
+{
+  const Matrix_n3 samples = random_samples(80, 3), points = random_samples(2000, 4);
+  std::vector<int> owner(2000); // the nearest sample point, as a clustering gives it
+  for(Eigen::Index p = 0; p < points.rows(); ++p)
+    (samples.rowwise() - points.row(p)).rowwise().squaredNorm().minCoeff(&owner[std::size_t(p)]);
+  Diffusion_stencil by_tree, by_owner;
+  by_tree.setup<CGAL::Parallel_if_available_tag>(points, samples, 6);
+  by_owner.setup<CGAL::Parallel_if_available_tag>(points, samples, 6, &owner);
+  EXPECT_EQ(by_owner.samples.indices, by_tree.samples.indices);
+  EXPECT_EQ(by_owner.weights, by_tree.weights);
+}
+
 TEST(DiffusionStencil, EverySamplePointsWeightIsContinuousAlongAPath)
 {
   // Walk a point across the sample points in tiny steps: the stencil's membership changes many times, but no

@@ -7,6 +7,7 @@
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/parallel.h>
 
+#include <CGAL/Fuzzy_sphere.h>
 #include <CGAL/Kd_tree.h>
 #include <CGAL/Orthogonal_k_neighbor_search.h>
 #include <CGAL/Search_traits_3.h>
@@ -86,6 +87,12 @@ public:
     for(auto it = search.begin(); it != search.end(); ++it) visit(it->first, it->second);
   }
 
+  /// Appends to `out` the rows within `radius` of `centre` (and perhaps some a rounding farther).
+  void within(const Point& centre, double radius, std::vector<int>& out) const
+  {
+    m_tree->search(std::back_inserter(out), CGAL::Fuzzy_sphere<Traits>(centre, radius, 0, Traits(m_pmap)));
+  }
+
 private:
   std::vector<Point> m_points;
   Point_pmap m_pmap;
@@ -132,6 +139,69 @@ Neighbor_graph k_nearest_samples(const Matrix_n3& samples, const Matrix_n3& quer
   for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
     int* out = graph.indices.data() + i * k;
     tree.nearest(Position_tree::point(queries, Eigen::Index(i)), k, [&](int j, double) { *out++ = j; });
+  });
+  return graph;
+}
+
+/*
+  `k_nearest_samples` for queries that each belong to a sample (`owner[q]`, a row of `samples`: the sample
+  point of a cluster its member, say), ties broken by row. The queries of sample s lie within r_s of it, so
+  the k nearest of each lie within D_k(s) + r_s of it and within D_k(s) + 2 r_s of s, D_k(s) the distance of
+  s to its own k-th nearest sample (itself included): one range query per sample replaces one tree query per
+  point, then each query ranks its owner's few candidates. Any `owner` gives the exact answer; one that
+  keeps queries near their owners gives few candidates.
+*/
+template <typename ConcurrencyTag>
+Neighbor_graph k_nearest_samples_by_owner(const Matrix_n3& samples, const Matrix_n3& queries,
+                                          const std::vector<int>& owner, std::size_t k)
+{
+  const std::size_t n = std::size_t(queries.rows()), count = std::size_t(samples.rows());
+  // The queries of each sample, by counting sort.
+  std::vector<int> first(count + 1, 0), members(n);
+  for(const int s : owner) ++first[std::size_t(s) + 1];
+  for(std::size_t s = 0; s < count; ++s) first[s + 1] += first[s];
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for(std::size_t q = 0; q < n; ++q) members[std::size_t(fill[std::size_t(owner[q])]++)] = int(q);
+  }
+  const Position_tree tree(samples, ConcurrencyTag());
+  Neighbor_graph graph = fixed_degree_graph(n, k);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t s) {
+    if(first[s] == first[s + 1]) return;
+    const Eigen::RowVector3d centre = samples.row(Eigen::Index(s));
+    double reach2 = 0; // D_k(s)^2
+    tree.nearest(tree[s], k, [&](int, double d2) { reach2 = std::max(reach2, d2); });
+    const double reach = std::sqrt(reach2);
+    double radius = 0; // r_s
+    for(int m = first[s]; m < first[s + 1]; ++m)
+      radius = std::max(radius, (queries.row(members[std::size_t(m)]) - centre).norm());
+    thread_local std::vector<int> candidates;
+    thread_local std::vector<std::pair<double, int>> nearest; // (squared distance, row), sorted
+    candidates.clear();
+    nearest.resize(k);
+    // A relative margin for the rounding of the distances compared.
+    tree.within(tree[s], (reach + 2 * radius) * (1 + 1e-12), candidates);
+    for(int m = first[s]; m < first[s + 1]; ++m) {
+      const int q = members[std::size_t(m)];
+      const Eigen::RowVector3d p = queries.row(q);
+      const double bound = reach + (p - centre).norm();
+      const double bound2 = bound * bound * (1 + 1e-12);
+      std::size_t found = 0;
+      for(const int c : candidates) {
+        const double d2 = (samples.row(c) - p).squaredNorm();
+        if(d2 > bound2) continue;
+        const std::pair<double, int> entry(d2, c);
+        if(found == k && !(entry < nearest[k - 1])) continue;
+        std::size_t e = found < k ? found++ : k - 1;
+        for(; e > 0 && entry < nearest[e - 1]; --e) nearest[e] = nearest[e - 1];
+        nearest[e] = entry;
+      }
+      int* out = graph.indices.data() + std::size_t(q) * k;
+      if(found == k)
+        for(std::size_t e = 0; e < k; ++e) out[e] = nearest[e].second;
+      else // only if the bound failed (non-finite coordinates): the tree's answer
+        tree.nearest(Position_tree::point(queries, q), k, [&](int j, double) { *out++ = j; });
+    }
   });
   return graph;
 }
@@ -185,6 +255,8 @@ Neighbor_graph symmetrize(const Neighbor_graph& directed)
 #define CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES(EXTERN, Tag) \
   EXTERN template Neighbor_graph k_nearest_neighbor_graph<Tag>(const Matrix_n3&, std::size_t, Progress&); \
   EXTERN template Neighbor_graph k_nearest_samples<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t); \
+  EXTERN template Neighbor_graph k_nearest_samples_by_owner<Tag>(const Matrix_n3&, const Matrix_n3&, \
+                                                                 const std::vector<int>&, std::size_t); \
   EXTERN template Neighbor_graph symmetrize<Tag>(const Neighbor_graph&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES)
 

@@ -106,6 +106,7 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
   iterations.assign(n, 0);
   const bool gaussian = settings.kernel == Mean_shift_kernel::gaussian;
   const double tolerance2 = settings.tolerance * settings.tolerance;
+  const int measured_from = settings.stop == Mean_shift_stop::range_part ? 3 : 0; // the coordinates the stop measures
   // Plain arrays of seven, not Eigen's small expressions: the same time in a Release build, half of it under
   // the sanitizers, where each expression's temporary is a checked copy (doc/design.md, "Build time").
   const double* f = features.data();
@@ -162,7 +163,7 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
       double shift2 = 0;
       for(int c = 0; c < 7; ++c) {
         const double next = sum[c] / weight_sum;
-        shift2 += (next - mode[c]) * (next - mode[c]);
+        if(c >= measured_from) shift2 += (next - mode[c]) * (next - mode[c]);
         mode[c] = next;
       }
       // The spatial distances of the new mode to the candidates, kept for the next step when the anchor stays.
