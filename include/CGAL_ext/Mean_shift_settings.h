@@ -90,8 +90,11 @@ struct Mean_shift_settings
   }
 };
 
-/// The settings of a mean shift whose modes are compared by their range parts only (stopped by
-/// `Mean_shift_stop::range_part`): the default of `Simplification_settings` and `Detail_settings`.
+/*!
+  \ingroup PkgCGALExtRef
+  The default settings with the stop of a mean shift whose modes are compared by their range parts only
+  (`Mean_shift_stop::range_part`): the default of `Simplification_settings` and `Detail_settings`.
+*/
 inline Mean_shift_settings range_part_mean_shift_settings()
 {
   Mean_shift_settings settings;

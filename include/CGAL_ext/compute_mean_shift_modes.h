@@ -26,7 +26,8 @@ namespace CGAL_ext {
   shift of Comaniciu and Meer over the 7D features `(x, y, z, n, c H)`: starting at the point's feature, the
   mode moves to the mean of the nearby samples weighted by the product kernel
   `g(||M_s - q_s||^2 / h_s^2) g(||M_r - q_r||^2 / h_r^2)`, until it moves by less than `settings.tolerance`
-  bandwidths or `settings.max_iterations` is reached. The samples near a moving mode are the sample nearest
+  bandwidths (its range part only, with `settings.stop` set to `Mean_shift_stop::range_part`) or
+  `settings.max_iterations` is reached. The samples near a moving mode are the sample nearest
   to it and that sample's `k` nearest neighbours, followed along the neighbour graph as the mode moves.
 
   The mean curvature `H` comes from the closed-form degree-2 fit of `estimate_mean_curvature` on the same
