@@ -144,8 +144,8 @@ Neighbor_graph k_nearest_samples(const Matrix_n3& samples, const Matrix_n3& quer
 }
 
 /*
-  `k_nearest_samples` for queries that each belong to a sample (`owner[q]`, a row of `samples`: the sample
-  point of a cluster its member, say), ties broken by row. The queries of sample s lie within r_s of it, so
+  `k_nearest_samples` for queries that each belong to a sample (`owner[q]`, a row of `samples`, such as the
+  sample point of the cluster that q belongs to), ties broken by row. The queries of sample s lie within r_s of it, so
   the k nearest of each lie within D_k(s) + r_s of it and within D_k(s) + 2 r_s of s, D_k(s) the distance of
   s to its own k-th nearest sample (itself included): one range query per sample replaces one tree query per
   point, then each query ranks its owner's few candidates. Any `owner` gives the exact answer; one that
@@ -176,9 +176,9 @@ Neighbor_graph k_nearest_samples_by_owner(const Matrix_n3& samples, const Matrix
     for(int m = first[s]; m < first[s + 1]; ++m)
       radius = std::max(radius, (queries.row(members[std::size_t(m)]) - centre).norm());
     thread_local std::vector<int> candidates;
-    thread_local std::vector<std::pair<double, int>> nearest; // (squared distance, row), sorted
+    thread_local std::vector<std::pair<double, int>> ranked; // (squared distance, row), nearest first
     candidates.clear();
-    nearest.resize(k);
+    ranked.resize(k);
     // A relative margin for the rounding of the distances compared.
     tree.within(tree[s], (reach + 2 * radius) * (1 + 1e-12), candidates);
     for(int m = first[s]; m < first[s + 1]; ++m) {
@@ -191,14 +191,14 @@ Neighbor_graph k_nearest_samples_by_owner(const Matrix_n3& samples, const Matrix
         const double d2 = (samples.row(c) - p).squaredNorm();
         if(d2 > bound2) continue;
         const std::pair<double, int> entry(d2, c);
-        if(found == k && !(entry < nearest[k - 1])) continue;
+        if(found == k && !(entry < ranked[k - 1])) continue;
         std::size_t e = found < k ? found++ : k - 1;
-        for(; e > 0 && entry < nearest[e - 1]; --e) nearest[e] = nearest[e - 1];
-        nearest[e] = entry;
+        for(; e > 0 && entry < ranked[e - 1]; --e) ranked[e] = ranked[e - 1];
+        ranked[e] = entry;
       }
       int* out = graph.indices.data() + std::size_t(q) * k;
       if(found == k)
-        for(std::size_t e = 0; e < k; ++e) out[e] = nearest[e].second;
+        for(std::size_t e = 0; e < k; ++e) out[e] = ranked[e].second;
       else // only if the bound failed (non-finite coordinates): the tree's answer
         tree.nearest(Position_tree::point(queries, q), k, [&](int j, double) { *out++ = j; });
     }
