@@ -11,26 +11,60 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <mutex>
 #include <system_error>
 #include <thread>
+#include <dlfcn.h>
 #include <unistd.h>
 
 namespace point_detail {
 
-void use_huge_pages(char** argv)
+namespace {
+using Corename_function = char* (*)();
+
+/// OpenBLAS's `openblas_get_corename`, looked up rather than linked: CHOLMOD reaches BLAS through Debian's
+/// libblas.so.3 alternative, which need not be OpenBLAS.
+Corename_function openblas_corename() { return reinterpret_cast<Corename_function>(dlsym(RTLD_DEFAULT, "openblas_get_corename")); }
+} // namespace
+
+bool openblas_core_predates_avx2(const std::string& core)
+{
+  // openblas_get_corename()'s names of the kernels for x86 CPUs without AVX2 and FMA (OpenBLAS 0.3, DYNAMIC_ARCH).
+  static const char* const older[] = {"Katmai", "Coppermine", "Northwood", "Prescott", "Banias", "Core2", "Penryn", "Dunnington",
+                                      "Nehalem", "Atom", "Nano", "Sandybridge", "Athlon", "Opteron", "Opteron_SSE3", "Barcelona",
+                                      "Bobcat", "Bulldozer", "Piledriver", "Steamroller"};
+  return std::find(std::begin(older), std::end(older), core) != std::end(older);
+}
+
+std::string blas_kernels()
+{
+  const Corename_function corename = openblas_corename();
+  const char* core = corename ? corename() : nullptr;
+  return core ? core : "not OpenBLAS";
+}
+
+void tune_process_environment(char** argv)
 {
   const char* current = std::getenv("GLIBC_TUNABLES");
   const std::string tunables = current ? current : "";
-  const char* wanted = std::getenv("POINT_DETAIL_HUGE_PAGES");
-  if(tunables.find("glibc.malloc.hugetlb") != std::string::npos || (wanted && std::string(wanted) == "0")) return;
-  const std::string value = (tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1";
-  if(setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  const char* huge_pages = std::getenv("POINT_DETAIL_HUGE_PAGES");
+  const bool set_huge_pages =
+    tunables.find("glibc.malloc.hugetlb") == std::string::npos && !(huge_pages && std::string(huge_pages) == "0");
+  const char* blas_core = std::getenv("POINT_DETAIL_OPENBLAS_CORE");
+  const bool set_blas_core = !std::getenv("OPENBLAS_CORETYPE") && !(blas_core && std::string(blas_core) == "0") &&
+                             openblas_core_predates_avx2(blas_kernels()) && __builtin_cpu_supports("avx2") &&
+                             __builtin_cpu_supports("fma");
+  if(!set_huge_pages && !set_blas_core) return;
+  if(set_huge_pages && setenv("GLIBC_TUNABLES", ((tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1").c_str(), 1) != 0)
+    return;
+  if(set_blas_core) setenv("OPENBLAS_CORETYPE", "Haswell", 1);
   execv("/proc/self/exe", argv);
   // The exec failed: run as we are, with the environment as it was (setenv may have reused `current`).
   if(current) setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
   else unsetenv("GLIBC_TUNABLES");
+  if(set_blas_core) unsetenv("OPENBLAS_CORETYPE");
 }
 
 std::string malloc_pages()

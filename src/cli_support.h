@@ -28,14 +28,25 @@ struct Cancelled : std::runtime_error
   Cancelled() : std::runtime_error("cancelled") {}
 };
 
-/// Re-executes the program with glibc's malloc backed by transparent huge pages (GLIBC_TUNABLES
-/// glibc.malloc.hugetlb=1) unless that is already set or POINT_DETAIL_HUGE_PAGES=0. Every large array then
-/// costs one page fault per 2 MiB instead of per 4 KiB: on virtual machines, where page faults are expensive,
-/// this halves the time of sparse factorisations and of the kNN pipeline (benchmark/RESULTS). Returns only
-/// when the program runs as it is (already re-executed, disabled, or the exec failed).
-void use_huge_pages(char** argv);
+/// Re-executes the program, once, with
+/// - glibc's malloc backed by transparent huge pages (GLIBC_TUNABLES glibc.malloc.hugetlb=1) unless that is
+///   already set or POINT_DETAIL_HUGE_PAGES=0: every large array then costs one page fault per 2 MiB instead of
+///   per 4 KiB, which on virtual machines, where page faults are expensive, halves the time of sparse
+///   factorisations (doc/detail_scaling.md);
+/// - OpenBLAS's AVX2 kernels (OPENBLAS_CORETYPE=Haswell) when the OpenBLAS CHOLMOD runs on picked kernels
+///   older than AVX2 on a CPU that has AVX2 and FMA (`openblas_core_predates_avx2`), unless OPENBLAS_CORETYPE
+///   is set or POINT_DETAIL_OPENBLAS_CORE=0. OpenBLAS falls back to its SSE3 kernels (Prescott) on a CPU whose
+///   model it does not know, as a virtual machine's generic one; they take twice as long to factor
+///   (doc/design.md, "Editing's factorisation").
+/// Returns only when the program runs as it is (nothing to change, disabled, or the exec failed).
+void tune_process_environment(char** argv);
 /// "transparent huge pages" or "4 KiB pages", as the running process's malloc was set up (for reports).
 std::string malloc_pages();
+/// The OpenBLAS kernels the process runs ("Haswell", "Prescott", ...), or "not OpenBLAS" (for reports).
+std::string blas_kernels();
+/// Whether `core`, an OpenBLAS core name (`openblas_get_corename()`), names kernels for a CPU older than
+/// AVX2 and FMA.
+bool openblas_core_predates_avx2(const std::string& core);
 
 /// How long after Ctrl-C a run that has not reached a progress report is ended anyway (its temporaries removed,
 /// exit status 130).

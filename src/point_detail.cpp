@@ -21,9 +21,11 @@ using namespace point_detail;
 
 int main(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   CLI::App app{"point-detail: high-frequency geometric details of point-sampled surfaces (Miao et al. 2007)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "point-detail (CGAL_ext); malloc: " + malloc_pages() + "; BLAS: OpenBLAS kernels " + blas_kernels(),
+                       "the program and the environment it runs in (memory pages, BLAS kernels)");
   Common_options common;
   app.add_option("--threads", common.threads, "worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
   app.add_flag("-q,--quiet", common.quiet, "no progress on stderr");

@@ -5,6 +5,7 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
+#include "cli_support.h"
 #include "program_run.h"
 #include "test_support.h"
 
@@ -961,4 +962,39 @@ TEST_F(Cli, CtrlCEndsARunWithinAboutASecondEvenInsideAFactorisationAndWritesNoth
   EXPECT_EQ(status, 130);
   EXPECT_LT(ms, 2500) << "the run went on for " << ms << " ms after Ctrl-C";
   expect_only({"in.ply"});
+}
+
+TEST(ProgramEnvironment, OpenBlasCoresOlderThanAvx2AreTold)
+{
+  for(const char* older : {"Prescott", "Core2", "Nehalem", "Sandybridge", "Bulldozer", "Piledriver"})
+    EXPECT_TRUE(point_detail::openblas_core_predates_avx2(older)) << older;
+  for(const char* avx2 : {"Haswell", "Zen", "SkylakeX", "Cooperlake", "SapphireRapids", "Excavator", "Unknown", ""})
+    EXPECT_FALSE(point_detail::openblas_core_predates_avx2(avx2)) << avx2;
+}
+
+/// The BLAS kernels `point-detail --version` reports.
+std::string reported_blas_kernels(const std::string& environment)
+{
+  const Program_run r = run("--version", environment);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const std::string marker = "OpenBLAS kernels ";
+  const std::size_t at = r.output.find(marker);
+  if(at == std::string::npos) return "";
+  const std::string rest = r.output.substr(at + marker.size());
+  return rest.substr(0, rest.find_first_of("\r\n"));
+}
+
+TEST_F(Cli, OpenBlasRunsItsAvx2KernelsWhereTheCpuHasThemUnlessTheUserChoseOthers)
+{
+  const std::string core = reported_blas_kernels("");
+  ASSERT_FALSE(core.empty());
+  if(core == "not OpenBLAS") GTEST_SKIP() << "CHOLMOD does not run on OpenBLAS here";
+  if(__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) EXPECT_FALSE(point_detail::openblas_core_predates_avx2(core)) << core;
+  // The user's own choice stands, and the program's can be turned off.
+  EXPECT_EQ(reported_blas_kernels("OPENBLAS_CORETYPE=Prescott "), "Prescott");
+  if(__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    const std::string untouched = reported_blas_kernels("POINT_DETAIL_OPENBLAS_CORE=0 ");
+    EXPECT_FALSE(untouched.empty());
+    EXPECT_TRUE(untouched == core || point_detail::openblas_core_predates_avx2(untouched)) << untouched;
+  }
 }
