@@ -227,7 +227,7 @@ void write_normals_results(const fs::path& out, const std::vector<Normals_row>& 
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_curvature", 3);
   if(!options.valid) return 2;
   const bool quick = options.quick;

@@ -80,7 +80,7 @@ void bench_model(const std::string& name, const Point_cloud& cloud, int reps, in
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_details", 5);
   if(!options.valid) return 2;
   const bool quick = options.quick;

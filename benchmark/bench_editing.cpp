@@ -631,7 +631,7 @@ int check_cactus(const fs::path& data)
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   if(argc == 4 && std::string(argv[1]) == "--check-cactus" && std::string(argv[2]) == "--data") return check_cactus(argv[3]);
   const Bench_options options = parse_bench_options(argc, argv, "bench_editing", 3);
   if(!options.valid) return 2;

@@ -113,7 +113,7 @@ double base_surface_offset(const Point_cloud& cloud)
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_scaling", 3);
   if(!options.valid) return 2;
   const bool quick = options.quick;

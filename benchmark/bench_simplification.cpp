@@ -130,7 +130,7 @@ void sweep_threshold(const std::string& name, const Point_cloud& input, std::vec
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_simplification", 3);
   if(!options.valid) return 2;
   const bool quick = options.quick;

@@ -194,7 +194,7 @@ void bench(const std::string& name, const Point_cloud& input, const Mesh& mesh, 
 
 int run(int argc, char** argv)
 {
-  use_huge_pages(argv);
+  tune_process_environment(argv);
   const Bench_options options = parse_bench_options(argc, argv, "bench_upsampling", 3);
   if(!options.valid) return 2;
   const fs::path file = options.data / "meshes/armadillo.off";

@@ -27,6 +27,15 @@ using Corename_function = char* (*)();
 /// OpenBLAS's `openblas_get_corename`, looked up rather than linked: CHOLMOD reaches BLAS through Debian's
 /// libblas.so.3 alternative, which need not be OpenBLAS.
 Corename_function openblas_corename() { return reinterpret_cast<Corename_function>(dlsym(RTLD_DEFAULT, "openblas_get_corename")); }
+
+bool cpu_has_avx2_and_fma()
+{
+#if defined(__x86_64__) || defined(__i386__)
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
 } // namespace
 
 bool openblas_core_predates_avx2(const std::string& core)
@@ -54,11 +63,9 @@ void tune_process_environment(char** argv)
     tunables.find("glibc.malloc.hugetlb") == std::string::npos && !(huge_pages && std::string(huge_pages) == "0");
   const char* blas_core = std::getenv("POINT_DETAIL_OPENBLAS_CORE");
   const bool set_blas_core = !std::getenv("OPENBLAS_CORETYPE") && !(blas_core && std::string(blas_core) == "0") &&
-                             openblas_core_predates_avx2(blas_kernels()) && __builtin_cpu_supports("avx2") &&
-                             __builtin_cpu_supports("fma");
+                             openblas_core_predates_avx2(blas_kernels()) && cpu_has_avx2_and_fma();
   if(!set_huge_pages && !set_blas_core) return;
-  if(set_huge_pages && setenv("GLIBC_TUNABLES", ((tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1").c_str(), 1) != 0)
-    return;
+  if(set_huge_pages) setenv("GLIBC_TUNABLES", ((tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1").c_str(), 1);
   if(set_blas_core) setenv("OPENBLAS_CORETYPE", "Haswell", 1);
   execv("/proc/self/exe", argv);
   // The exec failed: run as we are, with the environment as it was (setenv may have reused `current`).
