@@ -204,10 +204,10 @@ inline std::string machine_facts()
     if(line.rfind("model name", 0) == 0) { model = line.substr(line.find(':') + 2); break; }
   return format("- CPU: %s; threads in parallel runs: %d\n- compiler: GCC %s, -O3 -DNDEBUG (Release); CGAL %s, "
                 "Eigen %d.%d.%d, oneTBB %d.%d\n- malloc: %s (GLIBC_TUNABLES glibc.malloc.hugetlb=1, set by the harness)\n"
-                "- BLAS: OpenBLAS kernels %s (OPENBLAS_CORETYPE=Haswell set by the harness where OpenBLAS picked older ones)\n",
+                "- BLAS: %s (OPENBLAS_CORETYPE=Haswell set by the harness where OpenBLAS picked older ones)\n",
                 model.c_str(), tbb::info::default_concurrency(), __VERSION__, CGAL_VERSION_STR, EIGEN_WORLD_VERSION,
                 EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION, TBB_VERSION_MAJOR, TBB_VERSION_MINOR, malloc_pages().c_str(),
-                blas_kernels().c_str());
+                blas_description().c_str());
 }
 
 using Models = std::vector<std::pair<std::string, Point_cloud>>;

@@ -51,7 +51,13 @@ std::string blas_kernels()
 {
   const Corename_function corename = openblas_corename();
   const char* core = corename ? corename() : nullptr;
-  return core ? core : "not OpenBLAS";
+  return core ? core : "";
+}
+
+std::string blas_description()
+{
+  const std::string core = blas_kernels();
+  return core.empty() ? "not OpenBLAS" : "OpenBLAS, " + core + " kernels";
 }
 
 void tune_process_environment(char** argv)

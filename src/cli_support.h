@@ -33,7 +33,7 @@ struct Cancelled : std::runtime_error
 ///   already set or POINT_DETAIL_HUGE_PAGES=0: every large array then costs one page fault per 2 MiB instead of
 ///   per 4 KiB, which on virtual machines, where page faults are expensive, halves the time of sparse
 ///   factorisations (doc/detail_scaling.md);
-/// - OpenBLAS's AVX2 kernels (OPENBLAS_CORETYPE=Haswell) when the OpenBLAS CHOLMOD runs on picked kernels
+/// - OpenBLAS's AVX2 kernels (OPENBLAS_CORETYPE=Haswell) when OpenBLAS, CHOLMOD's BLAS, picked kernels
 ///   older than AVX2 on a CPU that has AVX2 and FMA (`openblas_core_predates_avx2`), unless OPENBLAS_CORETYPE
 ///   is set or POINT_DETAIL_OPENBLAS_CORE=0. OpenBLAS falls back to its SSE3 kernels (Prescott) on a CPU whose
 ///   model it does not know, as a virtual machine's generic one; they take twice as long to factor
@@ -42,8 +42,10 @@ struct Cancelled : std::runtime_error
 void tune_process_environment(char** argv);
 /// "transparent huge pages" or "4 KiB pages", as the running process's malloc was set up (for reports).
 std::string malloc_pages();
-/// The OpenBLAS kernels the process runs ("Haswell", "Prescott", ...), or "not OpenBLAS" (for reports).
+/// The name of the OpenBLAS kernels the process runs ("Haswell", "Prescott", ...), empty when BLAS is not OpenBLAS.
 std::string blas_kernels();
+/// "OpenBLAS, Haswell kernels" or "not OpenBLAS" (for reports).
+std::string blas_description();
 /// Whether `core`, an OpenBLAS core name (`openblas_get_corename()`), names kernels for a CPU older than
 /// AVX2 and FMA.
 bool openblas_core_predates_avx2(const std::string& core);

@@ -24,7 +24,7 @@ int main(int argc, char** argv)
   tune_process_environment(argv);
   CLI::App app{"point-detail: high-frequency geometric details of point-sampled surfaces (Miao et al. 2007)"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "point-detail (CGAL_ext); malloc: " + malloc_pages() + "; BLAS: OpenBLAS kernels " + blas_kernels(),
+  app.set_version_flag("--version", "point-detail (CGAL_ext); malloc: " + malloc_pages() + "; BLAS: " + blas_description(),
                        "the program and the environment it runs in (memory pages, BLAS kernels)");
   Common_options common;
   app.add_option("--threads", common.threads, "worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
