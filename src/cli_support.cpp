@@ -28,6 +28,13 @@ using Corename_function = char* (*)();
 /// libblas.so.3 alternative, which need not be OpenBLAS.
 Corename_function openblas_corename() { return reinterpret_cast<Corename_function>(dlsym(RTLD_DEFAULT, "openblas_get_corename")); }
 
+/// Whether the environment variable `name` is "0", the project's way to turn one of its own settings off.
+bool turned_off(const char* name)
+{
+  const char* value = std::getenv(name);
+  return value && std::string(value) == "0";
+}
+
 bool cpu_has_avx2_and_fma()
 {
 #if defined(__x86_64__) || defined(__i386__)
@@ -64,11 +71,8 @@ void tune_process_environment(char** argv)
 {
   const char* current = std::getenv("GLIBC_TUNABLES");
   const std::string tunables = current ? current : "";
-  const char* huge_pages = std::getenv("POINT_DETAIL_HUGE_PAGES");
-  const bool set_huge_pages =
-    tunables.find("glibc.malloc.hugetlb") == std::string::npos && !(huge_pages && std::string(huge_pages) == "0");
-  const char* blas_core = std::getenv("POINT_DETAIL_OPENBLAS_CORE");
-  const bool set_blas_core = !std::getenv("OPENBLAS_CORETYPE") && !(blas_core && std::string(blas_core) == "0") &&
+  const bool set_huge_pages = tunables.find("glibc.malloc.hugetlb") == std::string::npos && !turned_off("POINT_DETAIL_HUGE_PAGES");
+  const bool set_blas_core = !std::getenv("OPENBLAS_CORETYPE") && !turned_off("POINT_DETAIL_OPENBLAS_CORE") &&
                              openblas_core_predates_avx2(blas_kernels()) && cpu_has_avx2_and_fma();
   if(!set_huge_pages && !set_blas_core) return;
   if(set_huge_pages) setenv("GLIBC_TUNABLES", ((tunables.empty() ? "" : tunables + ":") + "glibc.malloc.hugetlb=1").c_str(), 1);

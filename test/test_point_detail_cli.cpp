@@ -972,6 +972,7 @@ TEST(ProgramEnvironment, OpenBlasCoresOlderThanAvx2AreTold)
     EXPECT_FALSE(point_detail::openblas_core_predates_avx2(avx2)) << avx2;
 }
 
+namespace {
 /// The OpenBLAS kernels `point-detail --version` reports ("not OpenBLAS" when BLAS is another library).
 std::string reported_blas_kernels(const std::string& environment)
 {
@@ -984,6 +985,7 @@ std::string reported_blas_kernels(const std::string& environment)
   const std::string rest = r.output.substr(at + marker.size());
   return rest.substr(0, rest.find(" kernels"));
 }
+} // namespace
 
 TEST_F(Cli, OpenBlasRunsItsAvx2KernelsWhereTheCpuHasThemUnlessTheUserChoseOthers)
 {
