@@ -156,6 +156,7 @@ TEST(DiffusionStencil, TheWidePathComputesWhatThePortableOneDoes)
   const Matrix_n3 samples = random_samples(count, 10), points = random_samples(n, 11);
   Matrix_n3 normals = random_samples(n, 12), moved = samples + 0.05 * random_samples(count, 13);
   normals.rowwise().normalize();
+  normals.row(3).setZero(); // a point without a normal keeps none (no division by zero)
   std::vector<Eigen::Matrix3d> map(count);
   std::mt19937 rng(14);
   std::uniform_real_distribution<double> u(-0.3, 0.3);
@@ -174,6 +175,7 @@ TEST(DiffusionStencil, TheWidePathComputesWhatThePortableOneDoes)
     }
     EXPECT_LT((out[1][0] - out[0][0]).cwiseAbs().maxCoeff(), 1e-14);
     EXPECT_LT((out[1][1] - out[0][1]).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_TRUE(out[1][1].row(3).isZero(0) && out[0][1].row(3).isZero(0));
     EXPECT_GT((out[1][0] - points).cwiseAbs().maxCoeff(), 1e-2); // the points moved
     for(Eigen::Index i = 1; i < Eigen::Index(n); i += 3) // and the others were left as they were
       EXPECT_TRUE(out[1][0].row(i) == points.row(i) && out[1][1].row(i) == normals.row(i));
