@@ -225,7 +225,7 @@ def peers_section(out, editing, simplification, upsampling, curvature, accuracy)
     table(out, ["stage", "model", "points", "ours s", "CGAL s", "ours / CGAL time"], rows)
 
     out.append("Quality of each edit beside CGAL's mesh ARAP (same mesh, region, control vertices and targets): "
-               "ours per drag (median of 20 drags through the edit), Hausdorff distance of the result to SRE_ARAP's, the rotation-compensated change of the region's own "
+               "ours per drag (median of every run's 20 drags through the edit), Hausdorff distance of the result to SRE_ARAP's, the rotation-compensated change of the region's own "
                "quadric details (relative to their size), and the largest distance of a handle point from its target; "
                "distances relative to the bounding diagonal.\n")
     rows = [[r["model"], r["method"], number(r["preprocess_s"]), number(r["deform_s"], 4),
