@@ -519,6 +519,12 @@ private:
         else throw py::value_error("rotations must be \"none\", \"propagate\" or \"arap\", not \"" + r + "\"");
       } else if(key == "rigid_iterations") s.rigid_iterations = as_count(value.cast<long long>(), "rigid_iterations");
       else if(key == "rigid_rotation_smoothing") s.rigid_rotation_smoothing = value.cast<double>();
+      else if(key == "rigid_rotation_smoothing_scale") {
+        const std::string w = value.cast<std::string>();
+        if(w == "edge_lengths") s.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::edge_lengths;
+        else if(w == "surface_area") s.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
+        else throw py::value_error("rigid_rotation_smoothing_scale must be \"edge_lengths\" or \"surface_area\", not \"" + w + "\"");
+      }
       else if(key == "rigid_edge_weights") {
         const std::string w = value.cast<std::string>();
         if(w == "uniform") s.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::uniform;
@@ -603,6 +609,7 @@ PYBIND11_MODULE(cgal_ext, m)
   py::class_<Deformation>(m, "Deformation",
                           "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
                           "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, rigid_rotation_smoothing, "
+                          "rigid_rotation_smoothing_scale ('edge_lengths', 'surface_area'), "
                           "rigid_edge_weights ('uniform', 'cotangent'), strength "
                           "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_iterations, "
                           "detail_tolerance, detail_anchor, diffusion_origin "

@@ -22,7 +22,7 @@ struct Edit_command
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
   std::size_t max_cluster_size = 0, target = 0;
   unsigned int rigid_iterations = 0, detail_iterations = 0;
-  std::string rotations, rigid_weights;
+  std::string rotations, rigid_weights, rigid_smoothing_scale;
   bool upsample = false;
   std::map<std::string, CLI::Option*> given;
   Render_settings render;
@@ -63,6 +63,8 @@ struct Edit_command
     if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
     if(has("--rigid-smoothing")) s.rigid_rotation_smoothing = rigid_smoothing;
     if(has("--rigid-weights")) s.rigid_edge_weights = rigid_edge_weights(rigid_weights, "--rigid-weights");
+    if(has("--rigid-smoothing-scale"))
+      s.rigid_rotation_smoothing_scale = rotation_smoothing_scale(rigid_smoothing_scale, "--rigid-smoothing-scale");
     if(has("--detail-iterations")) s.detail_iterations = detail_iterations;
     s.validate();
     ensure_normals(cloud, progress, rep);
@@ -140,8 +142,10 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
     ->check(CLI::IsMember({"none", "propagate", "arap"}));
   edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
     ->check(CLI::Range(1u, 1000u));
-  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: CGAL's SRE_ARAP energy, with --rigid-iterations 10 or more; default 0)")
+  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: near CGAL's SRE_ARAP, with --rigid-iterations 10 or more; default 0)")
     ->check(CLI::NonNegativeNumber);
+  edit.given["--rigid-smoothing-scale"] = edit_app->add_option("--rigid-smoothing-scale", edit.rigid_smoothing_scale, "with --rigid-smoothing: what its weight is relative to, edge_lengths (default: the same at every density) or surface_area (CGAL's SRE_ARAP: --rigid-smoothing 0.02 with --rigid-weights cotangent is its energy)")
+    ->check(CLI::IsMember({"edge_lengths", "surface_area"}));
   edit.given["--rigid-weights"] = edit_app->add_option("--rigid-weights", edit.rigid_weights, "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent (from each SSP's Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)")
     ->check(CLI::IsMember({"uniform", "cotangent"}));
   edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")

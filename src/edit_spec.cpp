@@ -148,6 +148,13 @@ CGAL_ext::Rigid_edge_weights rigid_edge_weights(const std::string& name, const s
   throw Cli_error(where + " must be \"uniform\" or \"cotangent\", not \"" + name + "\"");
 }
 
+CGAL_ext::Rotation_smoothing_scale rotation_smoothing_scale(const std::string& name, const std::string& where)
+{
+  if(name == "edge_lengths") return CGAL_ext::Rotation_smoothing_scale::edge_lengths;
+  if(name == "surface_area") return CGAL_ext::Rotation_smoothing_scale::surface_area;
+  throw Cli_error(where + " must be \"edge_lengths\" or \"surface_area\", not \"" + name + "\"");
+}
+
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
 {
   std::ifstream in = open_input(path);
@@ -159,7 +166,7 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   }
   const std::string file = path.filename().string();
   check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
-                    "rigid_rotation_smoothing", "rigid_edge_weights",
+                    "rigid_rotation_smoothing", "rigid_rotation_smoothing_scale", "rigid_edge_weights",
                     "diffusion", "simplification"}, file);
   const std::filesystem::path base = path.parent_path();
   Edit_description out;
@@ -217,6 +224,11 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("rigid_rotation_smoothing"))
     settings.rigid_rotation_smoothing = number(edit["rigid_rotation_smoothing"], file + ": rigid_rotation_smoothing");
+  if(edit.contains("rigid_rotation_smoothing_scale")) {
+    const json& w = edit["rigid_rotation_smoothing_scale"];
+    settings.rigid_rotation_smoothing_scale =
+      rotation_smoothing_scale(w.is_string() ? w.get<std::string>() : "", file + ": rigid_rotation_smoothing_scale");
+  }
   if(edit.contains("rigid_edge_weights")) {
     const json& w = edit["rigid_edge_weights"];
     settings.rigid_edge_weights = rigid_edge_weights(w.is_string() ? w.get<std::string>() : "", file + ": rigid_edge_weights");

@@ -39,13 +39,16 @@ CGAL_ext::Detail_order detail_order(const std::string& name, const std::string& 
 CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where);
 /// The ARAP edge weights named `uniform` or `cotangent`; throws Cli_error naming `where`.
 CGAL_ext::Rigid_edge_weights rigid_edge_weights(const std::string& name, const std::string& where);
+/// The smooth-rotation scale named `edge_lengths` or `surface_area`; throws Cli_error naming `where`.
+CGAL_ext::Rotation_smoothing_scale rotation_smoothing_scale(const std::string& name, const std::string& where);
 
 /*!
   Reads a JSON edit (documented in doc/editing.md):
   `{"roi": [SPEC...], "handles": [{"select": [SPEC...], "translation": [x,y,z],
     "rotation": {"axis": [x,y,z], "degrees": a} | "quaternion": [w,x,y,z] | "matrix": [[..],[..],[..]],
     "pivot": [x,y,z]}], "filter": {"order", "lambda", "mu"}, "k", "strength_distance", "handle_weight",
-    "rotations" ("none" | "propagate" | "arap"), "rigid_iterations", "rigid_rotation_smoothing", "rigid_edge_weights"
+    "rotations" ("none" | "propagate" | "arap"), "rigid_iterations", "rigid_rotation_smoothing",
+    "rigid_rotation_smoothing_scale" ("edge_lengths" | "surface_area"), "rigid_edge_weights"
     ("uniform" | "cotangent"), "diffusion": {"samples", "origin", "turn", "detail_iterations"}, "simplification":
     {"max_cluster_size", "target_count", "mode_threshold"}}`. SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
   relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos).

@@ -225,6 +225,9 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) {
     r["rigid_iterations"] = st.rigid_iterations;
     r["rigid_edge_weights"] = edit.settings.rigid_edge_weights == CGAL_ext::Rigid_edge_weights::cotangent ? "cotangent" : "uniform";
+    r["rigid_rotation_smoothing"] = edit.settings.rigid_rotation_smoothing;
+    r["rigid_rotation_smoothing_scale"] =
+      edit.settings.rigid_rotation_smoothing_scale == CGAL_ext::Rotation_smoothing_scale::surface_area ? "surface_area" : "edge_lengths";
   }
   if(edit.settings.detail_iterations > 0)
     r["restore_details"] = {{"iterations", st.restore_iterations}, {"residual", st.restore_residual}};

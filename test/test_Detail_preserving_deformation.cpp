@@ -140,7 +140,7 @@ TEST(DetailPreservingDeformation, WholeModelMovesRigidlyWithItsHandles)
   Tentacle t(3000);
   for(auto turn : {CGAL_ext::Sample_turn::frames, CGAL_ext::Sample_turn::fitted, CGAL_ext::Sample_turn::affine})
   for(auto rotations : both_rotations)
-  for(double smoothing : {0.0, 1.0})
+  for(double smoothing : {0.0, 1.0, 0.02}) // 0.02: CGAL's, of the surface's area
   for(auto weights : both_rigid_weights)
   for(Detail_order order : {Detail_order::linear, Detail_order::quadric, Detail_order::cubic}) {
     const bool rigid = rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible;
@@ -149,6 +149,7 @@ TEST(DetailPreservingDeformation, WholeModelMovesRigidlyWithItsHandles)
     Settings settings = with_order(order, rotations);
     settings.diffusion_turn = turn;
     settings.rigid_rotation_smoothing = smoothing; // SRE-ARAP's term, with as rigid as possible
+    if(smoothing == 0.02) settings.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
     settings.rigid_edge_weights = weights;
     settings.simplification.max_cluster_size = 6; // clustered: the points are not their own sample points
     Deformation d(t.all(), settings, t.np());
@@ -887,6 +888,19 @@ TEST(DetailPreservingDeformation, AsRigidAsPossibleApproachesItsFixedPointWithMo
   }
 }
 
+namespace {
+
+/// The largest distance between the deformed sample points of two edits of the same points.
+double largest_sample_distance(const std::unique_ptr<Deformation>& a, const std::unique_ptr<Deformation>& b)
+{
+  double largest = 0;
+  for(std::size_t s = 0; s < a->number_of_sample_points(); ++s)
+    largest = std::max(largest, (a->deformed_sample_position(s) - b->deformed_sample_position(s)).norm());
+  return largest;
+}
+
+} // namespace
+
 TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
 {
   // SRE-ARAP's smooth-rotation term (rigid_rotation_smoothing): unmoved handles still return every point bit
@@ -907,12 +921,7 @@ TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
     s.rigid_rotation_smoothing = smoothing;
     return bend_tip_by_70_degrees(t, s);
   };
-  auto distance = [](const std::unique_ptr<Deformation>& a, const std::unique_ptr<Deformation>& b) {
-    double largest = 0;
-    for(std::size_t s = 0; s < a->number_of_sample_points(); ++s)
-      largest = std::max(largest, (a->deformed_sample_position(s) - b->deformed_sample_position(s)).norm());
-    return largest;
-  };
+  const auto distance = largest_sample_distance;
   const auto reference = solve(100, 1);
   double previous = INFINITY;
   for(const unsigned iterations : {3u, 10u, 30u}) {
@@ -928,6 +937,48 @@ TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
   Settings bad = settings;
   bad.rigid_rotation_smoothing = -1;
   EXPECT_THROW(Deformation(t.all(), bad, t.np()), CGAL_ext::Invalid_input);
+}
+
+TEST(DetailPreservingDeformation, AreaScaledSmoothRotationsKeepTheIdentitiesAndConverge)
+{
+  // CGAL's SRE_ARAP energy on the sample points (smoothing 0.02 of the surface's area, cotangent weights): unmoved
+  // handles return every point bit for bit, a whole-model rigid motion is reproduced, more iterations approach one
+  // fixed point, and that fixed point is neither plain ARAP's nor that of the term scaled by edge lengths.
+  const Tentacle t(1000);
+  Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
+  settings.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::cotangent;
+  settings.rigid_rotation_smoothing = 0.02;
+  settings.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
+  {
+    auto d = t.edit(settings);
+    ASSERT_TRUE(d->deform());
+    d->diffuse();
+    for(std::size_t i = 0; i < t.shape.points.size(); ++i) ASSERT_EQ(d->deformed_point(i), t.point(i)) << i;
+  }
+  auto solve = [&](unsigned iterations, double smoothing, CGAL_ext::Rotation_smoothing_scale scale) {
+    Settings s = settings;
+    s.rigid_iterations = iterations;
+    s.rigid_rotation_smoothing = smoothing;
+    s.rigid_rotation_smoothing_scale = scale;
+    return bend_tip_by_70_degrees(t, s);
+  };
+  const auto distance = largest_sample_distance;
+  const auto area = CGAL_ext::Rotation_smoothing_scale::surface_area;
+  const auto reference = solve(100, 0.02, area);
+  double previous = INFINITY;
+  for(const unsigned iterations : {3u, 10u, 30u}) {
+    const double d = distance(solve(iterations, 0.02, area), reference);
+    std::printf("area-scaled smooth rotations, 70 degrees, %u iterations per step: %.4f of the diagonal from 100\n",
+                iterations, d / t.diagonal);
+    EXPECT_LT(d, 0.7 * previous) << iterations << " iterations";
+    previous = d;
+  }
+  const double from_plain = distance(solve(100, 0, area), reference);
+  const double from_edge_scaled = distance(solve(100, 0.02, CGAL_ext::Rotation_smoothing_scale::edge_lengths), reference);
+  std::printf("area-scaled smooth rotations against plain ARAP / the edge-scaled term of the same weight, 100 iterations "
+              "per step: %.4f / %.4f of the diagonal\n", from_plain / t.diagonal, from_edge_scaled / t.diagonal);
+  EXPECT_GT(from_plain, 2 * previous);
+  EXPECT_GT(from_edge_scaled, 2 * previous);
 }
 
 namespace {

@@ -776,6 +776,19 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_LT(max_distance(cotangent_points, library_edit(settings)), 1e-12);
   EXPECT_GT(max_distance(cotangent_points, rigid_points), 1e-6);
   EXPECT_EQ(nlohmann::json::parse(contents(path("cotangent.json")))["rigid_edge_weights"], "cotangent");
+  // SRE_ARAP's own energy (the term relative to the surface's area), as the library does it; the report names it.
+  const Program_run sre = run("edit -i " + in + " -o " + path("sre.ply") + " --edit " + path("edit.json") +
+                              " --rotations arap --rigid-iterations 2 --rigid-weights cotangent --rigid-smoothing 0.02"
+                              " --rigid-smoothing-scale surface_area --report " + path("sre.json"));
+  ASSERT_EQ(sre.exit_code, 0) << sre.output;
+  CGAL::Point_set_3<Point> sre_set;
+  ASSERT_TRUE(CGAL::IO::read_point_set(path("sre.ply"), sre_set));
+  settings.rigid_rotation_smoothing = 0.02;
+  settings.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
+  const std::vector<Point> sre_points(sre_set.points().begin(), sre_set.points().end());
+  EXPECT_LT(max_distance(sre_points, library_edit(settings)), 1e-12);
+  EXPECT_GT(max_distance(sre_points, cotangent_points), 1e-6);
+  EXPECT_EQ(nlohmann::json::parse(contents(path("sre.json")))["rigid_rotation_smoothing_scale"], "surface_area");
   // A misspelt mode is named.
   {
     std::ofstream edit(path("bad.json"));
@@ -792,8 +805,16 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_NE(bad_weights.exit_code, 0);
   EXPECT_NE(bad_weights.output.find("rigid_edge_weights must be \"uniform\" or \"cotangent\", not \"cot\""), std::string::npos)
     << bad_weights.output;
+  {
+    std::ofstream edit(path("bad_scale.json"));
+    edit << R"({"handles": [{"select": ["sphere:0,0,1,0.25"], "translation": [0.1, 0, 0.2]}], "rigid_rotation_smoothing_scale": "area"})";
+  }
+  const Program_run bad_scale = run("edit -i " + in + " -o " + path("bad.ply") + " --edit " + path("bad_scale.json"));
+  EXPECT_NE(bad_scale.exit_code, 0);
+  EXPECT_NE(bad_scale.output.find("rigid_rotation_smoothing_scale must be \"edge_lengths\" or \"surface_area\", not \"area\""),
+            std::string::npos) << bad_scale.output;
   expect_only({"in.ply", "edit.json", "out.ply", "out.png", "out.json", "arap.ply", "capped.ply", "smooth.ply", "cotangent.ply",
-               "cotangent.json", "bad.json", "bad_weights.json"});
+               "cotangent.json", "sre.ply", "sre.json", "bad.json", "bad_weights.json", "bad_scale.json"});
 }
 
 TEST_F(Cli, EditBySelAndDefAndItsMistakes)

@@ -497,6 +497,8 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   m_system.setup<ConcurrencyTag>(m_samples, m_sample_normals, m_sample_label, point_of_sample, k, m_settings.filter,
                                  m_settings.rotations == Detail_rotation::as_rigid_as_possible,
                                  m_settings.rigid_edge_weights == Rigid_edge_weights::cotangent,
+                                 m_settings.rigid_rotation_smoothing > 0 &&
+                                   m_settings.rigid_rotation_smoothing_scale == Rotation_smoothing_scale::surface_area,
                                  m_settings.least_squares, m_settings.handle_weight, who);
   const bool exact_handles = std::isinf(m_settings.handle_weight);
   if(!progress.report(0.6)) return false;

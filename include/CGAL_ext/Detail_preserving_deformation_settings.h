@@ -55,6 +55,21 @@ enum class Rigid_edge_weights
 
 /*!
   \ingroup PkgCGALExtRef
+  What the weight of the smooth-rotation term of `Detail_rotation::as_rigid_as_possible`
+  (`rigid_rotation_smoothing`) is relative to.
+*/
+enum class Rotation_smoothing_scale
+{
+  edge_lengths, ///< each sample point's squared neighbourhood edge lengths (under the edge weights): the same pull
+                ///< against the edges at every sampling density
+  surface_area  ///< CGAL's `SRE_ARAP`: the sample points' whole area (the sum of their tangent-plane Voronoi
+                ///< cells), shared among each sample point's neighbours, so that `rigid_rotation_smoothing` is
+                ///< CGAL's `alpha` (0.02 there) and the energy is SRE_ARAP's; its pull against the edges grows
+                ///< with the number of sample points, as the mesh ARAP's grows with the vertices
+};
+
+/*!
+  \ingroup PkgCGALExtRef
   Where a point's offset is measured from when the deformation is diffused from the sample points to every
   point (Miao et al. 2007, Sect. 6.2). Both reproduce rigid motions exactly and keep points whose sample
   points did not move in place; they differ in how they blend bending.
@@ -127,12 +142,18 @@ struct Detail_preserving_deformation_settings
   double rigid_tolerance = 0;
   /// With `as_rigid_as_possible`: the weight of SRE-ARAP's smooth-rotation term (CGAL's `SRE_ARAP`), which
   /// pulls each sample point's rotation toward its graph neighbours', relative to its neighbourhood's squared
-  /// edge lengths, >= 0 (0: plain ARAP). About 1 makes the energy CGAL's SRE_ARAP's: on the 70-degree
-  /// Botsch–Sorkine cactus, 300 iterations per step land 3.1 % of the diagonal from SRE_ARAP's converged
+  /// edge lengths (or, with `rigid_rotation_smoothing_scale`, to the surface's area, as CGAL's), >= 0 (0: plain
+  /// ARAP). About 1 brings the result near CGAL's SRE_ARAP's: on the 70-degree
+  /// Botsch–Sorkine cactus, 300 iterations per step land 2.2 % of the diagonal from SRE_ARAP's converged
   /// result instead of 6.8 %. It pays with 10 or more `rigid_iterations` (it uses the previous iteration's
   /// rotations): with 3 it lands farther from SRE_ARAP than plain ARAP on most scans (doc/editing.md, "As rigid
   /// as possible").
   double rigid_rotation_smoothing = 0;
+  /// With `as_rigid_as_possible`: what `rigid_rotation_smoothing` is relative to. `surface_area` with
+  /// `Rigid_edge_weights::cotangent` and `rigid_rotation_smoothing` 0.02 is CGAL's SRE_ARAP energy on the sample
+  /// points: converged on the 70-degree Botsch–Sorkine cactus (1,000 iterations per step) it lands within 2 % of
+  /// the diagonal from SRE_ARAP's converged result (doc/editing.md, "As rigid as possible").
+  Rotation_smoothing_scale rigid_rotation_smoothing_scale = Rotation_smoothing_scale::edge_lengths;
   /// With `as_rigid_as_possible`: the weights of the graph's edges.
   Rigid_edge_weights rigid_edge_weights = Rigid_edge_weights::uniform;
   /// With `as_rigid_as_possible`: the largest turn of a handle group in one step of `deform()`, in degrees, > 0.

@@ -97,6 +97,9 @@ def test_upsampling_is_the_programs(sphere, tmp_path):
     ((), {}),
     (("--diffusion-turn", "frames", "--diffusion-origin", "nearest"), {"diffusion_turn": "frames", "diffusion_origin": "nearest"}),
     (("--rotations", "arap", "--rigid-weights", "cotangent"), {"rotations": "arap", "rigid_edge_weights": "cotangent"}),
+    (("--rotations", "arap", "--rigid-weights", "cotangent", "--rigid-smoothing", "0.02", "--rigid-smoothing-scale", "surface_area"),
+     {"rotations": "arap", "rigid_edge_weights": "cotangent", "rigid_rotation_smoothing": 0.02,
+      "rigid_rotation_smoothing_scale": "surface_area"}),
 ])
 def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, settings):
     points, normals = sphere
@@ -159,6 +162,8 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_turn="twisted"), ValueError, "diffusion_turn must be"),
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_origin="far"), ValueError, "diffusion_origin must be"),
     (lambda p, n: cgal_ext.Deformation(p, n, rigid_edge_weights="cot"), ValueError, "rigid_edge_weights must be"),
+    (lambda p, n: cgal_ext.Deformation(p, n, rigid_rotation_smoothing_scale="area"), ValueError,
+     "rigid_rotation_smoothing_scale must be"),
 ])
 def test_bad_input_is_a_value_error_naming_it(sphere, call, error, needle):
     points, normals = sphere

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -102,6 +103,30 @@ TEST(TangentCotangentWeights, CellsOfAJitteredPlaneCloseAndAgreeFromBothEnds)
   }
   // The interior cells tile (n - 8)^2 unit squares, give or take the jitter along the interior's border.
   EXPECT_NEAR(interior_area / ((n - 8) * (n - 8)), 1.0, 0.05);
+}
+
+TEST(TangentCotangentWeights, TheCellsOfASphereCoverItsArea)
+{
+  // Fibonacci points on spheres of two radii, normals radial: the Voronoi cells in the tangent planes add up to
+  // the sphere's area (CGAL's SRE_ARAP weighs its smooth-rotation term by that area), to within the cells'
+  // flatness, and scale with the radius squared.
+  for(const double radius : {1.0, 3.0}) {
+    const std::size_t n = 4000;
+    in::Matrix_n3 points(Eigen::Index(n), 3);
+    const double golden = 3.14159265358979323846 * (3 - std::sqrt(5.0));
+    for(std::size_t i = 0; i < n; ++i) {
+      const double z = 1 - (2 * double(i) + 1) / double(n), r = std::sqrt(1 - z * z);
+      points.row(Eigen::Index(i)) << radius * r * std::cos(golden * double(i)), radius * r * std::sin(golden * double(i)), radius * z;
+    }
+    in::Progress silent;
+    const in::Neighbor_graph graph =
+      in::symmetrize<CGAL::Sequential_tag>(in::k_nearest_neighbor_graph<CGAL::Sequential_tag>(points, 10, silent));
+    const in::Matrix_n3 normals = points / radius;
+    const double area = in::sampled_surface_area(points, graph, in::cotangent_edge_weights<CGAL::Sequential_tag>(points, normals, graph));
+    const double exact = 4 * 3.14159265358979323846 * radius * radius;
+    std::printf("sphere of radius %.0f, %zu points: cells cover %.5f of its area\n", radius, n, area / exact);
+    EXPECT_NEAR(area / exact, 1.0, 0.01) << "radius " << radius;
+  }
 }
 
 TEST(TangentCotangentWeights, BorderPointsAndDegenerateNeighbourhoodsStayFinite)

@@ -124,15 +124,15 @@ Eigen::Matrix3d fitted_linear_map(const Positions& rest, const Positions& deform
 /// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`
 /// under the edge `weights` (empty: uniform), written to `rotations[s]`. With `smoothing` > 0, the
 /// smooth-rotation term of SRE-ARAP (Levi and Gotsman 2015; CGAL's `SRE_ARAP`) joins each fit: the covariance
-/// gains `smoothing * sum_j w_j |e_j|^2 / d * R_j^T` for each of the d neighbours j that the term visits (all
-/// of them; with weights, those of the Voronoi cell, as SRE-ARAP visits the 1-ring), `R_j` its rotation before
-/// this step (`previous`, a buffer), so every rotation is pulled toward its neighbours' by a weight that is the
-/// same at every sampling density. A neighbourhood that did not move among neighbours that did not turn keeps
-/// the identity exactly.
+/// gains `smoothing * scale / d * R_j^T` for each of the d neighbours j that the term visits (all of them; with
+/// weights, those of the Voronoi cell, as SRE-ARAP visits the 1-ring), `R_j` its rotation before this step
+/// (`previous`, a buffer). The scale is `area` when it is > 0 (CGAL's: the surface's area, the same for every
+/// sample point), otherwise the point's own `sum_j w_j |e_j|^2`, a weight that is the same at every sampling
+/// density. A neighbourhood that did not move among neighbours that did not turn keeps the identity exactly.
 template <typename ConcurrencyTag>
 void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed, const Neighbor_graph& graph,
                                 const std::vector<double>& weights, const std::vector<int>& rows, double smoothing,
-                                std::vector<Eigen::Matrix3d>& rotations, std::vector<Eigen::Matrix3d>& previous)
+                                double area, std::vector<Eigen::Matrix3d>& rotations, std::vector<Eigen::Matrix3d>& previous)
 {
   const double* w = weights.empty() ? nullptr : weights.data();
   if(!(smoothing > 0)) {
@@ -159,7 +159,7 @@ void fit_neighborhood_rotations(const Matrix_n3& rest, const Matrix_n3& deformed
       turns += previous[std::size_t(*j)].transpose();
       ++degree;
     }
-    const double pull = degree > 0 ? smoothing * spread / degree : 0.0;
+    const double pull = degree > 0 ? smoothing * (area > 0 ? area : spread) / degree : 0.0;
     const Eigen::Matrix3d covariance = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(edges);
     rotations[s] = moved ? best_rotation(Eigen::Matrix3d(covariance + pull * turns)) : Eigen::Matrix3d::Identity();
   });
@@ -222,7 +222,7 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
 #define CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template void fit_neighborhood_rotations<Tag>(const Matrix_n3&, const Matrix_n3&, const Neighbor_graph&, \
                                                        const std::vector<double>&, const std::vector<int>&, double, \
-                                                       std::vector<Eigen::Matrix3d>&, std::vector<Eigen::Matrix3d>&); \
+                                                       double, std::vector<Eigen::Matrix3d>&, std::vector<Eigen::Matrix3d>&); \
   EXTERN template Matrix_n3 rigid_edge_change<Tag>(const std::vector<std::pair<int, int>>&, const std::vector<double>&, \
                                                    const Matrix_n3&, const std::vector<Eigen::Matrix3d>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES)

@@ -72,7 +72,8 @@ inline Rigid_transform rigid_step(const Rigid_transform& from, const Rigid_trans
 /// `rotations`, the handles pulled by `anchor_displacement`) and the local fit of `rotations` to its result
 /// (the region's and the fixed ring's around it, `Sample_system::rigid_rotation_rows`);
 /// with `tolerance` > 0, it stops once no region sample point moved more than `tolerance` in an iteration;
-/// `smoothing` is the rotation fit's (`fit_neighborhood_rotations`). `edge_change`, `previous` and
+/// `smoothing` is the rotation fit's (`fit_neighborhood_rotations`, scaled by `system.smoothing_area` when it is
+/// > 0). `edge_change`, `previous` and
 /// `previous_rotations` are buffers. Returns the iterations taken.
 template <typename ConcurrencyTag>
 unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, const Matrix_n3& anchor_displacement,
@@ -86,7 +87,8 @@ unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, c
     if(tolerance > 0) previous = deformed;
     system.solve<ConcurrencyTag>(samples, edge_change, anchor_displacement, deformed);
     fit_neighborhood_rotations<ConcurrencyTag>(samples, deformed, system.graph, system.edge_weights,
-                                               system.rigid_rotation_rows, smoothing, rotations, previous_rotations);
+                                               system.rigid_rotation_rows, smoothing, system.smoothing_area, rotations,
+                                               previous_rotations);
     ++used;
     if(!(tolerance > 0)) continue;
     double moved = 0;

@@ -46,17 +46,22 @@ public:
   /// ones an edge joins to it (their rotations are free in the energy, as CGAL's mesh ARAP fits the ring
   /// around its region; held at the identity, they bend the region's edge toward them).
   std::vector<int> rigid_rotation_rows;
+  /// As-rigid-as-possible with the smooth-rotation term scaled by the surface's area (CGAL's SRE_ARAP): the
+  /// sample points' whole area, the sum of their tangent-plane Voronoi cells; 0: scaled by edge lengths.
+  double smoothing_area = 0;
   Matrix_n3 details;               ///< `f(K) s` on the region's rows
 
   /// Builds the graph (`k` neighbours) and Laplacian of `samples`, indexes the region and handles by `labels`,
   /// checks that every part of the region is pinned (`point_of_sample` names a point of each sample point in
   /// the messages) and factors the normal equations: of the details of `filter`, or with `rigid` of the graph's
-  /// edges, weighted by `cotangent_weights` (from the sample points' `normals`) or uniformly. A finite
-  /// `handle_weight` makes the handles the paper's soft constraints, infinity exact ones.
+  /// edges, weighted by `cotangent_weights` (from the sample points' `normals`) or uniformly, and with
+  /// `area_scaled_smoothing` finds `smoothing_area`. A finite `handle_weight` makes the handles the paper's soft
+  /// constraints, infinity exact ones.
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& samples, const Matrix_n3& normals, const std::vector<int>& labels,
              const std::vector<int>& point_of_sample, std::size_t k, const Detail_filter& filter, bool rigid,
-             bool cotangent_weights, Least_squares_settings least_squares, double handle_weight, const char* who)
+             bool cotangent_weights, bool area_scaled_smoothing, Least_squares_settings least_squares,
+             double handle_weight, const char* who)
   {
     const std::size_t count = std::size_t(samples.rows());
     Progress silent;
@@ -94,6 +99,10 @@ public:
     // As-rigid-as-possible editing solves for the edges of the sample points' graph instead of their details.
     edge_weights.clear();
     if(rigid && cotangent_weights) edge_weights = cotangent_edge_weights<ConcurrencyTag>(samples, normals, graph);
+    smoothing_area = 0;
+    if(rigid && area_scaled_smoothing)
+      smoothing_area = sampled_surface_area(samples, graph, cotangent_weights ? edge_weights
+                                                            : cotangent_edge_weights<ConcurrencyTag>(samples, normals, graph));
     if(rigid) {
       Sparse_row_matrix rows = rigid_edge_rows(graph, edge_weights, roi_local, roi.size(), rigid_edges, rigid_edge_scales);
       rigid_rotation_rows = roi;

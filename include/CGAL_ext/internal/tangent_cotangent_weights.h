@@ -134,6 +134,19 @@ std::vector<double> cotangent_edge_weights(const Matrix_n3& positions, const Mat
   return weights;
 }
 
+/// The area of the surface that `positions` sample: the sum of their Voronoi cells, each `sum_j w_ij |e_ij|^2 / 4`
+/// under `cotangent_edge_weights` (one per entry of `graph.indices`): its side toward j times half the edge,
+/// halved.
+inline double sampled_surface_area(const Matrix_n3& positions, const Neighbor_graph& graph, const std::vector<double>& weights)
+{
+  double area = 0;
+  for(std::size_t i = 0; i < graph.size(); ++i)
+    for(int e = graph.offsets[i]; e < graph.offsets[i + 1]; ++e)
+      area += 0.25 * weights[std::size_t(e)] *
+              (positions.row(graph.indices[std::size_t(e)]) - positions.row(Eigen::Index(i))).squaredNorm();
+  return area;
+}
+
 } // namespace internal
 } // namespace CGAL_ext
 
