@@ -344,6 +344,7 @@ private:
   void write_deformed(PointRange& points, const NamedParameters& np) const;
   void cluster(internal::Progress& progress);
   void build_strength_field();
+  void build_handle_collar();
 
   Settings m_settings;
   std::function<bool(double)> m_callback;
@@ -375,6 +376,12 @@ private:
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
+  // With exact handles, the collar: the region's rows within reach of a handle (m_collar_offsets delimits each
+  // row's entries), each entry the nearest handle point of one group (an index into m_handle_rows) and the
+  // weight with which that point's step is added to the row's motion.
+  std::vector<int> m_collar_rows, m_collar_offsets;
+  std::vector<std::pair<int, double>> m_collar_entries;
+  Matrix_n3 m_handle_steps, m_handle_normal_steps; // per handle row, its transform's position less the blend's
   internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
   bool m_has_relaxation = false;
   bool m_diffused = false; // diffuse() ran since preprocess() or reset(): the stencil holds its motions
@@ -466,6 +473,70 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_strength_field()
   }
 }
 
+// Exact handles put their points on the handle's transform T_g, while the points next to them follow the blend
+// of their sample points, F; where the blend differs from T_g (as rigid as possible fits the sample points next
+// to a handle turns of their own) the border would be a step, one that grows, relative to the point spacing,
+// with the sampling density. So a region point within reach r of a handle also takes the step of the group's
+// nearest handle point h, T_g(h) - F(h), weighted by w = 1 - smoothstep(d / r), d its distance to h and r twice
+// the median distance from a handle point to the farthest sample point of its stencil (how far the diffusion
+// spreads one sample point's motion): the motion is continuous up to the handle (doc/editing.md, "Exact
+// handles without a seam").
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
+{
+  m_collar_rows.clear();
+  m_collar_offsets.assign(1, 0);
+  m_collar_entries.clear();
+  m_handle_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
+  m_handle_normal_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
+  if(m_handle_rows.empty()) return;
+  std::vector<double> reach(m_handle_rows.size());
+  for(std::size_t h = 0; h < m_handle_rows.size(); ++h) {
+    const std::size_t row = std::size_t(m_handle_rows[h]);
+    reach[h] = (m_cloud.positions.row(Eigen::Index(row)) - m_samples.row(m_stencil.samples.end(row)[-1])).norm();
+  }
+  std::nth_element(reach.begin(), reach.begin() + std::ptrdiff_t(reach.size() / 2), reach.end());
+  const double r = 2 * reach[reach.size() / 2];
+  if(!(r > 0)) return;
+  struct Entry { int row, handle; double weight; };
+  std::vector<Entry> entries;
+  for(std::size_t g = 0; g < m_transforms.size(); ++g) {
+    const int label = first_handle_label + int(g);
+    std::vector<int> handle; // indices into m_handle_rows
+    Eigen::AlignedBox3d box;
+    for(std::size_t h = 0; h < m_handle_rows.size(); ++h)
+      if(m_label[std::size_t(m_handle_rows[h])] == label) {
+        handle.push_back(int(h));
+        box.extend(m_cloud.positions.row(m_handle_rows[h]).transpose());
+      }
+    box.min().array() -= r;
+    box.max().array() += r;
+    std::vector<int> near; // moving region points (not handle points) in the handle's box
+    for(int row : m_active_points)
+      if(m_label[std::size_t(row)] == roi_label && box.contains(m_cloud.positions.row(row).transpose())) near.push_back(row);
+    if(near.empty()) continue;
+    Matrix_n3 handle_positions(Eigen::Index(handle.size()), 3), near_positions(Eigen::Index(near.size()), 3);
+    for(std::size_t i = 0; i < handle.size(); ++i)
+      handle_positions.row(Eigen::Index(i)) = m_cloud.positions.row(m_handle_rows[std::size_t(handle[i])]);
+    for(std::size_t i = 0; i < near.size(); ++i) near_positions.row(Eigen::Index(i)) = m_cloud.positions.row(near[i]);
+    const internal::Neighbor_graph nearest = internal::k_nearest_samples<ConcurrencyTag>(handle_positions, near_positions, 1);
+    for(std::size_t i = 0; i < near.size(); ++i) {
+      const double t = (near_positions.row(Eigen::Index(i)) - handle_positions.row(*nearest.begin(i))).norm() / r;
+      if(t < 1) entries.push_back({near[i], handle[std::size_t(*nearest.begin(i))], 1 - t * t * (3 - 2 * t)});
+    }
+  }
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.row < b.row || (a.row == b.row && a.handle < b.handle); });
+  for(std::size_t e = 0; e < entries.size(); ++e) {
+    if(e == 0 || entries[e].row != entries[e - 1].row) {
+      if(e > 0) m_collar_offsets.push_back(int(e));
+      m_collar_rows.push_back(entries[e].row);
+    }
+    m_collar_entries.emplace_back(entries[e].handle, entries[e].weight);
+  }
+  if(!entries.empty()) m_collar_offsets.push_back(int(entries.size()));
+}
+
 template <typename ConcurrencyTag>
 bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
 {
@@ -513,20 +584,22 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   }
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
                                            std::min<std::size_t>(m_settings.diffusion_samples, count), &m_sample_of);
-  // Points carried by fixed sample points only never move: each drag skips them.
+  // Points carried by fixed sample points only never move: each drag skips them. Handle points are always
+  // blended (the collar takes their blend's step to their transform).
   m_active_points.clear();
-  for(std::size_t row = 0; row < m_cloud.size(); ++row)
-    for(const int* s = m_stencil.samples.begin(row); s != m_stencil.samples.end(row); ++s)
-      if(m_sample_label[std::size_t(*s)] != fixed_label) {
-        m_active_points.push_back(int(row));
-        break;
-      }
+  for(std::size_t row = 0; row < m_cloud.size(); ++row) {
+    bool active = exact_handles && m_label[row] >= first_handle_label;
+    for(const int* s = m_stencil.samples.begin(row); s != m_stencil.samples.end(row) && !active; ++s)
+      active = m_sample_label[std::size_t(*s)] != fixed_label;
+    if(active) m_active_points.push_back(int(row));
+  }
 
   m_group_rotations.resize(m_transforms.size());
   m_handle_rows.clear();
   if(exact_handles)
     for(std::size_t row = 0; row < m_cloud.size(); ++row)
       if(m_label[row] >= first_handle_label) m_handle_rows.push_back(int(row));
+  build_handle_collar();
 
   m_has_relaxation = m_diffused = false;
   m_propagated.assign(count, Eigen::Matrix3d::Identity());
@@ -695,12 +768,32 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
                                              ? Offset_origin::nearest_sample
                                              : Offset_origin::own_sample,
                                            m_deformed_points, m_deformed_normals, &m_active_points);
-  // Exact handles: the handle points themselves follow their transform, not the blend of their neighbourhood.
+  // Exact handles: the handle points themselves follow their transform, not the blend of their neighbourhood,
+  // and the points of the collar about them blend into it (build_handle_collar()).
   for_range<ConcurrencyTag>(0, m_handle_rows.size(), [&](std::size_t h) {
     const Eigen::Index row = m_handle_rows[h];
     const std::size_t g = std::size_t(m_label[std::size_t(row)] - first_handle_label);
-    m_deformed_points.row(row) = (rotation[g] * m_cloud.positions.row(row).transpose() + m_transforms[g].translation).transpose();
-    m_deformed_normals.row(row) = (rotation[g] * m_normals.row(row).transpose()).transpose();
+    const Eigen::RowVector3d exact = (rotation[g] * m_cloud.positions.row(row).transpose() + m_transforms[g].translation).transpose();
+    const Eigen::RowVector3d exact_normal = (rotation[g] * m_normals.row(row).transpose()).transpose();
+    m_handle_steps.row(Eigen::Index(h)) = exact - m_deformed_points.row(row);
+    m_handle_normal_steps.row(Eigen::Index(h)) = exact_normal - m_deformed_normals.row(row);
+    m_deformed_points.row(row) = exact;
+    m_deformed_normals.row(row) = exact_normal;
+  });
+  for_range<ConcurrencyTag>(0, m_collar_rows.size(), [&](std::size_t c) {
+    const Eigen::Index row = m_collar_rows[c];
+    double total = 0;
+    for(int e = m_collar_offsets[c]; e < m_collar_offsets[c + 1]; ++e) total += m_collar_entries[std::size_t(e)].second;
+    const double scale = total > 1 ? 1 / total : 1.0; // where two groups' collars overlap
+    Eigen::RowVector3d step = Eigen::RowVector3d::Zero(), normal_step = Eigen::RowVector3d::Zero();
+    for(int e = m_collar_offsets[c]; e < m_collar_offsets[c + 1]; ++e) {
+      const auto [h, weight] = m_collar_entries[std::size_t(e)];
+      step += scale * weight * m_handle_steps.row(h);
+      normal_step += scale * weight * m_handle_normal_steps.row(h);
+    }
+    if(step.isZero(0) && normal_step.isZero(0)) return; // no step to take: bit for bit
+    m_deformed_points.row(row) += step;
+    m_deformed_normals.row(row) = (m_deformed_normals.row(row) + normal_step).normalized();
   });
   m_diffused = true;
   m_statistics.diffuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
