@@ -255,10 +255,12 @@ TEST(DetailPreservingDeformation, ExactHandlesLeaveNoStepAtTheirBorder)
     double border = 0, elsewhere = 0, error = 0;
     for(std::size_t i : t.roi) {
       if(in_tip[i]) error = std::max(error, (d->deformed_point(i) - (R * t.point(i) + shift)).norm());
-      for(const int* j = edges.begin(i); j != edges.end(i); ++j) {
-        if(!in_roi[std::size_t(*j)]) continue;
-        const double stretch = (d->deformed_point(i) - d->deformed_point(std::size_t(*j))).norm() / (t.point(i) - t.point(std::size_t(*j))).norm();
-        (in_tip[i] != in_tip[std::size_t(*j)] ? border : elsewhere) = std::max(in_tip[i] != in_tip[std::size_t(*j)] ? border : elsewhere, stretch);
+      for(const int* e = edges.begin(i); e != edges.end(i); ++e) {
+        const std::size_t j = std::size_t(*e);
+        if(!in_roi[j]) continue;
+        const double stretch = (d->deformed_point(i) - d->deformed_point(j)).norm() / (t.point(i) - t.point(j)).norm();
+        double& largest = in_tip[i] != in_tip[j] ? border : elsewhere;
+        largest = std::max(largest, stretch);
       }
     }
     const char* what = rotations == CGAL_ext::Detail_rotation::propagated ? "propagated" : "ARAP";
