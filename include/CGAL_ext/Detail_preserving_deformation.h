@@ -376,11 +376,11 @@ private:
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
-  // With exact handles, the collar: the region's rows within reach of a handle (m_collar_offsets delimits each
-  // row's entries), each entry the nearest handle point of one group (an index into m_handle_rows) and the
-  // weight with which that point's step is added to the row's motion.
-  std::vector<int> m_collar_rows, m_collar_offsets;
-  std::vector<std::pair<int, double>> m_collar_entries;
+  // With exact handles, the collar: the region's rows within reach of a handle and, per row, the nearest handle
+  // point of each group that reaches it (an index into m_handle_rows) with the weight of that point's step.
+  std::vector<int> m_collar_rows;
+  internal::Neighbor_graph m_collar;
+  std::vector<double> m_collar_weights;
   Matrix_n3 m_handle_steps, m_handle_normal_steps; // per handle row, its transform's position less the blend's
   internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
   bool m_has_relaxation = false;
@@ -485,8 +485,8 @@ template <typename ConcurrencyTag>
 void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
 {
   m_collar_rows.clear();
-  m_collar_offsets.assign(1, 0);
-  m_collar_entries.clear();
+  m_collar = internal::Neighbor_graph();
+  m_collar_weights.clear();
   m_handle_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
   m_handle_normal_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
   if(m_handle_rows.empty()) return;
@@ -527,14 +527,17 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
   }
   std::sort(entries.begin(), entries.end(),
             [](const Entry& a, const Entry& b) { return a.row < b.row || (a.row == b.row && a.handle < b.handle); });
-  for(std::size_t e = 0; e < entries.size(); ++e) {
-    if(e == 0 || entries[e].row != entries[e - 1].row) {
-      if(e > 0) m_collar_offsets.push_back(int(e));
-      m_collar_rows.push_back(entries[e].row);
+  for(std::size_t first = 0, last; first < entries.size(); first = last) {
+    double total = 0;
+    for(last = first; last < entries.size() && entries[last].row == entries[first].row; ++last) total += entries[last].weight;
+    const double scale = total > 1 ? 1 / total : 1.0; // where two groups' collars overlap
+    for(std::size_t e = first; e < last; ++e) {
+      m_collar.indices.push_back(entries[e].handle);
+      m_collar_weights.push_back(scale * entries[e].weight);
     }
-    m_collar_entries.emplace_back(entries[e].handle, entries[e].weight);
+    m_collar.offsets.push_back(int(last));
+    m_collar_rows.push_back(entries[first].row);
   }
-  if(!entries.empty()) m_collar_offsets.push_back(int(entries.size()));
 }
 
 template <typename ConcurrencyTag>
@@ -782,14 +785,11 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
   });
   for_range<ConcurrencyTag>(0, m_collar_rows.size(), [&](std::size_t c) {
     const Eigen::Index row = m_collar_rows[c];
-    double total = 0;
-    for(int e = m_collar_offsets[c]; e < m_collar_offsets[c + 1]; ++e) total += m_collar_entries[std::size_t(e)].second;
-    const double scale = total > 1 ? 1 / total : 1.0; // where two groups' collars overlap
     Eigen::RowVector3d step = Eigen::RowVector3d::Zero(), normal_step = Eigen::RowVector3d::Zero();
-    for(int e = m_collar_offsets[c]; e < m_collar_offsets[c + 1]; ++e) {
-      const auto [h, weight] = m_collar_entries[std::size_t(e)];
-      step += scale * weight * m_handle_steps.row(h);
-      normal_step += scale * weight * m_handle_normal_steps.row(h);
+    for(int e = m_collar.offsets[c]; e < m_collar.offsets[c + 1]; ++e) {
+      const double weight = m_collar_weights[std::size_t(e)];
+      step += weight * m_handle_steps.row(m_collar.indices[std::size_t(e)]);
+      normal_step += weight * m_handle_normal_steps.row(m_collar.indices[std::size_t(e)]);
     }
     if(step.isZero(0) && normal_step.isZero(0)) return; // no step to take: bit for bit
     m_deformed_points.row(row) += step;
