@@ -1,10 +1,12 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
 //
-// The Python module `cgal_ext`: the library's algorithms on numpy arrays (doc/python.md). Points and normals are
-// read in place through property maps over the caller's arrays (C- or F-ordered, any strides); results are new
-// arrays. The GIL is released while the library computes; a `progress` callable is called from the calling
-// thread with the GIL taken back, and an exception it raises (or Ctrl-C) cancels the computation and is raised.
+// The compiled part of the Python package `cgal_ext` (`cgal_ext._core`, doc/python.md): the library's algorithms
+// and the program's readers, writers and pictures on numpy arrays. float64 (n, 3) arrays are read in place through
+// property maps over the caller's memory (C- or F-ordered, any strides); other numbers and nested lists are
+// converted once. Results are new arrays, named tuples where there are several. The GIL is released while the
+// library computes; a `progress` callable is called from the calling thread with the GIL taken back, and an
+// exception it raises (or Ctrl-C) cancels the computation and is raised.
 #include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/compute_simplification_sample_points.h>
@@ -13,24 +15,73 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
+#include "cli_support.h"
+#include "colors.h"
+#include "point_io.h"
+#include "render.h"
+
 #include <CGAL/Simple_cartesian.h>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <boost/property_map/function_property_map.hpp>
 #include <boost/range/counting_range.hpp>
 
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace py = pybind11;
 using namespace pybind11::literals;
+
+// ---- names the signatures show --------------------------------------------------------------------------------
+// Arguments and results are Python objects checked by hand (the messages name the argument); these wrappers only
+// give help() and the stub the types a user passes, instead of `object`.
+#define CGAL_EXT_PYTHON_TYPE(Type, Name)                                                                      \
+  struct Type : py::object                                                                                   \
+  {                                                                                                          \
+    Type() = default;                                                                                        \
+    Type(py::object o) : py::object(std::move(o)) {}                                                         \
+  };                                                                                                         \
+  namespace pybind11 { namespace detail {                                                                    \
+  template <>                                                                                                \
+  struct type_caster<Type>                                                                                   \
+  {                                                                                                          \
+    PYBIND11_TYPE_CASTER(Type, const_name(Name));                                                            \
+    bool load(handle source, bool)                                                                           \
+    {                                                                                                        \
+      value = Type(reinterpret_borrow<object>(source));                                                      \
+      return true;                                                                                           \
+    }                                                                                                        \
+    static handle cast(const Type& source, return_value_policy, handle) { return source.inc_ref(); }         \
+  };                                                                                                         \
+  }}
+
+CGAL_EXT_PYTHON_TYPE(Array_like, "numpy.typing.ArrayLike")
+CGAL_EXT_PYTHON_TYPE(Optional_array_like, "Optional[numpy.typing.ArrayLike]")
+CGAL_EXT_PYTHON_TYPE(Optional_progress, "Optional[Callable[[float], object]]")
+CGAL_EXT_PYTHON_TYPE(Optional_int, "Optional[int]")
+CGAL_EXT_PYTHON_TYPE(Optional_path, "Optional[Union[str, os.PathLike]]")
+CGAL_EXT_PYTHON_TYPE(Path_like, "Union[str, os.PathLike]")
+CGAL_EXT_PYTHON_TYPE(Ndarray, "numpy.ndarray")
+CGAL_EXT_PYTHON_TYPE(Details_result, "Details")
+CGAL_EXT_PYTHON_TYPE(Upsampled_result, "Upsampled")
+CGAL_EXT_PYTHON_TYPE(Deformed_result, "Deformed")
+CGAL_EXT_PYTHON_TYPE(Point_set_result, "PointSet")
+CGAL_EXT_PYTHON_TYPE(Sample_points_of, "Union[int, numpy.ndarray]")
 
 namespace {
 
@@ -39,7 +90,7 @@ using Point = Kernel::Point_3;
 using Vector = Kernel::Vector_3;
 using Index_range = boost::iterator_range<boost::counting_iterator<std::size_t>>;
 
-// ---- arrays in place ----------------------------------------------------------------------------------------
+// ---- arrays -----------------------------------------------------------------------------------------------------
 
 /// An (n, 3) float64 array seen in place: row i, column c at `data + i * row_stride + c * column_stride` bytes.
 struct Rows3
@@ -53,6 +104,24 @@ struct Rows3
   }
 };
 
+/// The span of memory the library read through the points' and normals' maps since `_trace_reads(True)`: how the
+/// tests see that an input is read in place, not copied (off by default; one relaxed load per read).
+struct Read_trace
+{
+  std::atomic<bool> on{false};
+  std::atomic<std::uintptr_t> lowest{std::numeric_limits<std::uintptr_t>::max()}, highest{0};
+
+  void note(const void* first, const void* last)
+  {
+    const auto lo = reinterpret_cast<std::uintptr_t>(first), hi = reinterpret_cast<std::uintptr_t>(last);
+    for(std::uintptr_t seen = lowest.load(); lo < seen && !lowest.compare_exchange_weak(seen, lo);) {
+    }
+    for(std::uintptr_t seen = highest.load(); hi > seen && !highest.compare_exchange_weak(seen, hi);) {
+    }
+  }
+};
+Read_trace read_trace;
+
 std::string shape_of(const py::array& array)
 {
   std::string s = "(";
@@ -60,17 +129,36 @@ std::string shape_of(const py::array& array)
   return s + (array.ndim() == 1 ? ",)" : ")");
 }
 
-/// Checks that `object` is an (n, 3) float64 numpy array and views it in place; a ValueError names `argument`.
-Rows3 rows3(const py::handle& object, const char* argument)
+std::string dtype_name(const py::array& array) { return py::str(array.dtype()); }
+
+/// `object` as a numpy array, or a ValueError naming `argument` and `what` it must be.
+py::array as_array(const py::handle& object, const char* argument, const std::string& what)
 {
-  if(!py::isinstance<py::array>(object))
-    throw py::value_error(std::string(argument) + " must be a numpy array of shape (n, 3) and dtype float64, not " +
-                          std::string(py::str(object.get_type().attr("__name__"))));
-  const auto array = py::reinterpret_borrow<py::array>(object);
+  if(py::isinstance<py::array>(object)) return py::reinterpret_borrow<py::array>(object);
+  try {
+    return py::module_::import("numpy").attr("asarray")(object);
+  } catch(py::error_already_set& e) {
+    throw py::value_error(std::string(argument) + " must be " + what + " (" + e.what() + ")");
+  }
+}
+
+/// An (n, 3) array of real numbers as float64: the caller's own array when it is float64 (compared by value, so
+/// an array that went through pickle is one too), else one converted copy (float32, integers, nested lists).
+py::array float64_rows3(const py::handle& object, const char* argument)
+{
+  const py::array array = as_array(object, argument, "an (n, 3) array of numbers");
+  const char kind = array.dtype().kind();
+  if(kind != 'f' && kind != 'i' && kind != 'u')
+    throw py::value_error(std::string(argument) + " must hold real numbers (float64, float32 or integers), not dtype " +
+                          dtype_name(array));
   if(array.ndim() != 2 || array.shape(1) != 3)
     throw py::value_error(std::string(argument) + " must have shape (n, 3), not " + shape_of(array));
-  if(!array.dtype().is(py::dtype::of<double>()))
-    throw py::value_error(std::string(argument) + " must have dtype float64, not " + std::string(py::str(array.dtype())));
+  if(array.dtype().equal(py::dtype::of<double>())) return array;
+  return array.attr("astype")(py::dtype::of<double>());
+}
+
+Rows3 view_of(const py::array& array)
+{
   return Rows3{static_cast<char*>(const_cast<void*>(array.data())), array.shape(0), array.strides(0), array.strides(1)};
 }
 
@@ -78,22 +166,24 @@ Rows3 rows3(const py::handle& object, const char* argument)
 std::pair<py::array_t<double>, Rows3> new_rows3(std::size_t rows)
 {
   py::array_t<double> array({py::ssize_t(rows), py::ssize_t(3)});
-  const Rows3 view{reinterpret_cast<char*>(array.mutable_data()), array.shape(0), array.strides(0), array.strides(1)};
-  return {std::move(array), view};
+  return {array, view_of(array)};
 }
 
 /// `object` when it is a writable (n, 3) float64 array (checked, ValueError naming `argument`), else a new one.
-std::pair<py::object, Rows3> output_rows3(const py::object& object, const char* argument, std::size_t n)
+std::pair<py::array, Rows3> output_rows3(const py::object& object, const char* argument, std::size_t n)
 {
-  if(object.is_none()) {
-    auto [array, view] = new_rows3(n);
-    return {std::move(array), view};
-  }
-  const Rows3 view = rows3(object, argument);
-  if(std::size_t(view.rows) != n)
-    throw py::value_error(std::string(argument) + " must have " + std::to_string(n) + " rows, not " + std::to_string(view.rows));
-  if(!py::reinterpret_borrow<py::array>(object).writeable()) throw py::value_error(std::string(argument) + " is not writable");
-  return {object, view};
+  if(object.is_none()) return new_rows3(n);
+  if(!py::isinstance<py::array>(object))
+    throw py::value_error(std::string(argument) + " must be a numpy array of shape (" + std::to_string(n) +
+                          ", 3) and dtype float64");
+  const auto array = py::reinterpret_borrow<py::array>(object);
+  if(array.ndim() != 2 || array.shape(1) != 3 || std::size_t(array.shape(0)) != n)
+    throw py::value_error(std::string(argument) + " must have " + std::to_string(n) + " rows and 3 columns, not shape " +
+                          shape_of(array));
+  if(!array.dtype().equal(py::dtype::of<double>()))
+    throw py::value_error(std::string(argument) + " must have dtype float64, not " + dtype_name(array));
+  if(!array.writeable()) throw py::value_error(std::string(argument) + " is not writable");
+  return {array, view_of(array)};
 }
 
 /// Row i of a `Rows3` as a CGAL property map over indices: points, or vectors (normals, details).
@@ -106,7 +196,11 @@ struct Rows3_map
   using category = boost::read_write_property_map_tag;
   Rows3 rows;
 
-  friend Value get(const Rows3_map& m, std::size_t i) { return Value(m.rows.at(i, 0), m.rows.at(i, 1), m.rows.at(i, 2)); }
+  friend Value get(const Rows3_map& m, std::size_t i)
+  {
+    if(read_trace.on.load(std::memory_order_relaxed)) read_trace.note(&m.rows.at(i, 0), &m.rows.at(i, 2) + 1);
+    return Value(m.rows.at(i, 0), m.rows.at(i, 1), m.rows.at(i, 2));
+  }
   friend void put(const Rows3_map& m, std::size_t i, const Value& v)
   {
     m.rows.at(i, 0) = v.x();
@@ -115,7 +209,7 @@ struct Rows3_map
   }
 };
 
-/// Element i of a new 1-D array as a writable property map.
+/// Element i of a 1-D array as a writable property map.
 template <typename T>
 struct Array_map
 {
@@ -129,18 +223,27 @@ struct Array_map
   friend void put(const Array_map& m, std::size_t i, const T& v) { m.data[i] = v; }
 };
 
-/// Indices given as a 1-D integer array or a sequence of integers, each checked against `n`.
+/// Point indices given as a 1-D array or sequence of integers, or as a boolean mask of all `n` points, each
+/// checked against `n`.
 std::vector<std::size_t> indices(const py::handle& object, std::size_t n, const char* argument)
 {
-  py::array array;
-  try {
-    array = py::array::ensure(object);
-  } catch(const py::error_already_set&) {
+  const py::array array = as_array(object, argument, "a 1-D array of point indices or a boolean mask");
+  const char kind = array.dtype().kind();
+  if(array.ndim() != 1 || !(kind == 'i' || kind == 'u' || kind == 'b' || array.size() == 0))
+    throw py::value_error(std::string(argument) + " must be a 1-D array of integer point indices or a boolean mask, not " +
+                          (array.ndim() != 1 ? "shape " + shape_of(array) : "dtype " + dtype_name(array)));
+  std::vector<std::size_t> out;
+  if(kind == 'b') {
+    if(std::size_t(array.size()) != n)
+      throw py::value_error(std::string(argument) + ": a boolean mask needs one value per point (" + std::to_string(n) +
+                            "), not " + std::to_string(array.size()));
+    const auto mask = py::array_t<bool, py::array::forcecast>::ensure(array);
+    for(py::ssize_t m = 0; m < mask.size(); ++m)
+      if(mask.at(m)) out.push_back(std::size_t(m));
+    return out;
   }
-  if(!array || array.ndim() != 1 || !(array.dtype().kind() == 'i' || array.dtype().kind() == 'u' || array.size() == 0))
-    throw py::value_error(std::string(argument) + " must be a 1-D array of integer indices");
   const auto values = py::array_t<long long, py::array::forcecast>::ensure(array);
-  std::vector<std::size_t> out(std::size_t(values.size()));
+  out.resize(std::size_t(values.size()));
   for(py::ssize_t m = 0; m < values.size(); ++m) {
     const long long v = values.at(m);
     if(v < 0 || std::size_t(v) >= n)
@@ -151,19 +254,74 @@ std::vector<std::size_t> indices(const py::handle& object, std::size_t n, const 
   return out;
 }
 
+/// A 1-D array of `n` real numbers as float64 values.
+std::vector<double> values_of(const py::handle& object, std::size_t n, const char* argument)
+{
+  const py::array array = as_array(object, argument, "a 1-D array of numbers");
+  const char kind = array.dtype().kind();
+  if(array.ndim() != 1 || !(kind == 'f' || kind == 'i' || kind == 'u' || kind == 'b'))
+    throw py::value_error(std::string(argument) + " must be a 1-D array of numbers, not " +
+                          (array.ndim() != 1 ? "shape " + shape_of(array) : "dtype " + dtype_name(array)));
+  if(std::size_t(array.size()) != n)
+    throw py::value_error(std::string(argument) + " must have one value per point (" + std::to_string(n) + "), not " +
+                          std::to_string(array.size()));
+  const auto values = py::array_t<double, py::array::forcecast | py::array::c_style>::ensure(array);
+  return std::vector<double>(values.data(), values.data() + values.size());
+}
+
+/// An (n, 3) array of colours, integers in 0..255.
+std::vector<point_detail::Color> colors_of(const py::handle& object, std::size_t n, const char* argument)
+{
+  const py::array array = as_array(object, argument, "an (n, 3) array of integers in 0..255");
+  const char kind = array.dtype().kind();
+  if(kind != 'i' && kind != 'u')
+    throw py::value_error(std::string(argument) + " must hold integers in 0..255 (uint8), not dtype " + dtype_name(array));
+  if(array.ndim() != 2 || array.shape(1) != 3 || std::size_t(array.shape(0)) != n)
+    throw py::value_error(std::string(argument) + " must have shape (" + std::to_string(n) + ", 3), not " + shape_of(array));
+  const auto values = py::array_t<long long, py::array::forcecast | py::array::c_style>::ensure(array);
+  std::vector<point_detail::Color> colors(n);
+  for(std::size_t i = 0; i < n; ++i)
+    for(int c = 0; c < 3; ++c) {
+      const long long v = values.data()[3 * i + std::size_t(c)];
+      if(v < 0 || v > 255)
+        throw py::value_error(std::string(argument) + ": colour " + std::to_string(v) + " of point " + std::to_string(i) +
+                              " is outside 0..255");
+      colors[i][std::size_t(c)] = static_cast<unsigned char>(v);
+    }
+  return colors;
+}
+
 Index_range all_points(std::size_t n) { return boost::counting_range(std::size_t(0), n); }
 
-/// The named parameters of `points` and, unless None, `normals`, given to `body(n, np)`.
-template <typename Body>
-auto with_points(const py::handle& points, const py::handle& normals, Body&& body)
+/// Points and, unless None, normals as float64 arrays (kept alive here while the library reads them in place).
+struct Point_input
 {
-  const Rows3 p = rows3(points, "points");
-  if(normals.is_none()) return body(std::size_t(p.rows), CGAL::parameters::point_map(Rows3_map<Point>{p}));
-  const Rows3 n = rows3(normals, "normals");
-  if(n.rows != p.rows)
-    throw py::value_error("normals must have as many rows as points (" + std::to_string(p.rows) + "), not " +
-                          std::to_string(n.rows));
-  return body(std::size_t(p.rows), CGAL::parameters::point_map(Rows3_map<Point>{p}).normal_map(Rows3_map<Vector>{n}));
+  py::array points, normals;
+  Rows3 point_rows, normal_rows;
+  bool has_normals = false;
+
+  Point_input(const py::handle& point_object, const py::handle& normal_object)
+      : points(float64_rows3(point_object, "points")), point_rows(view_of(points))
+  {
+    if(normal_object.is_none()) return;
+    normals = float64_rows3(normal_object, "normals");
+    normal_rows = view_of(normals);
+    has_normals = true;
+    if(normal_rows.rows != point_rows.rows)
+      throw py::value_error("normals must have as many rows as points (" + std::to_string(point_rows.rows) + "), not " +
+                            std::to_string(normal_rows.rows));
+  }
+
+  std::size_t size() const { return std::size_t(point_rows.rows); }
+};
+
+/// The named parameters of `input`'s points and, when given, normals, given to `body(np)`.
+template <typename Body>
+auto with_maps(const Point_input& input, Body&& body)
+{
+  const auto np = CGAL::parameters::point_map(Rows3_map<Point>{input.point_rows});
+  if(!input.has_normals) return body(np);
+  return body(np.normal_map(Rows3_map<Vector>{input.normal_rows}));
 }
 
 // ---- progress and cancellation ------------------------------------------------------------------------------
@@ -174,7 +332,11 @@ auto with_points(const py::handle& points, const py::handle& normals, Body&& bod
 class Python_progress
 {
 public:
-  explicit Python_progress(py::object progress) : m_progress(std::move(progress)) {}
+  explicit Python_progress(py::object progress) : m_progress(std::move(progress))
+  {
+    if(!m_progress.is_none() && !PyCallable_Check(m_progress.ptr()))
+      throw py::value_error("progress must be a callable taking the progress in [0, 1], or None");
+  }
 
   std::function<bool(double)> callback()
   {
@@ -217,18 +379,59 @@ auto without_gil(Body&& body)
 
 // ---- settings -----------------------------------------------------------------------------------------------
 
-CGAL_ext::Detail_order order_named(const std::string& name)
+/// The Python spelling of each value of a setting's enumeration: parsed from keyword arguments, written back by
+/// `Deformation.settings`, and the defaults the signatures show.
+template <typename Enum>
+struct Spelling
 {
-  for(CGAL_ext::Detail_order order : {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric, CGAL_ext::Detail_order::cubic})
-    if(name == CGAL_ext::Detail_filter::order_name(order)) return order;
-  throw py::value_error("order must be \"linear\", \"quadric\" or \"cubic\", not \"" + name + "\"");
+  const char* name;
+  Enum value;
+};
+
+template <typename Enum, std::size_t N>
+Enum parse_setting(const Spelling<Enum> (&table)[N], const std::string& name, const char* setting)
+{
+  std::string choices;
+  for(const Spelling<Enum>& s : table) {
+    if(name == s.name) return s.value;
+    choices += std::string(choices.empty() ? "\"" : ", \"") + s.name + "\"";
+  }
+  throw py::value_error(std::string(setting) + " must be one of " + choices + ", not \"" + name + "\"");
 }
 
-CGAL_ext::Detail_settings detail_settings(const std::string& order, double lam, double mu, const std::string& weights)
+template <typename Enum, std::size_t N>
+const char* setting_name(const Spelling<Enum> (&table)[N], Enum value)
 {
-  CGAL_ext::Detail_settings s(CGAL_ext::Detail_filter{order_named(order), lam, mu});
-  if(weights == "distance") s.weights.weighting = CGAL_ext::Laplacian_weighting::distance_power;
-  else if(weights != "uniform") throw py::value_error("weights must be \"uniform\" or \"distance\", not \"" + weights + "\"");
+  for(const Spelling<Enum>& s : table)
+    if(s.value == value) return s.name;
+  return "?";
+}
+
+using namespace CGAL_ext;
+const Spelling<Detail_order> order_spellings[] = {
+  {"linear", Detail_order::linear}, {"quadric", Detail_order::quadric}, {"cubic", Detail_order::cubic}};
+const Spelling<Laplacian_weighting> weight_spellings[] = {
+  {"uniform", Laplacian_weighting::uniform}, {"distance", Laplacian_weighting::distance_power}};
+const Spelling<Curvature_fitting> fitting_spellings[] = {
+  {"closed_form", Curvature_fitting::closed_form}, {"monge", Curvature_fitting::monge_jet_fitting}};
+const Spelling<Detail_rotation> rotation_spellings[] = {{"propagate", Detail_rotation::propagated},
+                                                        {"arap", Detail_rotation::as_rigid_as_possible},
+                                                        {"none", Detail_rotation::none}};
+const Spelling<Rotation_smoothing_scale> smoothing_scale_spellings[] = {
+  {"edge_lengths", Rotation_smoothing_scale::edge_lengths}, {"surface_area", Rotation_smoothing_scale::surface_area}};
+const Spelling<Rigid_edge_weights> edge_weight_spellings[] = {{"uniform", Rigid_edge_weights::uniform},
+                                                              {"cotangent", Rigid_edge_weights::cotangent}};
+const Spelling<Strength_distance> strength_spellings[] = {{"euclidean", Strength_distance::euclidean},
+                                                          {"geodesic", Strength_distance::geodesic}};
+const Spelling<Diffusion_origin> origin_spellings[] = {{"own", Diffusion_origin::own_sample},
+                                                       {"nearest", Diffusion_origin::nearest_sample}};
+const Spelling<Sample_turn> turn_spellings[] = {
+  {"affine", Sample_turn::affine}, {"fitted", Sample_turn::fitted}, {"frames", Sample_turn::frames}};
+
+Detail_settings detail_settings(const std::string& order, double lam, double mu, const std::string& weights)
+{
+  Detail_settings s(Detail_filter{parse_setting(order_spellings, order, "order"), lam, mu});
+  s.weights.weighting = parse_setting(weight_spellings, weights, "weights");
   s.validate();
   return s;
 }
@@ -241,156 +444,333 @@ unsigned int as_count(long long value, const char* argument)
   return unsigned(value);
 }
 
-// ---- functions ----------------------------------------------------------------------------------------------
+// ---- named results ----------------------------------------------------------------------------------------------
 
-py::tuple compute_geometric_details(const py::object& points, const py::object& normals, long long k,
-                                    const std::string& order, double lam, double mu, const std::string& weights,
-                                    const py::object& progress)
+/// The named tuples of the results, made once at import (kept for the life of the process).
+struct Result_types
 {
-  const CGAL_ext::Detail_settings settings = detail_settings(order, lam, mu, weights);
-  return with_points(points, normals, [&](std::size_t n, const auto& np) {
-    auto [details, details_view] = new_rows3(n);
-    py::array_t<double> magnitude(static_cast<py::ssize_t>(n));
-    Python_progress reporter(progress);
-    const Array_map<double> magnitude_map{magnitude.mutable_data()};
-    const bool done = without_gil([&, details_view = details_view] {
-      return CGAL_ext::compute_geometric_details(all_points(n), as_count(k, "k"), settings, Rows3_map<Vector>{details_view},
-                                                 magnitude_map, np.callback(reporter.callback()));
-    });
-    reporter.raise_if_cancelled(done);
-    return py::make_tuple(details, magnitude);
-  });
+  py::handle details, upsampled, deformed, point_set;
+};
+Result_types result_types;
+
+py::handle named_tuple(py::module_& m, const char* name, std::vector<std::string> fields, const char* doc)
+{
+  py::object type = py::module_::import("collections").attr("namedtuple")(name, fields, "module"_a = "cgal_ext");
+  type.attr("__doc__") = doc;
+  m.attr(name) = type;
+  return type.release();
 }
 
-/// Scaling and enhancement: the points moved, as a new array.
-py::array_t<double> manipulate(bool enhance, const py::object& points, const py::object& roi, double s,
-                               const py::object& normals, const py::object& anchors, long long k, const std::string& order,
-                               double lam, double mu, const std::string& weights, const py::object& progress)
+/// What the library threw as the ValueError / RuntimeError a Python user expects, with the library's message.
+template <typename Body>
+auto translating_program_errors(Body&& body)
 {
-  CGAL_ext::Detail_enhancement_settings settings(detail_settings(order, lam, mu, weights));
-  const Rows3 input = rows3(points, "points");
-  const std::size_t n = std::size_t(input.rows);
+  try {
+    return body();
+  } catch(const point_detail::Cli_error& e) {
+    throw py::value_error(e.what());
+  }
+}
+
+// ---- functions ----------------------------------------------------------------------------------------------
+
+Details_result bound_compute_geometric_details(const Array_like& points, const Optional_array_like& normals, long long k,
+                                         const std::string& order, double lam, double mu, const std::string& weights,
+                                         const Optional_progress& progress)
+{
+  const Detail_settings settings = detail_settings(order, lam, mu, weights);
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  auto [details, details_view] = new_rows3(n);
+  py::array_t<double> magnitude(static_cast<py::ssize_t>(n));
+  Python_progress reporter(progress);
+  const Array_map<double> magnitude_map{magnitude.mutable_data()};
+  const Rows3_map<Vector> detail_map{details_view};
+  const bool done = with_maps(input, [&](const auto& np) {
+    return without_gil([&] {
+      return CGAL_ext::compute_geometric_details(all_points(n), as_count(k, "k"), settings, detail_map, magnitude_map,
+                                                 np.callback(reporter.callback()));
+    });
+  });
+  reporter.raise_if_cancelled(done);
+  return py::reinterpret_borrow<py::object>(result_types.details)(details, magnitude);
+}
+
+/// Scaling and enhancement: the points moved, as a new array (the library moves a copy of the points in place).
+Ndarray manipulate(bool enhance, const Array_like& points, const Optional_array_like& normals, const py::object& roi,
+                   double s, const Optional_array_like& anchors, long long k, const std::string& order, double lam,
+                   double mu, const std::string& weights, const Optional_progress& progress)
+{
+  Detail_enhancement_settings settings(detail_settings(order, lam, mu, weights));
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
   const std::vector<std::size_t> region = roi.is_none() ? std::vector<std::size_t>() : indices(roi, n, "roi");
   std::vector<char> anchored;
   if(!anchors.is_none()) {
     anchored.assign(n, 0);
     for(std::size_t a : indices(anchors, n, "anchors")) anchored[a] = 1;
   }
-  // The result starts as a copy of the points: the library moves it in place.
   auto [moved, moved_view] = new_rows3(n);
   for(std::size_t i = 0; i < n; ++i)
-    for(int c = 0; c < 3; ++c) moved_view.at(i, c) = input.at(i, c);
+    for(int c = 0; c < 3; ++c) moved_view.at(i, c) = input.point_rows.at(i, c);
   Python_progress reporter(progress);
   const auto is_anchor = boost::make_function_property_map<std::size_t, bool>([&](std::size_t i) { return anchored[i] != 0; });
+  const unsigned int neighbors = as_count(k, "k");
   const auto run = [&](const auto& np) {
     Index_range all = all_points(n);
     return without_gil([&] {
       const auto with_callback = np.callback(reporter.callback());
       if(enhance && anchored.empty())
-        return roi.is_none() ? CGAL_ext::enhance_geometric_details(all, as_count(k, "k"), s, settings, with_callback)
-                             : CGAL_ext::enhance_geometric_details(all, as_count(k, "k"), region, s, settings, with_callback);
+        return roi.is_none() ? CGAL_ext::enhance_geometric_details(all, neighbors, s, settings, with_callback)
+                             : CGAL_ext::enhance_geometric_details(all, neighbors, region, s, settings, with_callback);
       if(enhance)
         return roi.is_none()
-                 ? CGAL_ext::enhance_geometric_details(all, as_count(k, "k"), s, settings, with_callback.point_is_constrained_map(is_anchor))
-                 : CGAL_ext::enhance_geometric_details(all, as_count(k, "k"), region, s, settings,
+                 ? CGAL_ext::enhance_geometric_details(all, neighbors, s, settings, with_callback.point_is_constrained_map(is_anchor))
+                 : CGAL_ext::enhance_geometric_details(all, neighbors, region, s, settings,
                                                        with_callback.point_is_constrained_map(is_anchor));
-      if(anchored.empty()) return CGAL_ext::scale_geometric_details(all, as_count(k, "k"), region, s, settings, with_callback);
-      return CGAL_ext::scale_geometric_details(all, as_count(k, "k"), region, s, settings,
-                                               with_callback.point_is_constrained_map(is_anchor));
+      if(anchored.empty()) return CGAL_ext::scale_geometric_details(all, neighbors, region, s, settings, with_callback);
+      return CGAL_ext::scale_geometric_details(all, neighbors, region, s, settings, with_callback.point_is_constrained_map(is_anchor));
     });
   };
-  const Rows3_map<Point> moved_map{moved_view};
-  CGAL_ext::Detail_manipulation_result result;
-  if(normals.is_none()) {
-    result = run(CGAL::parameters::point_map(moved_map));
-  } else {
-    const Rows3 given = rows3(normals, "normals");
-    if(std::size_t(given.rows) != n)
-      throw py::value_error("normals must have as many rows as points (" + std::to_string(n) + "), not " + std::to_string(given.rows));
-    result = run(CGAL::parameters::point_map(moved_map).normal_map(Rows3_map<Vector>{given}));
-  }
+  const auto moved_map = CGAL::parameters::point_map(Rows3_map<Point>{moved_view});
+  const Detail_manipulation_result result =
+    input.has_normals ? run(moved_map.normal_map(Rows3_map<Vector>{input.normal_rows})) : run(moved_map);
   reporter.raise_if_cancelled(result.completed);
   return moved;
 }
 
-py::array_t<double> estimate_mean_curvature(const py::object& points, const py::object& normals, long long k,
-                                            const std::string& fitting, const py::object& progress)
+Ndarray bound_estimate_mean_curvature(const Array_like& points, const Optional_array_like& normals, long long k,
+                                const std::string& fitting, const Optional_progress& progress)
 {
-  CGAL_ext::Curvature_fitting method;
-  if(fitting == "closed_form") method = CGAL_ext::Curvature_fitting::closed_form;
-  else if(fitting == "monge") method = CGAL_ext::Curvature_fitting::monge_jet_fitting;
-  else throw py::value_error("fitting must be \"closed_form\" or \"monge\", not \"" + fitting + "\"");
-  return with_points(points, normals, [&](std::size_t n, const auto& np) {
-    py::array_t<double> curvature(static_cast<py::ssize_t>(n));
-    Python_progress reporter(progress);
-    const Array_map<double> curvature_map{curvature.mutable_data()};
-    const bool done = without_gil([&] {
+  const Curvature_fitting method = parse_setting(fitting_spellings, fitting, "fitting");
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  py::array_t<double> curvature(static_cast<py::ssize_t>(n));
+  Python_progress reporter(progress);
+  const Array_map<double> curvature_map{curvature.mutable_data()};
+  const bool done = with_maps(input, [&](const auto& np) {
+    return without_gil([&] {
       return CGAL_ext::estimate_mean_curvature(all_points(n), as_count(k, "k"), method, curvature_map,
                                                np.callback(reporter.callback()));
     });
-    reporter.raise_if_cancelled(done);
-    return curvature;
   });
+  reporter.raise_if_cancelled(done);
+  return curvature;
 }
 
-py::array_t<long long> compute_simplification_sample_points(const py::object& points, const py::object& normals,
-                                                            long long target_count, const py::object& max_cluster_size,
-                                                            double mode_threshold, long long k, const py::object& progress)
+Ndarray bound_compute_simplification_sample_points(const Array_like& points, const Optional_array_like& normals,
+                                             long long target_count, const Optional_int& max_cluster_size,
+                                             double mode_threshold, long long k, const Optional_progress& progress)
 {
-  CGAL_ext::Simplification_settings settings;
-  if(target_count < 1) throw py::value_error("target_count must be at least 1");
+  Simplification_settings settings;
+  if(target_count < 1) throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
   settings.target_count = std::size_t(target_count);
   if(!max_cluster_size.is_none()) {
     const long long size = max_cluster_size.cast<long long>();
-    if(size < 1) throw py::value_error("max_cluster_size must be at least 1");
+    if(size < 1) throw py::value_error("max_cluster_size must be at least 1, not " + std::to_string(size));
     settings.max_cluster_size = std::size_t(size);
   }
   settings.mode_spread_threshold = mode_threshold;
   settings.mean_shift_neighbors = as_count(k, "k");
   settings.validate();
-  return with_points(points, normals, [&](std::size_t n, const auto& np) {
-    std::vector<std::size_t> sample_of(n);
-    Python_progress reporter(progress);
-    const auto samples = without_gil([&] {
-      return CGAL_ext::compute_simplification_sample_points(all_points(n), settings, Array_map<std::size_t>{sample_of.data()},
-                                                            np.callback(reporter.callback()));
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  py::array_t<std::int64_t> labels(static_cast<py::ssize_t>(n));
+  static_assert(sizeof(std::int64_t) == sizeof(std::size_t), "labels are written in place as size_t");
+  Python_progress reporter(progress);
+  const auto samples = with_maps(input, [&](const auto& np) {
+    return without_gil([&] {
+      return CGAL_ext::compute_simplification_sample_points(
+        all_points(n), settings, Array_map<std::size_t>{reinterpret_cast<std::size_t*>(labels.mutable_data())},
+        np.callback(reporter.callback()));
     });
-    reporter.raise_if_cancelled(samples.completed);
-    py::array_t<long long> labels(static_cast<py::ssize_t>(n));
-    for(std::size_t i = 0; i < n; ++i) labels.mutable_at(py::ssize_t(i)) = (long long)sample_of[i];
-    return labels;
   });
+  reporter.raise_if_cancelled(samples.completed);
+  return labels;
 }
 
-py::tuple upsample_point_set(const py::object& points, const py::object& normals, double spacing, double max_hole_size,
-                             long long k, const py::object& roi, const py::object& progress)
+Upsampled_result bound_upsample_point_set(const Array_like& points, const Array_like& normals, double spacing,
+                                    double max_hole_size, long long k, const Optional_array_like& roi,
+                                    const Optional_progress& progress)
 {
-  if(normals.is_none()) throw py::value_error("normals are required: hole detection and the new samples' surface come from them");
-  CGAL_ext::Upsampling_settings settings;
+  if(normals.is_none())
+    throw py::value_error("normals are required: hole detection and the new samples' surface come from them");
+  Upsampling_settings settings;
   settings.detection.spacing = spacing;
   settings.detection.max_hole_size = max_hole_size;
   settings.neighbors = as_count(k, "k");
   settings.validate();
-  return with_points(points, normals, [&](std::size_t n, const auto& np) {
-    const std::vector<std::size_t> region = roi.is_none() ? std::vector<std::size_t>() : indices(roi, n, "roi");
-    std::vector<std::pair<Point, Vector>> added;
-    Python_progress reporter(progress);
-    const auto result = without_gil([&] {
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  const std::vector<std::size_t> region = roi.is_none() ? std::vector<std::size_t>() : indices(roi, n, "roi");
+  std::vector<std::pair<Point, Vector>> added;
+  Python_progress reporter(progress);
+  const auto result = with_maps(input, [&](const auto& np) {
+    return without_gil([&] {
       return roi.is_none()
                ? CGAL_ext::upsample_point_set(all_points(n), settings, std::back_inserter(added), np.callback(reporter.callback()))
                : CGAL_ext::upsample_point_set(all_points(n), region, settings, std::back_inserter(added),
                                               np.callback(reporter.callback()));
     });
-    reporter.raise_if_cancelled(result.completed);
-    auto [new_points, points_view] = new_rows3(added.size());
-    auto [new_normals, normals_view] = new_rows3(added.size());
-    for(std::size_t m = 0; m < added.size(); ++m) {
-      put(Rows3_map<Point>{points_view}, m, added[m].first);
-      put(Rows3_map<Vector>{normals_view}, m, added[m].second);
-    }
-    return py::make_tuple(new_points, new_normals);
+  });
+  reporter.raise_if_cancelled(result.completed);
+  auto [new_points, points_view] = new_rows3(added.size());
+  auto [new_normals, normals_view] = new_rows3(added.size());
+  for(std::size_t m = 0; m < added.size(); ++m) {
+    put(Rows3_map<Point>{points_view}, m, added[m].first);
+    put(Rows3_map<Vector>{normals_view}, m, added[m].second);
+  }
+  return py::reinterpret_borrow<py::object>(result_types.upsampled)(new_points, new_normals);
+}
+
+// ---- files and pictures -----------------------------------------------------------------------------------------
+
+namespace fs = std::filesystem;
+
+fs::path path_of(const py::handle& object, const char* argument)
+{
+  try {
+    return fs::path(py::str(py::module_::import("os").attr("fspath")(object)).cast<std::string>());
+  } catch(py::error_already_set&) {
+    throw py::value_error(std::string(argument) + " must be a path (str or os.PathLike)");
+  }
+}
+
+/// A (rows, 3) float64 array of CGAL points or vectors.
+template <typename Vectors>
+py::array_t<double> rows3_of(const Vectors& values)
+{
+  auto [array, view] = new_rows3(values.size());
+  for(std::size_t i = 0; i < values.size(); ++i)
+    for(int c = 0; c < 3; ++c) view.at(i, c) = values[i][c];
+  return array;
+}
+
+Point_set_result read_points(const Path_like& path_object)
+{
+  const fs::path path = path_of(path_object, "path");
+  std::error_code ec;
+  if(!fs::exists(path, ec)) {
+    PyErr_SetString(PyExc_FileNotFoundError, ("cannot read " + path.string() + ": no such file").c_str());
+    throw py::error_already_set();
+  }
+  // What the program's reader checks against the available memory: the arrays returned here, and its own.
+  constexpr std::uint64_t bytes_per_point = 160;
+  const point_detail::Point_cloud cloud = translating_program_errors(
+    [&] { return without_gil([&] { return point_detail::read_point_cloud(path, bytes_per_point); }); });
+  py::dict properties;
+  for(const auto& [name, values] : cloud.scalars) {
+    py::array_t<double> array(static_cast<py::ssize_t>(values.size()));
+    std::memcpy(array.mutable_data(), values.data(), values.size() * sizeof(double));
+    properties[py::str(name)] = array;
+  }
+  if(!cloud.colors.empty()) {
+    py::array_t<std::uint8_t> colors({py::ssize_t(cloud.colors.size()), py::ssize_t(3)});
+    std::memcpy(colors.mutable_data(), cloud.colors.data(), cloud.colors.size() * 3);
+    properties["colors"] = colors;
+  }
+  py::object normals = cloud.normals.empty() ? py::none() : py::object(rows3_of(cloud.normals));
+  return py::reinterpret_borrow<py::object>(result_types.point_set)(rows3_of(cloud.points), normals, properties);
+}
+
+void write_ply(const Path_like& path_object, const Array_like& points, const Optional_array_like& normals,
+               const Optional_array_like& colors, const Optional_path& input_path, const py::kwargs& scalars)
+{
+  const fs::path path = path_of(path_object, "path");
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  point_detail::Point_cloud cloud;
+  cloud.points.resize(n);
+  for(std::size_t i = 0; i < n; ++i)
+    cloud.points[i] = point_detail::Point(input.point_rows.at(i, 0), input.point_rows.at(i, 1), input.point_rows.at(i, 2));
+  if(input.has_normals) {
+    cloud.normals.resize(n);
+    for(std::size_t i = 0; i < n; ++i)
+      cloud.normals[i] =
+        point_detail::Vector(input.normal_rows.at(i, 0), input.normal_rows.at(i, 1), input.normal_rows.at(i, 2));
+  }
+  if(!colors.is_none()) cloud.colors = colors_of(colors, n, "colors");
+  for(const auto& [key, value] : scalars) {
+    const std::string name = py::str(key);
+    for(const char* taken : {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"})
+      if(name == taken)
+        throw py::value_error("property '" + name + "' is written from points, normals or colors; name it otherwise");
+    cloud.scalars.emplace_back(name, values_of(value, n, name.c_str()));
+  }
+  std::vector<fs::path> inputs;
+  if(!input_path.is_none()) inputs.push_back(path_of(input_path, "input_path"));
+  translating_program_errors([&] {
+    without_gil([&] {
+      // A temporary beside the destination, renamed once written whole: a failure leaves no partial file.
+      point_detail::Output_files outputs(inputs);
+      const fs::path temporary = outputs.add(path);
+      point_detail::write_file(temporary, point_detail::ply_bytes(cloud));
+      outputs.commit();
+      return 0;
+    });
+    return 0;
   });
 }
+
+Ndarray diverging_colors(const Array_like& values)
+{
+  const py::array array = as_array(values, "values", "a 1-D array of numbers");
+  const std::vector<double> v = values_of(array, std::size_t(array.ndim() == 1 ? array.size() : 0), "values");
+  const point_detail::Coloring coloring = point_detail::diverging_colors(v);
+  py::array_t<std::uint8_t> colors({py::ssize_t(v.size()), py::ssize_t(3)});
+  std::memcpy(colors.mutable_data(), coloring.colors.data(), v.size() * 3);
+  return colors;
+}
+
+py::bytes render_png(const Array_like& points, const Optional_array_like& normals, const Optional_array_like& values,
+                     const Optional_array_like& colors, const std::string& view, int width, int height,
+                     double splat_scale)
+{
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  if(!values.is_none() && !colors.is_none()) throw py::value_error("give values or colors, not both");
+  if(width < 16 || height < 16 || width > 8192 || height > 8192)
+    throw py::value_error("width and height must be in 16..8192 pixels");
+  if(!(splat_scale > 0) || !std::isfinite(splat_scale)) throw py::value_error("splat_scale must be a number > 0");
+  point_detail::Render_settings settings;
+  settings.width = width;
+  settings.height = height;
+  settings.splat_scale = splat_scale;
+  settings.view = translating_program_errors([&] { return point_detail::parse_view(view); });
+  point_detail::Coloring coloring;
+  if(!values.is_none()) coloring = point_detail::colors_for(values_of(values, n, "values"));
+  if(!colors.is_none()) coloring.colors = colors_of(colors, n, "colors");
+  std::vector<point_detail::Point> cgal_points(n);
+  std::vector<point_detail::Vector> cgal_normals(input.has_normals ? n : 0);
+  for(std::size_t i = 0; i < n; ++i) {
+    const Rows3& p = input.point_rows;
+    cgal_points[i] = point_detail::Point(p.at(i, 0), p.at(i, 1), p.at(i, 2));
+    if(input.has_normals)
+      cgal_normals[i] = point_detail::Vector(input.normal_rows.at(i, 0), input.normal_rows.at(i, 1), input.normal_rows.at(i, 2));
+  }
+  if(n == 0) throw py::value_error("points is empty: nothing to draw");
+  const std::string png = translating_program_errors(
+    [&] { return without_gil([&] { return point_detail::render_png(cgal_points, cgal_normals, coloring, settings); }); });
+  return py::bytes(png);
+}
+
+// ---- threads ----------------------------------------------------------------------------------------------------
+
+std::unique_ptr<tbb::global_control> thread_limit;
+
+void set_num_threads(const Optional_int& count)
+{
+  if(count.is_none()) {
+    thread_limit.reset();
+    return;
+  }
+  const long long n = count.cast<long long>();
+  if(n < 1) throw py::value_error("the number of threads must be at least 1 (None: every core), not " + std::to_string(n));
+  thread_limit.reset(); // one limit at a time: the smallest alive would win
+  thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(n));
+}
+
+int get_num_threads() { return int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)); }
 
 // ---- editing ------------------------------------------------------------------------------------------------
 
@@ -398,233 +778,599 @@ py::tuple upsample_point_set(const py::object& points, const py::object& normals
 class Deformation
 {
 public:
-  Deformation(const py::object& points, const py::object& normals, const py::kwargs& options)
+  using Settings = Detail_preserving_deformation_settings;
+
+  Deformation(const Array_like& points, const Optional_array_like& normals, const Settings& settings)
   {
-    const CGAL_ext::Detail_preserving_deformation_settings settings = settings_from(options);
-    // The object's progress callback forwards to the one `preprocess` sets (none at other times).
-    with_points(points, normals, [&](std::size_t n, const auto& np) {
-      const auto forward = [this](double fraction) { return !m_callback || m_callback(fraction); };
-      m_deformation = without_gil([&] {
-        return std::make_unique<CGAL_ext::Detail_preserving_deformation<>>(all_points(n), settings, np.callback(forward));
-      });
-      return 0;
+    const Point_input input(points, normals);
+    const std::size_t n = input.size();
+    // The object's progress callback forwards to the one of the call that may preprocess (none at other times).
+    const auto forward = [this](double fraction) { return !m_callback || m_callback(fraction); };
+    m_deformation = with_maps(input, [&](const auto& np) {
+      return without_gil([&] { return std::make_unique<Detail_preserving_deformation<>>(all_points(n), settings, np.callback(forward)); });
     });
   }
 
-  void insert_roi(const py::object& roi) { m_deformation->insert_roi_points(indices(roi, size(), "roi")); }
-
-  std::size_t create_handle_group(const py::object& handle_points)
+  void insert_roi(const Array_like& roi)
   {
-    const std::vector<std::size_t> handle = indices(handle_points, size(), "indices");
+    m_deformation->insert_roi_points(indices(roi, size(), "indices"));
+    forget_written_arrays(); // the points the edit can move change with the selection
+  }
+
+  std::size_t create_handle_group(const Optional_array_like& handle_points)
+  {
+    const std::vector<std::size_t> handle =
+      handle_points.is_none() ? std::vector<std::size_t>() : indices(handle_points, size(), "indices");
     const std::size_t group = m_deformation->create_handle_group();
     m_deformation->insert_handle_points(group, handle);
+    forget_written_arrays();
     return group;
   }
 
-  bool preprocess(const py::object& progress)
+  void insert_handle_points(long long group, const Array_like& handle_points)
   {
-    Python_progress reporter(progress);
-    m_callback = reporter.callback();
-    const bool done = without_gil([&] { return m_deformation->preprocess(); });
-    m_callback = nullptr;
-    reporter.raise_if_cancelled(done);
-    return done;
+    const std::vector<std::size_t> handle = indices(handle_points, size(), "indices");
+    m_deformation->insert_handle_points(checked_group(group), handle);
+    forget_written_arrays();
   }
 
-  void set_handle_transform(std::size_t group, const py::object& rotation, const py::object& translation)
+  void clear_selection()
   {
-    const auto R = py::array_t<double, py::array::forcecast>::ensure(rotation);
-    const auto t = py::array_t<double, py::array::forcecast>::ensure(translation);
-    if(!R || R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3) throw py::value_error("rotation must be a (3, 3) array");
-    if(!t || t.size() != 3) throw py::value_error("translation must be an array of 3 numbers");
-    Eigen::Matrix3d rotation_matrix;
-    for(int r = 0; r < 3; ++r)
-      for(int c = 0; c < 3; ++c) rotation_matrix(r, c) = R.at(r, c);
-    m_deformation->set_handle_transform(group, rotation_matrix, Eigen::Vector3d(t.data()[0], t.data()[1], t.data()[2]));
+    m_deformation->clear_selection();
+    forget_written_arrays();
   }
 
-  void deform()
+  bool preprocess(const Optional_progress& progress)
   {
-    const bool done = without_gil([&] { return m_deformation->deform(); });
-    if(!done) throw std::runtime_error("cancelled");
+    return with_progress(progress, [&] { return m_deformation->preprocess(); });
+  }
+
+  void set_handle_transform(long long group, const Optional_array_like& rotation, const Optional_array_like& translation,
+                            const Optional_array_like& transform, const Optional_array_like& pivot)
+  {
+    const std::size_t g = checked_group(group);
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t = Eigen::Vector3d::Zero();
+    if(!transform.is_none()) {
+      if(!rotation.is_none() || !translation.is_none() || !pivot.is_none())
+        throw py::value_error("give transform (4, 4) alone, or rotation, translation and pivot");
+      const Eigen::Matrix4d T = matrix_of<4, 4>(transform, "transform");
+      if(!T.allFinite() || T.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+        throw py::value_error("transform must be a rigid motion [[R, t], [0, 0, 0, 1]]: its last row is not (0, 0, 0, 1)");
+      R = T.topLeftCorner<3, 3>();
+      t = T.topRightCorner<3, 1>();
+    } else {
+      if(!rotation.is_none()) R = matrix_of<3, 3>(rotation, "rotation");
+      if(!translation.is_none()) t = matrix_of<3, 1>(translation, "translation");
+      if(!pivot.is_none()) { // p -> R (p - c) + c + t
+        const Eigen::Vector3d c = matrix_of<3, 1>(pivot, "pivot");
+        t += c - R * c;
+      }
+    }
+    m_deformation->set_handle_transform(g, R, t); // checks that R is a rotation and that both are finite
+  }
+
+  void deform(const Optional_progress& progress)
+  {
+    with_progress(progress, [&] { return m_deformation->deform(); });
   }
 
   /// Every point's and normal's deformed position, into `points_out` / `normals_out` when given (writable (n, 3)
   /// float64 arrays, reused from drag to drag), else into new arrays.
-  py::tuple diffuse(const py::object& points_out, const py::object& normals_out)
+  Deformed_result diffuse(const Optional_array_like& points_out, const Optional_array_like& normals_out)
   {
     return results([&] { m_deformation->diffuse(); }, points_out, normals_out);
   }
 
-  /// restore_details(), then the points and normals as diffuse() gives them.
-  py::tuple restore_details(const py::object& points_out, const py::object& normals_out)
+  Deformed_result restore_details(const Optional_array_like& points_out, const Optional_array_like& normals_out)
   {
     return results([&] { m_deformation->restore_details(); }, points_out, normals_out);
   }
 
-  /// Runs `step`, then copies every point's and normal's deformed position out.
-  template <typename Step>
-  py::tuple results(const Step& step, const py::object& points_out, const py::object& normals_out)
+  void reset() { m_deformation->reset(); }
+
+  Sample_points_of sample_point_of(const Array_like& points)
   {
-    const std::size_t n = size();
-    auto [points, points_view] = output_rows3(points_out, "points_out", n);
-    auto [normals, normals_view] = output_rows3(normals_out, "normals_out", n);
-    without_gil([&, points_view = points_view, normals_view = normals_view] {
-      step();
-      // Out of the object's spatial order into the caller's, in parallel.
-      CGAL_ext::internal::for_range<CGAL::Parallel_if_available_tag>(0, n, [&](std::size_t i) {
-        const Eigen::Vector3d p = m_deformation->deformed_point(i), v = m_deformation->deformed_normal(i);
-        for(int c = 0; c < 3; ++c) {
-          points_view.at(i, c) = p(c);
-          normals_view.at(i, c) = v(c);
-        }
-      });
-      return 0;
-    });
-    return py::make_tuple(points, normals);
+    if(!m_deformation->is_preprocessed())
+      throw py::value_error("sample_point_of() needs preprocess() first: the sample points are made there");
+    if(py::isinstance<py::int_>(points) && !py::isinstance<py::bool_>(points)) {
+      const long long i = points.cast<long long>();
+      if(i < 0 || std::size_t(i) >= size())
+        throw py::value_error("index " + std::to_string(i) + " is not a point index (" + std::to_string(size()) + " points)");
+      return py::int_(m_deformation->sample_point_of(std::size_t(i)));
+    }
+    const std::vector<std::size_t> rows = indices(points, size(), "points");
+    py::array_t<std::int64_t> labels(static_cast<py::ssize_t>(rows.size()));
+    for(std::size_t m = 0; m < rows.size(); ++m) labels.mutable_data()[m] = std::int64_t(m_deformation->sample_point_of(rows[m]));
+    return labels;
   }
 
   py::dict statistics() const
   {
-    const CGAL_ext::Detail_preserving_deformation_statistics& s = m_deformation->statistics();
+    const Detail_preserving_deformation_statistics& s = m_deformation->statistics();
     return py::dict("points"_a = s.points, "samples"_a = s.samples, "requested_samples"_a = s.requested_samples,
                     "roi_samples"_a = s.roi_samples, "handle_samples"_a = s.handle_samples,
                     "clustering_seconds"_a = s.clustering_seconds, "preprocess_seconds"_a = s.preprocess_seconds,
                     "deform_seconds"_a = s.deform_seconds, "diffuse_seconds"_a = s.diffuse_seconds,
                     "restore_seconds"_a = s.restore_seconds, "restore_iterations"_a = s.restore_iterations,
-                    "restore_residual"_a = s.restore_residual,
-                    "rigid_iterations"_a = s.rigid_iterations, "displacement_ratio"_a = s.displacement_ratio,
-                    "factor_seconds"_a = s.least_squares.factor_seconds,
+                    "restore_residual"_a = s.restore_residual, "rigid_iterations"_a = s.rigid_iterations,
+                    "displacement_ratio"_a = s.displacement_ratio, "factor_seconds"_a = s.least_squares.factor_seconds,
                     "relative_residual"_a = s.least_squares.relative_residual);
   }
 
-  std::size_t size() const { return m_deformation->number_of_points(); }
-
-private:
-  static CGAL_ext::Detail_preserving_deformation_settings settings_from(const py::kwargs& options)
+  /// The settings under their keyword names, as the constructor takes them.
+  static py::dict settings_dict(const Settings& s)
   {
-    CGAL_ext::Detail_preserving_deformation_settings s;
-    for(const auto& [key_handle, value] : options) {
-      const std::string key = py::str(key_handle);
-      if(key == "order") s.filter.order = order_named(value.cast<std::string>());
-      else if(key == "lam") s.filter.lambda = value.cast<double>();
-      else if(key == "mu") s.filter.mu = value.cast<double>();
-      else if(key == "k") s.sample_neighbors = as_count(value.cast<long long>(), "k");
-      else if(key == "handle_weight") s.handle_weight = value.cast<double>();
-      else if(key == "rotations") {
-        const std::string r = value.cast<std::string>();
-        if(r == "none") s.rotations = CGAL_ext::Detail_rotation::none;
-        else if(r == "propagate") s.rotations = CGAL_ext::Detail_rotation::propagated;
-        else if(r == "arap") s.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
-        else throw py::value_error("rotations must be \"none\", \"propagate\" or \"arap\", not \"" + r + "\"");
-      } else if(key == "rigid_iterations") s.rigid_iterations = as_count(value.cast<long long>(), "rigid_iterations");
-      else if(key == "rigid_rotation_smoothing") s.rigid_rotation_smoothing = value.cast<double>();
-      else if(key == "rigid_rotation_smoothing_scale") {
-        const std::string w = value.cast<std::string>();
-        if(w == "edge_lengths") s.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::edge_lengths;
-        else if(w == "surface_area") s.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
-        else throw py::value_error("rigid_rotation_smoothing_scale must be \"edge_lengths\" or \"surface_area\", not \"" + w + "\"");
-      }
-      else if(key == "rigid_edge_weights") {
-        const std::string w = value.cast<std::string>();
-        if(w == "uniform") s.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::uniform;
-        else if(w == "cotangent") s.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::cotangent;
-        else throw py::value_error("rigid_edge_weights must be \"uniform\" or \"cotangent\", not \"" + w + "\"");
-      }
-      else if(key == "strength") {
-        const std::string d = value.cast<std::string>();
-        if(d == "euclidean") s.strength_distance = CGAL_ext::Strength_distance::euclidean;
-        else if(d == "geodesic") s.strength_distance = CGAL_ext::Strength_distance::geodesic;
-        else throw py::value_error("strength must be \"euclidean\" or \"geodesic\", not \"" + d + "\"");
-      } else if(key == "target_count") s.simplification.target_count = as_count(value.cast<long long>(), "target_count");
-      else if(key == "max_cluster_size") s.simplification.max_cluster_size = as_count(value.cast<long long>(), "max_cluster_size");
-      else if(key == "diffusion_samples") s.diffusion_samples = as_count(value.cast<long long>(), "diffusion_samples");
-      else if(key == "detail_iterations") s.detail_iterations = as_count(value.cast<long long>(), "detail_iterations");
-      else if(key == "detail_tolerance") s.detail_tolerance = value.cast<double>();
-      else if(key == "detail_anchor") s.detail_anchor = value.cast<double>();
-      else if(key == "diffusion_origin") {
-        const std::string o = value.cast<std::string>();
-        if(o == "own") s.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
-        else if(o == "nearest") s.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
-        else throw py::value_error("diffusion_origin must be \"own\" or \"nearest\", not \"" + o + "\"");
-      } else if(key == "diffusion_turn") {
-        const std::string t = value.cast<std::string>();
-        if(t == "affine") s.diffusion_turn = CGAL_ext::Sample_turn::affine;
-        else if(t == "fitted") s.diffusion_turn = CGAL_ext::Sample_turn::fitted;
-        else if(t == "frames") s.diffusion_turn = CGAL_ext::Sample_turn::frames;
-        else throw py::value_error("diffusion_turn must be \"affine\", \"fitted\" or \"frames\", not \"" + t + "\"");
-      }
-      else throw py::value_error("unknown setting '" + key + "' (see help(cgal_ext.Deformation))");
-    }
-    s.validate();
-    return s;
+    return py::dict(
+      "order"_a = setting_name(order_spellings, s.filter.order), "lam"_a = s.filter.lambda, "mu"_a = s.filter.mu,
+      "k"_a = s.sample_neighbors, "handle_weight"_a = s.handle_weight,
+      "rotations"_a = setting_name(rotation_spellings, s.rotations), "rigid_iterations"_a = s.rigid_iterations,
+      "rigid_rotation_smoothing"_a = s.rigid_rotation_smoothing,
+      "rigid_rotation_smoothing_scale"_a = setting_name(smoothing_scale_spellings, s.rigid_rotation_smoothing_scale),
+      "rigid_edge_weights"_a = setting_name(edge_weight_spellings, s.rigid_edge_weights),
+      "strength"_a = setting_name(strength_spellings, s.strength_distance), "target_count"_a = s.simplification.target_count,
+      "max_cluster_size"_a = s.simplification.max_cluster_size ? py::object(py::int_(*s.simplification.max_cluster_size))
+                                                                  : py::object(py::none()),
+      "diffusion_samples"_a = s.diffusion_samples, "diffusion_origin"_a = setting_name(origin_spellings, s.diffusion_origin),
+      "diffusion_turn"_a = setting_name(turn_spellings, s.diffusion_turn), "detail_iterations"_a = s.detail_iterations,
+      "detail_tolerance"_a = s.detail_tolerance, "detail_anchor"_a = s.detail_anchor);
   }
 
-  std::unique_ptr<CGAL_ext::Detail_preserving_deformation<>> m_deformation;
+  py::dict settings() const { return settings_dict(m_deformation->settings()); }
+
+  std::size_t size() const { return m_deformation->number_of_points(); }
+  std::size_t number_of_handle_groups() const { return m_deformation->number_of_handle_groups(); }
+  std::size_t number_of_sample_points() const { return m_deformation->number_of_sample_points(); }
+  bool is_preprocessed() const { return m_deformation->is_preprocessed(); }
+
+  std::string repr() const
+  {
+    std::string s = "<cgal_ext.Deformation of " + std::to_string(size()) + " points, " +
+                    std::to_string(number_of_handle_groups()) + " handle group(s), ";
+    if(!is_preprocessed()) return s + "not preprocessed>";
+    return s + std::to_string(number_of_sample_points()) + " sample points (" +
+           std::to_string(m_deformation->number_of_roi_sample_points()) + " in the region), rotations " +
+           setting_name(rotation_spellings, m_deformation->settings().rotations) + ">";
+  }
+
+private:
+  std::size_t checked_group(long long group) const
+  {
+    if(group < 0 || std::size_t(group) >= number_of_handle_groups())
+      throw py::value_error("there is no handle group " + std::to_string(group) + " (" +
+                            std::to_string(number_of_handle_groups()) + " groups; create_handle_group() adds one)");
+    return std::size_t(group);
+  }
+
+  template <int Rows, int Columns>
+  static Eigen::Matrix<double, Rows, Columns> matrix_of(const py::handle& object, const char* argument)
+  {
+    const py::array array = as_array(object, argument, "an array of numbers");
+    const char kind = array.dtype().kind();
+    const bool vector = Columns == 1 && array.ndim() == 1 && array.shape(0) == Rows;
+    const bool matrix = array.ndim() == 2 && array.shape(0) == Rows && array.shape(1) == Columns;
+    if(!(kind == 'f' || kind == 'i' || kind == 'u') || !(vector || matrix))
+      throw py::value_error(std::string(argument) + " must be " +
+                            (Columns == 1 ? "3 numbers" : "a (" + std::to_string(Rows) + ", " + std::to_string(Columns) + ") array") +
+                            ", not shape " + shape_of(array) + " of dtype " + dtype_name(array));
+    const auto values = py::array_t<double, py::array::forcecast | py::array::c_style>::ensure(array);
+    Eigen::Matrix<double, Rows, Columns> m;
+    for(int r = 0; r < Rows; ++r)
+      for(int c = 0; c < Columns; ++c) m(r, c) = values.data()[r * Columns + c];
+    if(!m.allFinite()) throw py::value_error(std::string(argument) + " is not finite");
+    return m;
+  }
+
+  /// `step()` (a call that may preprocess) with `progress` reported and its exception or Ctrl-C raised.
+  template <typename Step>
+  bool with_progress(const Optional_progress& progress, const Step& step)
+  {
+    Python_progress reporter(progress);
+    m_callback = reporter.callback();
+    bool done = false;
+    try {
+      done = without_gil(step);
+    } catch(...) {
+      m_callback = nullptr;
+      throw;
+    }
+    m_callback = nullptr;
+    reporter.raise_if_cancelled(done);
+    return done;
+  }
+
+  /// Runs `step`, then writes every point's and normal's deformed position in the caller's order: the whole
+  /// arrays, or, when they are the very arrays written whole since the last preprocessing, only the points the
+  /// edit can move (Detail_preserving_deformation::for_each_deformed_point).
+  template <typename Step>
+  Deformed_result results(const Step& step, const Optional_array_like& points_out, const Optional_array_like& normals_out)
+  {
+    const std::size_t n = size();
+    auto [points, point_view] = output_rows3(points_out, "points_out", n);
+    auto [normals, normal_view] = output_rows3(normals_out, "normals_out", n);
+    // The same array objects (held here, so their memory cannot pass to other arrays meanwhile).
+    const bool movable_only = m_deformation->is_preprocessed() && !points_out.is_none() && !normals_out.is_none() &&
+                              points_out.is(m_written_points) && normals_out.is(m_written_normals);
+    without_gil([&, point_view = point_view, normal_view = normal_view] {
+      step();
+      m_deformation->for_each_deformed_point(
+        [&](std::size_t i, const double* p, const double* v) {
+          for(int c = 0; c < 3; ++c) {
+            point_view.at(i, c) = p[c];
+            normal_view.at(i, c) = v[c];
+          }
+        },
+        movable_only);
+      return 0;
+    });
+    // Caller's arrays written whole: the next drag into them writes only what it can move.
+    m_written_points = points_out.is_none() || normals_out.is_none() ? py::object() : py::object(points_out);
+    m_written_normals = points_out.is_none() || normals_out.is_none() ? py::object() : py::object(normals_out);
+    return py::reinterpret_borrow<py::object>(result_types.deformed)(points, normals);
+  }
+
+  /// The caller's arrays last written whole, until the selection changes.
+  void forget_written_arrays()
+  {
+    m_written_points = py::object();
+    m_written_normals = py::object();
+  }
+  py::object m_written_points, m_written_normals;
+
+  std::unique_ptr<Detail_preserving_deformation<>> m_deformation;
   std::function<bool(double)> m_callback;
 };
 
+// ---- docstrings -------------------------------------------------------------------------------------------------
+
+const char* const points_doc = R"(points : (n, 3) array_like
+    The points. float64 arrays are read in place (any memory layout); float32, integers and nested lists are
+    converted to float64 once, a copy.)";
+const char* const normals_doc = R"(normals : (n, 3) array_like, optional
+    Unit normals, read as points are. None estimates them (jet fitting and a consistent orientation).)";
+const char* const progress_doc = R"(progress : callable, optional
+    Called as progress(fraction), fraction in [0, 1], from the calling thread. An exception raised in it
+    cancels the computation, which then raises it; Ctrl-C does the same with KeyboardInterrupt.)";
+const char* const filter_doc = R"(k : int
+    Neighbours of the point-set Laplacian (each point's k nearest, itself not counted; fewer than the points).
+order : {"linear", "quadric", "cubic"}
+    The transfer function f(K) of the details (Miao et al. 2007, Sect. 3).
+lam, mu : float
+    Its pass-band and highest frequencies, 0 < lam < mu (mu unused by "linear").
+weights : {"uniform", "distance"}
+    The Laplacian's weights: uniform, or inverse distance.)";
+const char* const raises_doc = R"(Raises
+------
+ValueError
+    A bad argument (shape, dtype, index, setting) or input the library refuses, with its message.
+RuntimeError
+    A numerical failure (a factorisation that fails), with the library's message.)";
+
+std::string doc(const std::string& summary, const std::vector<std::string>& parameters, const std::string& returns,
+                bool raises = true)
+{
+  std::string text = summary + "\n\nParameters\n----------\n";
+  for(const std::string& p : parameters) text += p + "\n";
+  if(!returns.empty()) text += "\nReturns\n-------\n" + returns + "\n";
+  if(raises) text += std::string("\n") + raises_doc + "\n";
+  return text;
+}
+
 } // namespace
 
-PYBIND11_MODULE(cgal_ext, m)
+PYBIND11_MODULE(_core, m)
 {
-  m.doc() = "High-frequency geometric details of point-sampled surfaces (Miao et al. 2007) on numpy arrays";
+  m.doc() = "The compiled part of cgal_ext: high-frequency geometric details of point-sampled surfaces (Miao et al. "
+            "2007) on numpy arrays.";
+  m.attr("__version__") = CGAL_EXT_VERSION;
   // The library's exceptions: Invalid_input is a std::invalid_argument (ValueError), Numerical_failure a
   // std::runtime_error (RuntimeError); pybind11 translates both with their messages.
+  result_types.details = named_tuple(m, "Details", {"details", "magnitude"},
+                                     "Details(details, magnitude): the detail vector of every point (n, 3) and its "
+                                     "oriented magnitude (n,), positive where the detail stands out along the normal.");
+  result_types.upsampled = named_tuple(m, "Upsampled", {"points", "normals"},
+                                       "Upsampled(points, normals): the new samples (m, 3) and their normals (m, 3).");
+  result_types.deformed = named_tuple(m, "Deformed", {"points", "normals"},
+                                      "Deformed(points, normals): every point's and normal's deformed position (n, 3), "
+                                      "in the input order.");
+  result_types.point_set = named_tuple(m, "PointSet", {"points", "normals", "properties"},
+                                       "PointSet(points, normals, properties): the points (n, 3) float64, their normals "
+                                       "(n, 3) or None, and the other per-point properties by name (float64 arrays; "
+                                       "colours as 'colors', (n, 3) uint8).");
 
-  m.def("compute_geometric_details", &compute_geometric_details, "points"_a, "normals"_a = py::none(),
-        "k"_a = CGAL_ext::default_laplacian_neighbors, "order"_a = "quadric", "lam"_a = 0.8, "mu"_a = 1.6,
-        "weights"_a = "uniform", "progress"_a = py::none(),
-        "The detail vector delta = f(K) p of every point and its oriented magnitude: (details (n, 3), magnitude (n,)).");
+  const Detail_filter filter;
+  const unsigned int laplacian_k = default_laplacian_neighbors;
+  const std::string default_order = setting_name(order_spellings, filter.order);
+  const std::string default_weights = setting_name(weight_spellings, Laplacian_weights().weighting);
+
+  m.def("compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(), py::kw_only(),
+        "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
+        "weights"_a = default_weights, "progress"_a = py::none(),
+        doc("The detail vector delta = f(K) p of every point and its oriented magnitude +-|delta| (the sign of "
+            "delta . n); K = I - W is the point-set Laplacian (doc/geometric_details.md).",
+            {points_doc, normals_doc, filter_doc, progress_doc},
+            "Details\n    (details (n, 3), magnitude (n,)), new float64 arrays.")
+          .c_str());
+  const std::string region_doc = R"(roi : array_like of int or bool
+    The region of interest: point indices, or a boolean mask of all the points.)";
+  const std::string anchors_doc = R"(anchors : array_like of int or bool, optional
+    Points held where they are (indices or a mask); None lets the function anchor the region's border.)";
   m.def("scale_geometric_details",
-        [](const py::object& points, const py::object& roi, double s, const py::object& normals, const py::object& anchors,
-           long long k, const std::string& order, double lam, double mu, const std::string& weights, const py::object& progress) {
-          return manipulate(false, points, roi, s, normals, anchors, k, order, lam, mu, weights, progress);
+        [](const Array_like& points, const Optional_array_like& normals, const Array_like& roi, double s,
+           const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
+           const std::string& weights, const Optional_progress& progress) {
+          return manipulate(false, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
         },
-        "points"_a, "roi"_a, "s"_a, "normals"_a = py::none(), "anchors"_a = py::none(),
-        "k"_a = CGAL_ext::default_laplacian_neighbors, "order"_a = "quadric", "lam"_a = 0.8, "mu"_a = 1.6,
-        "weights"_a = "uniform", "progress"_a = py::none(),
-        "The points with the details of the region `roi` (indices) scaled by s: a new (n, 3) array.");
+        "points"_a, "normals"_a = py::none(), py::kw_only(), "roi"_a, "s"_a, "anchors"_a = py::none(), "k"_a = laplacian_k,
+        "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu, "weights"_a = default_weights,
+        "progress"_a = py::none(),
+        doc("The points with the details of a region scaled by s (Miao et al. 2007, Sect. 4): a least-squares "
+            "solve that keeps the rest of the shape (doc/detail_scaling.md).",
+            {points_doc, normals_doc, region_doc, "s : float\n    The scale of the details: 0 removes them, 1 keeps the points, 2 doubles them.",
+             anchors_doc, filter_doc, progress_doc},
+            "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it; the input is "
+            "not changed).")
+          .c_str());
   m.def("enhance_geometric_details",
-        [](const py::object& points, double s, const py::object& roi, const py::object& normals, const py::object& anchors,
-           long long k, const std::string& order, double lam, double mu, const std::string& weights, const py::object& progress) {
-          return manipulate(true, points, roi, s, normals, anchors, k, order, lam, mu, weights, progress);
+        [](const Array_like& points, const Optional_array_like& normals, double s, const Optional_array_like& roi,
+           const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
+           const std::string& weights, const Optional_progress& progress) {
+          return manipulate(true, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
         },
-        "points"_a, "s"_a, "roi"_a = py::none(), "normals"_a = py::none(), "anchors"_a = py::none(),
-        "k"_a = CGAL_ext::default_laplacian_neighbors, "order"_a = "quadric", "lam"_a = 0.8, "mu"_a = 1.6,
-        "weights"_a = "uniform", "progress"_a = py::none(),
-        "The points with their details against the balanced-flow base surface enhanced by s (all of them, or the "
-        "region `roi`): a new (n, 3) array.");
-  m.def("estimate_mean_curvature", &estimate_mean_curvature, "points"_a, "normals"_a = py::none(),
-        "k"_a = CGAL_ext::default_curvature_neighbors, "fitting"_a = "closed_form", "progress"_a = py::none(),
-        "The signed mean curvature of every point (positive where the surface bends away from its normal): (n,).");
-  m.def("compute_simplification_sample_points", &compute_simplification_sample_points, "points"_a,
-        "normals"_a = py::none(), "target_count"_a = 4000, "max_cluster_size"_a = py::none(), "mode_threshold"_a = 1.0,
-        "k"_a = CGAL_ext::default_mean_shift_neighbors, "progress"_a = py::none(),
-        "The simplification sample point of every point: labels (n,), int64.");
-  m.def("upsample_point_set", &upsample_point_set, "points"_a, "normals"_a, "spacing"_a = 0.0, "max_hole_size"_a = 6.0,
-        "k"_a = 12, "roi"_a = py::none(), "progress"_a = py::none(),
-        "The new samples that fill the holes of an oriented point set: (points (m, 3), normals (m, 3)).");
+        "points"_a, "normals"_a = py::none(), py::kw_only(), "s"_a, "roi"_a = py::none(), "anchors"_a = py::none(),
+        "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
+        "weights"_a = default_weights, "progress"_a = py::none(),
+        doc("The points with their details against a smooth base surface (the balanced curvature flow) enhanced by "
+            "s (Miao et al. 2007, Sect. 4; doc/detail_scaling.md).",
+            {points_doc, normals_doc, "s : float\n    The enhancement: 1 keeps the points, 2 doubles the details.",
+             "roi : array_like of int or bool, optional\n    The region enhanced (indices or a mask); None: every point.",
+             anchors_doc, filter_doc, progress_doc},
+            "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it).")
+          .c_str());
+  m.def("estimate_mean_curvature", &bound_estimate_mean_curvature, "points"_a, "normals"_a = py::none(), py::kw_only(),
+        "k"_a = default_curvature_neighbors, "fitting"_a = setting_name(fitting_spellings, Curvature_fitting::closed_form),
+        "progress"_a = py::none(),
+        doc("The signed mean curvature of every point: a sphere with outward normals has +1/r (doc/curvature.md).",
+            {points_doc, normals_doc, "k : int\n    Neighbours of each local fit (itself not counted).",
+             "fitting : {\"closed_form\", \"monge\"}\n    A closed-form degree-2 fit, or CGAL's Monge jet fitting.",
+             progress_doc},
+            "numpy.ndarray\n    (n,) float64.")
+          .c_str());
+  const Simplification_settings simplification;
+  m.def("compute_simplification_sample_points", &bound_compute_simplification_sample_points, "points"_a,
+        "normals"_a = py::none(), py::kw_only(), "target_count"_a = simplification.target_count,
+        "max_cluster_size"_a = py::none(), "mode_threshold"_a = simplification.mode_spread_threshold,
+        "k"_a = default_mean_shift_neighbors, "progress"_a = py::none(),
+        doc("The simplification sample point (SSP) of every point: a 7D mean shift over position, normal and "
+            "curvature, and clusters that are dense where the surface bends (doc/simplification.md).",
+            {points_doc, normals_doc, "target_count : int\n    About how many sample points to make.",
+             "max_cluster_size : int, optional\n    The most points a sample point may have, instead of target_count.",
+             "mode_threshold : float\n    How far apart (in the mean shift's range units) two modes must be to split a "
+             "cluster.",
+             "k : int\n    Neighbours of the mean shift (itself not counted).", progress_doc},
+            "numpy.ndarray\n    (n,) int64, the sample point of each point, 0 .. number of sample points - 1.")
+          .c_str());
+  const Upsampling_settings upsampling;
+  m.def("upsample_point_set", &bound_upsample_point_set, "points"_a, "normals"_a, py::kw_only(),
+        "spacing"_a = upsampling.detection.spacing, "max_hole_size"_a = upsampling.detection.max_hole_size,
+        "k"_a = upsampling.neighbors, "roi"_a = py::none(), "progress"_a = py::none(),
+        doc("New samples that fill the holes and sparse parts of an oriented point set (doc/upsampling.md).",
+            {points_doc, "normals : (n, 3) array_like\n    Unit normals (required: the holes and the new samples' surface "
+             "come from them).",
+             "spacing : float\n    The spacing of the new samples; 0: each point's local spacing.",
+             "max_hole_size : float\n    The widest hole filled, in spacings.",
+             "k : int\n    Neighbours of the principal axes and of the local surface fits (at least 6).",
+             "roi : array_like of int or bool, optional\n    Only holes next to these points are filled.",
+             progress_doc},
+            "Upsampled\n    (points (m, 3), normals (m, 3)), the new samples only.")
+          .c_str());
 
+  m.def("read_points", &read_points, "path"_a,
+        doc("Reads a PLY, OFF, XYZ or PWN point set with the point-detail program's readers: the header is checked "
+            "before anything is allocated, and a file larger than the memory, truncated or malformed is refused with "
+            "the program's message (doc/bad_input.md); non-finite coordinates of a binary file are read as they are "
+            "(the algorithms refuse them). A mesh's normals are its faces' area-weighted vertex normals.",
+            {"path : str or os.PathLike\n    The file; its extension names the format."},
+            "PointSet\n    (points (n, 3) float64, normals (n, 3) or None, properties: dict of the other per-point "
+            "properties, float64 (n,) each, colours as 'colors' (n, 3) uint8).",
+            false)
+            .append("\nRaises\n------\nFileNotFoundError\n    No such file.\nValueError\n    A file the readers "
+                    "refuse, with their message.\n")
+          .c_str());
+  m.def("write_ply", &write_ply, "path"_a, "points"_a, "normals"_a = py::none(), "colors"_a = py::none(), py::kw_only(),
+        "input_path"_a = py::none(),
+        doc("Writes a binary little-endian PLY as the program does (x y z, nx ny nz, the scalars as doubles, red "
+            "green blue): into a temporary file beside it, renamed once whole, so a failure leaves no partial "
+            "file. Any extra keyword argument is a per-point scalar property of that name.",
+            {"path : str or os.PathLike\n    The file to write.", points_doc,
+             "normals : (n, 3) array_like, optional\n    Written as nx ny nz.",
+             "colors : (n, 3) array_like of int, optional\n    Written as red green blue, integers in 0..255.",
+             "input_path : str or os.PathLike, optional\n    The file the points were read from: writing over it is "
+             "refused.",
+             "**scalars : (n,) array_like\n    Per-point values, written as double properties in the order given."},
+            "", true)
+          .c_str());
+  m.def("diverging_colors", &diverging_colors, "values"_a,
+        doc("The program's blue-white-red colour map of signed values, symmetric about zero and saturating at the "
+            "98th percentile of the non-zero magnitudes (doc/geometric_details.md, \"Colour maps\").",
+            {"values : (n,) array_like\n    The values, e.g. the details' magnitude."},
+            "numpy.ndarray\n    (n, 3) uint8 colours.")
+          .c_str());
+  const point_detail::Render_settings render;
+  m.def("render_png", &render_png, "points"_a, "normals"_a = py::none(), py::kw_only(), "values"_a = py::none(),
+        "colors"_a = py::none(), "view"_a = "front", "width"_a = render.width, "height"_a = render.height,
+        "splat_scale"_a = render.splat_scale,
+        doc("A PNG picture of the points as the program draws it (splats with a depth buffer, shaded by the "
+            "normals), e.g. for IPython.display.Image.",
+            {points_doc, "normals : (n, 3) array_like, optional\n    Shade by them; None: flat shading.",
+             "values : (n,) array_like, optional\n    Colour by these values (a diverging map when both signs occur, "
+             "else a sequential one) with a legend of their range.",
+             "colors : (n, 3) array_like of int, optional\n    Colour by these colours (0..255) instead.",
+             "view : str\n    front, back, left, right, top, bottom, iso, or \"AZIMUTH,ELEVATION\" in degrees.",
+             "width, height : int\n    The picture's size in pixels.",
+             "splat_scale : float\n    Scales the splats' radius."},
+            "bytes\n    The PNG file's bytes.")
+          .c_str());
+  m.def("set_num_threads", &set_num_threads, "count"_a,
+        doc("Limits the library's worker threads (TBB's max_allowed_parallelism), as the program's --threads does. "
+            "cgal_ext.threads(n) does the same for a with-block.",
+            {"count : int or None\n    At least 1; None lifts the limit (every core)."},
+            "", false)
+          .c_str());
+  m.def("get_num_threads", &get_num_threads, "The number of worker threads the library may use now.");
+  m.def("_trace_reads", [](bool on) {
+    read_trace.lowest = std::numeric_limits<std::uintptr_t>::max();
+    read_trace.highest = 0;
+    read_trace.on = on;
+  }, "on"_a, "Tests only: start (True) or stop recording the memory the library reads through points and normals.");
+  m.def("_read_span", [] { return py::make_tuple(read_trace.lowest.load(), read_trace.highest.load()); },
+        "Tests only: the lowest and one past the highest address read since _trace_reads(True).");
+
+  const Deformation::Settings defaults;
   py::class_<Deformation>(m, "Deformation",
-                          "Detail-preserving editing (Miao et al. 2007, Sect. 6). Settings: order, lam, mu, k, "
-                          "handle_weight, rotations ('propagate', 'arap', 'none'), rigid_iterations, rigid_rotation_smoothing, "
-                          "rigid_rotation_smoothing_scale ('edge_lengths', 'surface_area'), "
-                          "rigid_edge_weights ('uniform', 'cotangent'), strength "
-                          "('euclidean', 'geodesic'), target_count, max_cluster_size, diffusion_samples, detail_iterations, "
-                          "detail_tolerance, detail_anchor, diffusion_origin "
-                          "('own', 'nearest'), diffusion_turn ('affine', 'fitted', 'frames').")
-    .def(py::init<const py::object&, const py::object&, const py::kwargs&>(), "points"_a, "normals"_a = py::none())
-    .def("insert_roi", &Deformation::insert_roi, "indices"_a)
-    .def("create_handle_group", &Deformation::create_handle_group, "indices"_a)
-    .def("preprocess", &Deformation::preprocess, "progress"_a = py::none())
-    .def("set_handle_transform", &Deformation::set_handle_transform, "group"_a, "rotation"_a, "translation"_a)
-    .def("deform", &Deformation::deform)
+                          doc("Detail-preserving editing of a point set (Miao et al. 2007, Sect. 6), shaped like CGAL's "
+                              "Surface_mesh_deformation: select a region of interest and handle groups, preprocess(), "
+                              "then per frame of a drag set_handle_transform(), deform() and diffuse(), and "
+                              "restore_details() once the drag ends (doc/editing.md). The points and normals are "
+                              "copied at construction. The settings are keyword-only; `settings` reads them back.",
+                              {points_doc, normals_doc,
+                               "order, lam, mu : str, float, float\n    The detail transfer function, as in compute_geometric_details.",
+                               "k : int\n    Neighbours of the sample points' Laplacian.",
+                               "handle_weight : float\n    inf: handles are hard constraints; else their weight in the "
+                               "least squares.",
+                               "rotations : {\"propagate\", \"arap\", \"none\"}\n    How the details turn: by the strength "
+                               "field, fitted as rigid as possible, or not.",
+                               "rigid_iterations : int\n    Local/global iterations per step in \"arap\" mode.",
+                               "rigid_rotation_smoothing : float\n    SRE-ARAP's smooth-rotation weight (0: plain ARAP).",
+                               "rigid_rotation_smoothing_scale : {\"edge_lengths\", \"surface_area\"}\n    How that weight "
+                               "is scaled.",
+                               "rigid_edge_weights : {\"uniform\", \"cotangent\"}\n    Edge weights of the \"arap\" energy.",
+                               "strength : {\"euclidean\", \"geodesic\"}\n    The distance of the strength field.",
+                               "target_count : int\n    About how many sample points to make.",
+                               "max_cluster_size : int, optional\n    The most points per sample point, instead.",
+                               "diffusion_samples : int\n    Sample points blended per point by the diffusion.",
+                               "diffusion_origin : {\"own\", \"nearest\"}\n    Where each point's offset is taken from.",
+                               "diffusion_turn : {\"affine\", \"fitted\", \"frames\"}\n    How each sample point carries "
+                               "its points.",
+                               "detail_iterations : int\n    The most conjugate-gradient iterations of restore_details().",
+                               "detail_tolerance : float\n    Its relative residual to stop at.",
+                               "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape."},
+                              "", true)
+                            .c_str())
+    .def(py::init([](const Array_like& points, const Optional_array_like& normals, const std::string& order, double lam,
+                     double mu, long long k, double handle_weight, const std::string& rotations, long long rigid_iterations,
+                     double rigid_rotation_smoothing, const std::string& rigid_rotation_smoothing_scale,
+                     const std::string& rigid_edge_weights, const std::string& strength, long long target_count,
+                     const Optional_int& max_cluster_size, long long diffusion_samples, const std::string& diffusion_origin,
+                     const std::string& diffusion_turn, long long detail_iterations, double detail_tolerance,
+                     double detail_anchor) {
+           Deformation::Settings s;
+           s.filter = Detail_filter{parse_setting(order_spellings, order, "order"), lam, mu};
+           s.sample_neighbors = as_count(k, "k");
+           s.handle_weight = handle_weight;
+           s.rotations = parse_setting(rotation_spellings, rotations, "rotations");
+           s.rigid_iterations = as_count(rigid_iterations, "rigid_iterations");
+           s.rigid_rotation_smoothing = rigid_rotation_smoothing;
+           s.rigid_rotation_smoothing_scale =
+             parse_setting(smoothing_scale_spellings, rigid_rotation_smoothing_scale, "rigid_rotation_smoothing_scale");
+           s.rigid_edge_weights = parse_setting(edge_weight_spellings, rigid_edge_weights, "rigid_edge_weights");
+           s.strength_distance = parse_setting(strength_spellings, strength, "strength");
+           if(target_count < 1) throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
+           s.simplification.target_count = std::size_t(target_count);
+           if(!max_cluster_size.is_none()) {
+             const long long size = max_cluster_size.cast<long long>();
+             if(size < 1) throw py::value_error("max_cluster_size must be at least 1, not " + std::to_string(size));
+             s.simplification.max_cluster_size = std::size_t(size);
+           }
+           s.diffusion_samples = as_count(diffusion_samples, "diffusion_samples");
+           s.diffusion_origin = parse_setting(origin_spellings, diffusion_origin, "diffusion_origin");
+           s.diffusion_turn = parse_setting(turn_spellings, diffusion_turn, "diffusion_turn");
+           s.detail_iterations = as_count(detail_iterations, "detail_iterations");
+           s.detail_tolerance = detail_tolerance;
+           s.detail_anchor = detail_anchor;
+           s.validate();
+           return std::make_unique<Deformation>(points, normals, s);
+         }),
+         "points"_a, "normals"_a = py::none(), py::kw_only(), "order"_a = setting_name(order_spellings, defaults.filter.order),
+         "lam"_a = defaults.filter.lambda, "mu"_a = defaults.filter.mu, "k"_a = defaults.sample_neighbors,
+         "handle_weight"_a = defaults.handle_weight, "rotations"_a = setting_name(rotation_spellings, defaults.rotations),
+         "rigid_iterations"_a = defaults.rigid_iterations, "rigid_rotation_smoothing"_a = defaults.rigid_rotation_smoothing,
+         "rigid_rotation_smoothing_scale"_a = setting_name(smoothing_scale_spellings, defaults.rigid_rotation_smoothing_scale),
+         "rigid_edge_weights"_a = setting_name(edge_weight_spellings, defaults.rigid_edge_weights),
+         "strength"_a = setting_name(strength_spellings, defaults.strength_distance),
+         "target_count"_a = defaults.simplification.target_count, "max_cluster_size"_a = py::none(),
+         "diffusion_samples"_a = defaults.diffusion_samples,
+         "diffusion_origin"_a = setting_name(origin_spellings, defaults.diffusion_origin),
+         "diffusion_turn"_a = setting_name(turn_spellings, defaults.diffusion_turn),
+         "detail_iterations"_a = defaults.detail_iterations, "detail_tolerance"_a = defaults.detail_tolerance,
+         "detail_anchor"_a = defaults.detail_anchor)
+    .def("insert_roi", &Deformation::insert_roi, "indices"_a,
+         doc("Adds points to the region of interest (the part that deforms).",
+             {"indices : array_like of int or bool\n    Point indices, or a boolean mask of all the points."}, "", true)
+           .c_str())
+    .def("create_handle_group", &Deformation::create_handle_group, "indices"_a = py::none(),
+         doc("Adds a handle group (points moved together by one rigid transform; they must lie in the region).",
+             {"indices : array_like of int or bool, optional\n    Its points (indices or a mask); more can be added with "
+              "insert_handle_points()."},
+             "int\n    The group's number.", true)
+           .c_str())
+    .def("insert_handle_points", &Deformation::insert_handle_points, "group"_a, "indices"_a,
+         doc("Adds points to a handle group.",
+             {"group : int\n    A group create_handle_group() returned.",
+              "indices : array_like of int or bool\n    Point indices, or a boolean mask of all the points."},
+             "", true)
+           .c_str())
+    .def("clear_selection", &Deformation::clear_selection,
+         "Empties the region of interest and removes every handle group (the next deform() preprocesses again).")
+    .def("preprocess", &Deformation::preprocess, py::kw_only(), "progress"_a = py::none(),
+         doc("Makes the sample points of the selection, their Laplacian and details, the strength field and the "
+             "diffusion stencils, and factors the least squares; deform() calls it when the selection changed.",
+             {progress_doc}, "bool\n    True (a cancelled call raises instead).", true)
+           .c_str())
+    .def("set_handle_transform", &Deformation::set_handle_transform, "group"_a, "rotation"_a = py::none(),
+         "translation"_a = py::none(), py::kw_only(), "transform"_a = py::none(), "pivot"_a = py::none(),
+         doc("Sets the rigid motion of a handle group: p -> R (p - c) + c + t (c = pivot, 0 when not given), or the "
+             "4x4 matrix [[R, t], [0, 0, 0, 1]].",
+             {"group : int\n    The handle group.", "rotation : (3, 3) array_like, optional\n    R, a rotation "
+              "(orthonormal within 1e-6, determinant +1); None: the identity.",
+              "translation : (3,) array_like, optional\n    t; None: zero.",
+              "transform : (4, 4) array_like, optional\n    The whole rigid motion instead of rotation, translation and "
+              "pivot.",
+              "pivot : (3,) array_like, optional\n    The point the rotation turns about."},
+             "", true)
+           .c_str())
+    .def("deform", &Deformation::deform, py::kw_only(), "progress"_a = py::none(),
+         doc("Solves the sample points' new positions for the handles' transforms (preprocessing first when the "
+             "selection changed): one back-substitution per call.",
+             {progress_doc}, "", true)
+           .c_str())
     .def("diffuse", &Deformation::diffuse, "points_out"_a = py::none(), "normals_out"_a = py::none(),
-         "The deformed points and normals (n, 3), written into points_out / normals_out when given.")
+         doc("Carries the sample points' deformation to every point and normal.",
+             {"points_out : (n, 3) float64 ndarray, optional\n    Written in place (reuse it from drag to drag); None: a "
+              "new array.",
+              "normals_out : (n, 3) float64 ndarray, optional\n    The same for the normals."},
+             "Deformed\n    (points, normals) in the input order: points_out and normals_out when given.", true)
+           .c_str())
     .def("restore_details", &Deformation::restore_details, "points_out"_a = py::none(), "normals_out"_a = py::none(),
-         "After diffuse(): puts back the fine details the diffusion smoothed (conjugate gradients, at most "
-         "detail_iterations; call it once a drag ends), then returns the points and normals as diffuse() does.")
-    .def("statistics", &Deformation::statistics)
-    .def("__len__", &Deformation::size);
+         doc("After diffuse(): puts back the fine details the diffusion smoothed (conjugate gradients, at most "
+             "detail_iterations; call it once a drag ends), then returns the points and normals as diffuse() does.",
+             {"points_out : (n, 3) float64 ndarray, optional\n    Written in place; None: a new array.",
+              "normals_out : (n, 3) float64 ndarray, optional\n    The same for the normals."},
+             "Deformed\n    (points, normals) in the input order.", true)
+           .c_str())
+    .def("reset", &Deformation::reset,
+         "Handle transforms back to the identity and every point back to its input position; the preprocessing is kept.")
+    .def("sample_point_of", &Deformation::sample_point_of, "points"_a,
+         doc("The sample point of points (after preprocess()).",
+             {"points : int or array_like of int or bool\n    A point index, or indices or a boolean mask."},
+             "int or numpy.ndarray\n    The sample point of each, int64.", true)
+           .c_str())
+    .def("number_of_handle_groups", &Deformation::number_of_handle_groups, "The number of handle groups.")
+    .def("number_of_sample_points", &Deformation::number_of_sample_points,
+         "The number of sample points (0 before preprocess()).")
+    .def("is_preprocessed", &Deformation::is_preprocessed, "Whether preprocess() ran since the selection last changed.")
+    .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
+    .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
+    .def("__len__", &Deformation::size)
+    .def("__repr__", &Deformation::repr);
 }

@@ -289,6 +289,31 @@ public:
   Eigen::Vector3d deformed_point(std::size_t i) const { return m_deformed_points.row(m_row_of.at(i)).transpose(); }
   Eigen::Vector3d deformed_normal(std::size_t i) const { return m_deformed_normals.row(m_row_of.at(i)).transpose(); }
 
+  /*!
+    Calls `write(i, point, normal)` for every input index `i` with its deformed position and normal (three
+    doubles each), in parallel: the cheap way to copy the result out of the object's spatial order into a
+    caller's arrays after a drag, without a property map per point. With `movable_only`, only for the points
+    the edit can move (those a region sample point carries, the handles among them): since `preprocess()` the
+    others keep their input position and normal, so a caller that wrote every point once since then need only
+    rewrite these after each drag.
+  */
+  template <typename Writer>
+  void for_each_deformed_point(const Writer& write, bool movable_only = false) const
+  {
+    if(movable_only) {
+      internal::for_range<ConcurrencyTag>(0, m_active_points.size(), [&](std::size_t a) {
+        const Eigen::Index row = m_active_points[a];
+        write(std::size_t(m_cloud.input_index[std::size_t(row)]), m_deformed_points.row(row).data(),
+              m_deformed_normals.row(row).data());
+      });
+      return;
+    }
+    internal::for_range<ConcurrencyTag>(0, m_row_of.size(), [&](std::size_t i) {
+      const Eigen::Index row = m_row_of[i];
+      write(i, m_deformed_points.row(row).data(), m_deformed_normals.row(row).data());
+    });
+  }
+
   /// The sample point of input point `i` (after `preprocess()`).
   std::size_t sample_point_of(std::size_t i) const { return std::size_t(m_sample_of.at(std::size_t(m_row_of.at(i)))); }
   Eigen::Vector3d sample_position(std::size_t s) const { return m_samples.row(Eigen::Index(s)).transpose(); }

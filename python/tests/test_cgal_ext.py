@@ -1,5 +1,5 @@
 # The Python module against the library's numbers as the point-detail program gives them, on a generated shape
-# and on CGAL's armadillo scan; its errors; the GIL released during a computation; progress and cancellation.
+# and on CGAL's armadillo scan; its errors; progress and cancellation.
 import threading
 
 import numpy as np
@@ -69,14 +69,14 @@ def test_scaling_and_enhancement_are_the_programs(sphere, sphere_file, tmp_path)
     roi = np.flatnonzero(points[:, 2] > 0.5)
     (tmp_path / "roi.txt").write_text("\n".join(map(str, roi)) + "\n")
     run_program("scale", "-i", sphere_file, "-o", tmp_path / "scaled.ply", "-s", 2, "--roi", "indices:%s" % (tmp_path / "roi.txt"))
-    scaled = cgal_ext.scale_geometric_details(points, roi, 2.0, normals=normals)
+    scaled = cgal_ext.scale_geometric_details(points, normals, roi=roi, s=2.0)
     assert_close(scaled, xyz(read_ply(tmp_path / "scaled.ply")))
     outside = np.setdiff1d(np.arange(len(points)), roi)
     assert np.array_equal(scaled[outside], points[outside])
     run_program("enhance", "-i", sphere_file, "-o", tmp_path / "enhanced.ply", "-s", 2)
-    assert_close(cgal_ext.enhance_geometric_details(points, 2.0, normals=normals), xyz(read_ply(tmp_path / "enhanced.ply")))
+    assert_close(cgal_ext.enhance_geometric_details(points, normals, s=2.0), xyz(read_ply(tmp_path / "enhanced.ply")))
     # s = 1 leaves the points as they were.
-    assert np.allclose(cgal_ext.scale_geometric_details(points, roi, 1.0, normals=normals), points, atol=1e-12)
+    assert np.allclose(cgal_ext.scale_geometric_details(points, normals, roi=roi, s=1.0), points, atol=1e-12)
 
 
 def test_upsampling_is_the_programs(sphere, tmp_path):
@@ -146,19 +146,21 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
 
 @pytest.mark.parametrize("call, error, needle", [
     (lambda p, n: cgal_ext.compute_geometric_details(p[:, :2].copy()), ValueError, "shape (n, 3)"),
-    (lambda p, n: cgal_ext.compute_geometric_details(p.astype(np.float32)), ValueError, "dtype float64"),
-    (lambda p, n: cgal_ext.compute_geometric_details(p.tolist()), ValueError, "numpy array"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p.astype(np.complex128)), ValueError, "real numbers"),
+    (lambda p, n: cgal_ext.compute_geometric_details([[0, 0, 0], [1, 2]]), ValueError, "points must be"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n.astype(str)), ValueError, "normals must hold real numbers"),
     (lambda p, n: cgal_ext.compute_geometric_details(np.where(np.arange(len(p))[:, None] == 5, np.nan, p)), ValueError, "non-finite"),
     (lambda p, n: cgal_ext.compute_geometric_details(np.zeros((0, 3))), ValueError, "empty"),
     (lambda p, n: cgal_ext.compute_geometric_details(p[:8].copy(), n[:8].copy()), ValueError, "k = 10"),
     (lambda p, n: cgal_ext.compute_geometric_details(p, n[:10].copy()), ValueError, "as many rows"),
     (lambda p, n: cgal_ext.compute_geometric_details(p, n, order="quintic"), ValueError, "order"),
     (lambda p, n: cgal_ext.compute_geometric_details(p, n, lam=0.0), ValueError, "lambda"),
-    (lambda p, n: cgal_ext.scale_geometric_details(p, [len(p)], 2.0, normals=n), ValueError, "not a point index"),
-    (lambda p, n: cgal_ext.scale_geometric_details(p, np.array([0.5]), 2.0, normals=n), ValueError, "integer indices"),
+    (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=[len(p)], s=2.0), ValueError, "not a point index"),
+    (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=np.array([0.5]), s=2.0), ValueError, "integer point indices"),
+    (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=np.ones(10, bool), s=2.0), ValueError, "one value per point"),
     (lambda p, n: cgal_ext.estimate_mean_curvature(p, n, k=3), ValueError, "at least 5"),
     (lambda p, n: cgal_ext.upsample_point_set(p, None), ValueError, "normals are required"),
-    (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), ValueError, "unknown setting 'rotation'"),
+    (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), TypeError, "incompatible constructor arguments"),
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_turn="twisted"), ValueError, "diffusion_turn must be"),
     (lambda p, n: cgal_ext.Deformation(p, n, diffusion_origin="far"), ValueError, "diffusion_origin must be"),
     (lambda p, n: cgal_ext.Deformation(p, n, rigid_edge_weights="cot"), ValueError, "rigid_edge_weights must be"),
@@ -205,31 +207,9 @@ def test_progress_is_reported_and_an_exception_from_it_cancels(sphere):
     assert deformation.preprocess()  # cancelled, then done
 
 
-def test_another_thread_runs_while_the_library_computes(sphere):
-    points, normals = sphere
-    many = np.vstack([points * (1 + 0.1 * i) for i in range(30)])  # 180k points: about a second
-    many_normals = np.vstack([normals] * 30)
-    count, running = [0], [True]
-
-    def spin():
-        while running[0]:
-            count[0] += 1
-
-    thread = threading.Thread(target=spin)
-    thread.start()
-    try:
-        before = count[0]
-        cgal_ext.compute_geometric_details(many, many_normals, k=10)
-        during = count[0] - before
-    finally:
-        running[0] = False
-        thread.join()
-    # With the GIL held for the whole call, the other thread would count almost nothing meanwhile.
-    assert during > 10000
-
-
-def test_a_large_input_is_read_in_place(tmp_path):
-    """Peak memory of details on 1M points from Python within 10 % of the C++ example's on the same points."""
+def test_peak_memory_of_a_large_input_is_the_cpp_examples(tmp_path):
+    """Peak memory of details on 1M points from Python within 10 % of the C++ example's on the same points (that
+    the points are read in place is test_package.py's test_float64_input_is_read_in_place...)."""
     import os
     import subprocess
     import sys
