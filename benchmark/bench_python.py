@@ -1,9 +1,17 @@
-"""The Python module's overhead against the library's own timing of the same calls, on 1M points: details, and
-one drag of an edit (set_handle_transform, deform, diffuse). Medians of repeated runs.
+#!/usr/bin/python3
+"""The Python package's cost against the library's own on the same work, on a seeded sampling of the armadillo
+(1M points; --quick: 100k, one repetition): details, reading a binary PLY, and one drag of an edit as a Python user
+gets it (set_handle_transform, deform, diffuse into the caller's arrays, reused from drag to drag). Medians of the
+repetitions (a drag: of every repetition's drags). Writes OUT/python_results.csv and OUT/python_results.md.
 
-Usage: PYTHONPATH=build/python python3 benchmark/bench_python.py [--points N] [--reps R] [--program build/src/point-detail]
+It runs, as point-detail does, with glibc's malloc on transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1,
+set by re-executing itself unless GLIBC_TUNABLES is set): a fresh array's first touch then costs one page fault per
+2 MiB, not per 4 KiB, which on a virtual machine halves the time of reading a large file.
+
+Usage: PYTHONPATH=build/python benchmark/bench_python.py --out DIR [--build build] [--data data] [--quick]
 """
 import argparse
+import csv
 import json
 import os
 import subprocess
@@ -15,59 +23,123 @@ import numpy as np
 
 import cgal_ext
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python", "tests"))
-from conftest import bumpy_sphere, write_ply  # noqa: E402
-
 
 def median(values):
     return float(np.median(values))
 
 
+def program_timing(program, args, stage, reps, tmp):
+    """The program's own timing of one stage (its --report), median of `reps` runs."""
+    report = os.path.join(tmp, "report.json")
+    times = []
+    for _ in range(reps):
+        subprocess.run([program, "-q", *args, "--report", report], check=True)
+        with open(report) as f:
+            times.append(json.load(f)["timings_s"][stage])
+    return median(times)
+
+
+def drag_times(points, normals, drags, reps):
+    """One drag as a Python user gets it (into reused arrays in the caller's order) and the library's own
+    deform() + diffuse() for the same drags (statistics), medians over every repetition's drags."""
+    wall, library = [], []
+    up = points[:, 1]
+    top = np.quantile(up, 0.9)
+    for _ in range(reps):
+        d = cgal_ext.Deformation(points, normals)
+        d.insert_roi(up > np.quantile(up, 0.5))  # the upper half deforms
+        g = d.create_handle_group(up > top)  # its top is dragged
+        d.preprocess()
+        P, N = np.empty_like(points), np.empty_like(normals)
+        pivot = points[up > top].mean(axis=0)
+        for step in range(drags + 1):
+            a = np.radians(1.0 + step)
+            R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+            start = time.perf_counter()
+            d.set_handle_transform(g, R, pivot=pivot)
+            d.deform()
+            d.diffuse(P, N)
+            if step:  # the first writes every point; the drags after it only what the edit can move
+                wall.append(time.perf_counter() - start)
+        for step in range(drags):
+            a = np.radians(1.0 + step)
+            R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+            d.set_handle_transform(g, R, pivot=pivot)
+            d.deform()
+            d.diffuse()
+            s = d.statistics()
+            library.append(s["deform_seconds"] + s["diffuse_seconds"])
+        movable = int(np.sum(up > np.quantile(up, 0.5)))
+    return median(wall), median(library), movable
+
+
 def main():
+    if "GLIBC_TUNABLES" not in os.environ:
+        os.execve(sys.executable, [sys.executable] + sys.argv, dict(os.environ, GLIBC_TUNABLES="glibc.malloc.hugetlb=1"))
     parser = argparse.ArgumentParser()
-    parser.add_argument("--points", type=int, default=1000000)
-    parser.add_argument("--reps", type=int, default=5)
-    parser.add_argument("--program", default="build/src/point-detail")
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--build", default="build")
+    parser.add_argument("--data", default="data")
+    parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
-    points, normals = bumpy_sphere(args.points, seed=11)
-
-    # Details: the module's call against the program's own timing of the library call on the same points.
-    python_s = []
-    for _ in range(args.reps):
-        start = time.perf_counter()
-        cgal_ext.compute_geometric_details(points, normals)
-        python_s.append(time.perf_counter() - start)
-    program_s = []
+    n, reps, drags = (100000, 1, 5) if args.quick else (1000000, 5, 20)
+    program = os.path.join(args.build, "src", "point-detail")
+    rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        write_ply(os.path.join(tmp, "in.ply"), points, normals)
-        for _ in range(args.reps):
-            subprocess.run([args.program, "-q", "details", "-i", os.path.join(tmp, "in.ply"), "-o", os.path.join(tmp, "out.ply"),
-                            "--report", os.path.join(tmp, "r.json")], check=True)
-            program_s.append(json.load(open(os.path.join(tmp, "r.json")))["timings_s"]["details"])
-    print("details, %d points: Python %.3f s, the library's call in point-detail %.3f s: overhead %+.1f %%"
-          % (args.points, median(python_s), median(program_s), 100 * (median(python_s) / median(program_s) - 1)))
+        scan = os.path.join(tmp, "armadillo.ply")
+        subprocess.run([os.path.join(args.build, "benchmark", "sample_scan"),
+                        os.path.join(args.data, "meshes", "armadillo.off"), str(n), scan], check=True)
 
-    # One drag: the Python calls' wall time against the library's own timing of deform() and diffuse().
-    d = cgal_ext.Deformation(points, normals)
-    d.insert_roi(np.flatnonzero(points[:, 2] > 0.0))
-    g = d.create_handle_group(np.flatnonzero(points[:, 2] > 0.85))
-    d.preprocess()
-    out_points, out_normals = np.empty_like(points), np.empty_like(normals)  # reused from drag to drag
-    wall, inner = [], []
-    for step in range(1, 4 * args.reps + 1):
-        a = np.radians(2 * step)
-        R = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
-        start = time.perf_counter()
-        d.set_handle_transform(g, R, np.zeros(3))
-        d.deform()
-        d.diffuse(out_points, out_normals)
-        wall.append(time.perf_counter() - start)
-        s = d.statistics()
-        inner.append(s["deform_seconds"] + s["diffuse_seconds"])
-    # The difference is writing the points and normals out in the caller's order, which C++'s
-    # diffuse(points, np) pays as well.
-    print("one drag, %d points: Python (into reused arrays) %.1f ms; the library's deform() + diffuse() into its own "
-          "arrays %.1f ms" % (args.points, 1000 * median(wall), 1000 * median(inner)))
+        read = []
+        for _ in range(reps):
+            start = time.perf_counter()
+            points, normals, _ = cgal_ext.read_points(scan)
+            read.append(time.perf_counter() - start)
+        program_read = program_timing(program, ["details", "-i", scan, "-o", os.path.join(tmp, "o.ply")], "read", reps, tmp)
+        rows.append(("read_points of a binary PLY", n, median(read), program_read, "the program's reader"))
+
+        details = []
+        for _ in range(reps):
+            start = time.perf_counter()
+            cgal_ext.compute_geometric_details(points, normals)
+            details.append(time.perf_counter() - start)
+        program_details = program_timing(program, ["details", "-i", scan, "-o", os.path.join(tmp, "o.ply")], "details",
+                                         reps, tmp)
+        rows.append(("compute_geometric_details", n, median(details), program_details, "the library's call in point-detail"))
+
+        # The sampling's own order is random; a scanner writes its points in sweeps, close in space: the same
+        # points in a coherent order (sorted by a coarse grid along one axis, then the next).
+        wall, library, movable = drag_times(points, normals, drags, reps)
+        rows.append(("one drag, points in random order (%d in the region)" % movable, n, wall, library,
+                     "the library's deform() + diffuse()"))
+        cell = np.floor((points - points.min(axis=0)) / (np.ptp(points, axis=0).max() / 64)).astype(np.int64)
+        order = np.lexsort((cell[:, 0], cell[:, 2], cell[:, 1]))
+        wall, library, movable = drag_times(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]),
+                                            drags, reps)
+        rows.append(("one drag, points in scan-like order (%d in the region)" % movable, n, wall, library,
+                     "the library's deform() + diffuse()"))
+
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "python_results.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["measure", "points", "python_s", "reference_s", "ratio", "reference"])
+        for measure, points_n, python_s, reference_s, reference in rows:
+            w.writerow([measure, points_n, "%.6f" % python_s, "%.6f" % reference_s, "%.3f" % (python_s / reference_s),
+                        reference])
+    lines = ["# The Python package against the library", "",
+             "Written by `benchmark/bench_python.py`%s (%d threads, GLIBC_TUNABLES=%s as point-detail sets it): medians of "
+             "%d repetitions; a sampling of CGAL's "
+             "armadillo with normals; a drag is `set_handle_transform`, `deform` and `diffuse(P, N)` into arrays reused "
+             "from drag to drag, in the caller's order, against the library's own `deform()` + `diffuse()` (its "
+             "statistics)." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(), os.environ["GLIBC_TUNABLES"], reps),
+             "",
+             "| measure | points | Python | reference | ratio | reference is |", "|---|---|---|---|---|---|"]
+    for measure, points_n, python_s, reference_s, reference in rows:
+        lines.append("| %s | %d | %.4f s | %.4f s | %.2f | %s |" % (measure, points_n, python_s, reference_s,
+                                                                 python_s / reference_s, reference))
+    with open(os.path.join(args.out, "python_results.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -636,14 +636,19 @@ fs::path path_of(const py::handle& object, const char* argument)
   }
 }
 
-/// A (rows, 3) float64 array of CGAL points or vectors.
-template <typename Vectors>
-py::array_t<double> rows3_of(const Vectors& values)
+/// The elements of `values` as a numpy array that owns them, without a copy: shape (size, extra...), each element
+/// `extra_strides` apart inside one value (the values are arrays of doubles or bytes: points, colours).
+template <typename Value>
+py::array array_owning(std::vector<Value>&& values, std::vector<py::ssize_t> extra_shape, std::vector<py::ssize_t> extra_strides)
 {
-  auto [array, view] = new_rows3(values.size());
-  for(std::size_t i = 0; i < values.size(); ++i)
-    for(int c = 0; c < 3; ++c) view.at(i, c) = values[i][c];
-  return array;
+  using Scalar = std::conditional_t<std::is_same_v<Value, point_detail::Color>, std::uint8_t, double>;
+  static_assert(sizeof(Value) % sizeof(Scalar) == 0 && std::is_trivially_copyable_v<Value>, "a value is an array of scalars");
+  auto* owned = new std::vector<Value>(std::move(values));
+  const py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<Value>*>(p); });
+  std::vector<py::ssize_t> shape{py::ssize_t(owned->size())}, strides{py::ssize_t(sizeof(Value))};
+  shape.insert(shape.end(), extra_shape.begin(), extra_shape.end());
+  strides.insert(strides.end(), extra_strides.begin(), extra_strides.end());
+  return py::array_t<Scalar>(shape, strides, reinterpret_cast<const Scalar*>(owned->data()), owner);
 }
 
 Point_set_result read_points(const Path_like& path_object)
@@ -656,21 +661,14 @@ Point_set_result read_points(const Path_like& path_object)
   }
   // What the program's reader checks against the available memory: the arrays returned here, and its own.
   constexpr std::uint64_t bytes_per_point = 160;
-  const point_detail::Point_cloud cloud = translating_program_errors(
+  point_detail::Point_cloud cloud = translating_program_errors(
     [&] { return without_gil([&] { return point_detail::read_point_cloud(path, bytes_per_point); }); });
   py::dict properties;
-  for(const auto& [name, values] : cloud.scalars) {
-    py::array_t<double> array(static_cast<py::ssize_t>(values.size()));
-    std::memcpy(array.mutable_data(), values.data(), values.size() * sizeof(double));
-    properties[py::str(name)] = array;
-  }
-  if(!cloud.colors.empty()) {
-    py::array_t<std::uint8_t> colors({py::ssize_t(cloud.colors.size()), py::ssize_t(3)});
-    std::memcpy(colors.mutable_data(), cloud.colors.data(), cloud.colors.size() * 3);
-    properties["colors"] = colors;
-  }
-  py::object normals = cloud.normals.empty() ? py::none() : py::object(rows3_of(cloud.normals));
-  return py::reinterpret_borrow<py::object>(result_types.point_set)(rows3_of(cloud.points), normals, properties);
+  for(auto& [name, values] : cloud.scalars) properties[py::str(name)] = array_owning(std::move(values), {}, {});
+  if(!cloud.colors.empty()) properties["colors"] = array_owning(std::move(cloud.colors), {3}, {1});
+  py::object normals = cloud.normals.empty() ? py::object(py::none()) : py::object(array_owning(std::move(cloud.normals), {3}, {8}));
+  return py::reinterpret_borrow<py::object>(result_types.point_set)(array_owning(std::move(cloud.points), {3}, {8}),
+                                                                    normals, properties);
 }
 
 void write_ply(const Path_like& path_object, const Array_like& points, const Optional_array_like& normals,
@@ -992,15 +990,14 @@ private:
     const bool movable_only = m_deformation->is_preprocessed() && !points_out.is_none() && !normals_out.is_none() &&
                               points_out.is(m_written_points) && normals_out.is(m_written_normals);
     without_gil([&, point_view = point_view, normal_view = normal_view] {
+      const auto write = [&](std::size_t i, const double* p, const double* v) {
+        for(int c = 0; c < 3; ++c) {
+          point_view.at(i, c) = p[c];
+          normal_view.at(i, c) = v[c];
+        }
+      };
       step();
-      m_deformation->for_each_deformed_point(
-        [&](std::size_t i, const double* p, const double* v) {
-          for(int c = 0; c < 3; ++c) {
-            point_view.at(i, c) = p[c];
-            normal_view.at(i, c) = v[c];
-          }
-        },
-        movable_only);
+      m_deformation->for_each_deformed_point(write, movable_only);
       return 0;
     });
     // Caller's arrays written whole: the next drag into them writes only what it can move.

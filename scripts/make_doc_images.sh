@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Regenerates every picture of the manual (doc/images/*.png) with the program, from the demo's generated
-# tentacle and CGAL's real scans, and checks that each stays within 300 KiB.
-# Usage: scripts/make_doc_images.sh   (builds point-detail in Release first; DOC_IMAGES_DIR=DIR writes them to
-#        DIR instead, as CI does to check that the script still runs)
+# tentacle and CGAL's real scans, and the Python page's with the package (examples/python/workflow.py), and
+# checks that each stays within 300 KiB.
+# Usage: scripts/make_doc_images.sh   (builds point-detail and the Python package in Release first;
+#        DOC_IMAGES_DIR=DIR writes them to DIR instead, as CI does to check that the script still runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/release_build.sh point-detail
+bash scripts/release_build.sh point-detail cgal_ext_python
 bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
 pd() { "$build/src/point-detail" -q "$@"; }
@@ -43,6 +44,11 @@ for strength in euclidean geodesic; do
   pd edit -i "$meshes/armadillo.off" -o "$work/w.ply" --edit doc/edits/armadillo_raise_arm_wide.json --strength "$strength" \
     --png "$img/armadillo_wide_$strength.png" $(size 800 800)
 done
+
+# doc/python.md: the package's workflow on bunny00 (details, the selection, the edited ear), with Debian's
+# interpreter and the package of the same build.
+PYTHONPATH="$build/python" /usr/bin/python3 examples/python/workflow.py --data data "$work/python" >/dev/null
+for picture in details selection edit; do cp "$work/python/$picture.png" "$img/python_$picture.png"; done
 
 too_large=0
 for f in "$img"/*.png; do

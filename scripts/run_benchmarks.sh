@@ -14,7 +14,7 @@ case "${1:-}" in
   *) echo "usage: scripts/run_benchmarks.sh [--quick]" >&2; exit 2 ;;
 esac
 benches=(bench_editing bench_upsampling bench_simplification bench_curvature bench_scaling bench_details)
-bash scripts/release_build.sh "${benches[@]}" sample_scan point-detail
+bash scripts/release_build.sh "${benches[@]}" sample_scan point-detail cgal_ext_python
 bash scripts/fetch_data.sh
 build=${BUILD_DIR:-build}
 if [ "$quick" = 1 ]; then
@@ -37,5 +37,8 @@ BUILD_DIR="$build" bash benchmark/measure_edit_memory.sh --out "$out" "${sizes[@
 echo "== measure_raw_scan.sh" >&2
 if [ "$quick" = 1 ]; then raw_scan=(--reps 1 100000); else raw_scan=(--reps 3 1000000); fi
 BUILD_DIR="$build" bash benchmark/measure_raw_scan.sh --out "$out" "${raw_scan[@]}" >/dev/null
+echo "== bench_python.py" >&2
+PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_python.py "${flags[@]}" --build "$build" --data data --out "$out" \
+  > "$build/benchmark/logs/bench_python.log"
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"
 echo "run_benchmarks.sh: $((SECONDS - start)) s of benchmarks" >&2

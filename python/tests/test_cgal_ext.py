@@ -236,15 +236,23 @@ def test_peak_memory_of_a_large_input_is_the_cpp_examples(tmp_path):
     assert python <= 1.10 * cpp
 
 
-@pytest.mark.parametrize("example", ["details_colours.py", "edit.py"])
+@pytest.mark.parametrize("example", ["details_colours.py", "edit.py", "workflow.py"])
 def test_the_python_examples_run(example, tmp_path):
     import os
     import subprocess
     import sys
+    from conftest import DATA
+    if example == "workflow.py" and not os.path.exists(os.path.join(DATA, "meshes", "bunny00.off")):
+        pytest.skip("workflow.py needs CGAL's bunny00 scan (scripts/fetch_data.sh)")
     script = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "python", example)
-    result = subprocess.run([sys.executable, script, str(tmp_path / "out.ply")], capture_output=True, text=True)
+    result = subprocess.run([sys.executable, script, str(tmp_path / "out.ply")], capture_output=True, text=True,
+                            env=dict(os.environ, CGAL_EXT_DATA=DATA))
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "out.ply").read_bytes().startswith(b"ply\n")
+    if example == "workflow.py":  # the details beside it, and its three pictures
+        assert (tmp_path / "details.ply").read_bytes().startswith(b"ply\n")
+        for picture in ("details.png", "selection.png", "edit.png"):
+            assert (tmp_path / picture).read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
 
 
 def test_ctrl_c_cancels_a_computation(sphere):
