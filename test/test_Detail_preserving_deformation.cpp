@@ -803,6 +803,45 @@ TEST(DetailPreservingDeformation, InteractiveStepsEqualAFreshSolve)
   for(std::size_t i = 0; i < t.shape.points.size(); ++i) ASSERT_EQ(interactive->deformed_point(i), t.point(i));
 }
 
+TEST(DetailPreservingDeformation, DeformedPointsAreWrittenInInputOrderAndTheUnmovableNeverMove)
+{
+  // for_each_deformed_point() visits every input index once, in increasing order per block, with deformed_point()'s
+  // values; with movable_only it skips exactly points that still hold their input position and normal, so a
+  // caller that copied every point once keeps an exact copy by rewriting only the movable ones after each drag.
+  const Tentacle t(2500);
+  auto d = t.edit(Settings());
+  ASSERT_TRUE(d->preprocess());
+  const std::size_t n = t.shape.points.size();
+  std::vector<Eigen::Vector3d> copy(n, Eigen::Vector3d::Constant(std::nan(""))), copy_normals = copy;
+  const auto copy_into = [&](std::size_t i, const double* p, const double* v) {
+    copy[i] = Eigen::Vector3d(p[0], p[1], p[2]);
+    copy_normals[i] = Eigen::Vector3d(v[0], v[1], v[2]);
+  };
+  d->for_each_deformed_point(copy_into);
+  std::vector<char> visited(n, 0);
+  d->for_each_deformed_point([&](std::size_t i, const double*, const double*) { ++visited[i]; }, true);
+  std::size_t movable = 0;
+  for(std::size_t i = 0; i < n; ++i) {
+    ASSERT_LE(visited[i], 1);
+    movable += std::size_t(visited[i]);
+  }
+  EXPECT_GT(movable, 0u);
+  EXPECT_LT(movable, n); // the tentacle's fixed base cannot move
+  for(int step = 1; step <= 3; ++step) {
+    const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.3 * step, Eigen::Vector3d(0, 0.05, 0));
+    d->set_handle_transform(0, R, shift);
+    ASSERT_TRUE(d->deform());
+    d->diffuse();
+    if(step == 3) d->restore_details();
+    d->for_each_deformed_point(copy_into, true);
+    for(std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(copy[i], d->deformed_point(i)) << "step " << step << ", point " << i;
+      ASSERT_EQ(copy_normals[i], d->deformed_normal(i)) << "step " << step << ", point " << i;
+      if(!visited[i]) ASSERT_EQ(d->deformed_point(i), t.point(i));
+    }
+  }
+}
+
 TEST(DetailPreservingDeformation, SequentialAndParallelAgreeAndClustersKeepTheirStatus)
 {
   const Tentacle t(6000);

@@ -24,6 +24,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -291,24 +292,27 @@ public:
 
   /*!
     Calls `write(i, point, normal)` for every input index `i` with its deformed position and normal (three
-    doubles each), in parallel: the cheap way to copy the result out of the object's spatial order into a
-    caller's arrays after a drag, without a property map per point. With `movable_only`, only for the points
-    the edit can move (those a region sample point carries, the handles among them): since `preprocess()` the
-    others keep their input position and normal, so a caller that wrote every point once since then need only
-    rewrite these after each drag.
+    doubles each), in parallel and in increasing `i`: the cheap way to copy the result out of the object's
+    spatial order into a caller's arrays after a drag (their writes go forward; the reads, scattered, are
+    fetched ahead). With `movable_only`, only for the points the edit can move (those a region sample point
+    carries, the handles among them): since `preprocess()` the others keep their input position and normal,
+    so a caller that wrote every point once since then need only rewrite these after each drag.
   */
   template <typename Writer>
   void for_each_deformed_point(const Writer& write, bool movable_only = false) const
   {
-    if(movable_only) {
-      internal::for_range<ConcurrencyTag>(0, m_active_points.size(), [&](std::size_t a) {
-        const Eigen::Index row = m_active_points[a];
-        write(std::size_t(m_cloud.input_index[std::size_t(row)]), m_deformed_points.row(row).data(),
-              m_deformed_normals.row(row).data());
-      });
-      return;
-    }
-    internal::for_range<ConcurrencyTag>(0, m_row_of.size(), [&](std::size_t i) {
+    const std::size_t count = movable_only ? m_movable_points.size() : m_row_of.size();
+    const auto input = [&](std::size_t a) { return movable_only ? std::size_t(m_movable_points[a]) : a; };
+    internal::for_range<ConcurrencyTag>(0, count, [&](std::size_t a) {
+      constexpr std::size_t ahead = 16; // rows in flight: enough to hide a memory access behind the writes
+#if defined(__GNUC__)
+      if(a + ahead < count) {
+        const Eigen::Index later = m_row_of[input(a + ahead)];
+        __builtin_prefetch(m_deformed_points.row(later).data());
+        __builtin_prefetch(m_deformed_normals.row(later).data());
+      }
+#endif
+      const std::size_t i = input(a);
       const Eigen::Index row = m_row_of[i];
       write(i, m_deformed_points.row(row).data(), m_deformed_normals.row(row).data());
     });
@@ -400,6 +404,7 @@ private:
   internal::Ssp_frames m_frame_builder;
   internal::Diffusion_stencil m_stencil;
   std::vector<int> m_active_points; // rows carried by at least one region sample point
+  std::vector<int> m_movable_points; // their input indices, increasing (for_each_deformed_point())
   std::vector<int> m_handle_rows;   // with exact handles: the rows that follow their group's transform exactly
   // With exact handles, the collar: the region's rows within reach of a handle and, per row, the nearest handle
   // point of each group that reaches it (an index into m_handle_rows) with the weight of that point's step.
@@ -621,6 +626,10 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
       active = m_sample_label[std::size_t(*s)] != fixed_label;
     if(active) m_active_points.push_back(int(row));
   }
+  m_movable_points.resize(m_active_points.size());
+  for(std::size_t a = 0; a < m_active_points.size(); ++a)
+    m_movable_points[a] = m_cloud.input_index[std::size_t(m_active_points[a])];
+  std::sort(m_movable_points.begin(), m_movable_points.end());
 
   m_group_rotations.resize(m_transforms.size());
   m_handle_rows.clear();
