@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages (scripts/setup.sh), configures the Release build in $BUILD_DIR (default: build)
 # and builds the given targets (all when none are given). The other scripts start with it. CGAL_EXT_UNIT_TESTS=OFF
-# in the environment leaves the unit tests out (scripts/run_tests.sh runs them in its sanitized pass).
+# in the environment leaves the unit tests out.
 # Usage: scripts/release_build.sh [TARGET...]
 set -euo pipefail
 cd "$(dirname "$0")/.."

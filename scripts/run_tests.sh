@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Sets everything up (Debian packages), builds, and runs every test: a Release build of the program, the
-# examples, the benchmarks and the tests that need it (examples, determinism reruns, the installed package, the
-# solver without CHOLMOD, real scans) with ctest, beside them the benchmark harness in its quick mode, that
+# examples, the benchmarks and every test (the unit tests of the library and the program, on the build users
+# install; examples, determinism reruns, the installed package, the solver without CHOLMOD, real scans, the Python
+# package) with ctest, beside them the benchmark harness in its quick mode, that
 # README's headline figures come from committed result files, that no internal header includes an algorithm
 # header (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into
 # the build folder), the unit tests of the library and the program built with AddressSanitizer and
-# UndefinedBehaviorSanitizer (each unit test runs once, there), and each fuzz target for 20 seconds. Ends with
+# UndefinedBehaviorSanitizer (the unit tests again), and each fuzz target for 20 seconds. Ends with
 # the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/design.md,
 # "Build time", gives the figures of a fresh clone with the compiler cache off on 2 cores.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
@@ -17,7 +18,6 @@ mkdir -p "$build"
 export STAGE_TIMES="$PWD/$build/stage_times.tsv"
 : >"$STAGE_TIMES"
 run_start=$(date +%s.%N)
-export CGAL_EXT_UNIT_TESTS=OFF # the unit tests run in the sanitized pass (scripts/release_build.sh)
 timed_stage setup bash scripts/setup.sh
 timed_stage "release build" bash scripts/release_build.sh
 export CGAL_EXT_BUILT="$build"
