@@ -239,9 +239,11 @@ std::ifstream open_input(const fs::path& path, std::ios::openmode mode)
 void write_file(const fs::path& path, const std::string& bytes)
 {
   std::ofstream out(path, std::ios::binary);
+  errno = 0;
   out.write(bytes.data(), std::streamsize(bytes.size()));
   out.close();
-  if(!out) throw Cli_error("cannot write " + path.string() + " (disk full or not writable?)");
+  if(!out)
+    throw Cli_error("cannot write " + path.string() + ": " + (errno != 0 ? std::strerror(errno) : "disk full or not writable?"));
 }
 
 Report::Report(std::string command)

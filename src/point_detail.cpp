@@ -13,6 +13,7 @@
 #include <tbb/global_control.h>
 #endif
 
+#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <new>
@@ -38,6 +39,9 @@ int main(int argc, char** argv)
 
   CLI11_PARSE(app, argc, argv);
   install_interrupt_handler();
+  // A write past the file-size limit (ulimit -f, the nearest thing to a full disk) then fails with EFBIG, which
+  // write_file reports, instead of the signal killing the program and leaving its temporary file behind.
+  std::signal(SIGXFSZ, SIG_IGN);
 #ifdef CGAL_LINKED_WITH_TBB
   std::unique_ptr<tbb::global_control> threads;
   if(common.threads > 0)

@@ -121,10 +121,10 @@ public:
 
   /// Runs the program; it must fail with one line or two that contain `needle`, touch no file of the folder
   /// and leave no new one.
-  void expect_failure(const std::string& arguments, const std::string& needle) const
+  void expect_failure(const std::string& arguments, const std::string& needle, const std::string& shell_prefix = "") const
   {
     const std::map<std::string, std::string> before = snapshot();
-    const Program_run r = run(arguments);
+    const Program_run r = run(arguments, shell_prefix);
     EXPECT_EQ(r.exit_code, 1) << arguments << "\n" << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << arguments << "\n" << r.output;
     EXPECT_LE(std::count(r.output.begin(), r.output.end(), '\n'), 2) << r.output;
@@ -568,6 +568,17 @@ const std::vector<Row>& catalogue()
     {"cli_output_directory_missing", [] {
        Workspace w;
        w.expect_failure("details -i " + w.sphere_ply() + " -o " + w.path("no/such/o.ply"), "does not exist");
+     }},
+    {"cli_output_over_the_file_size_limit", [] {
+       // Under ulimit -f (1 KiB blocks), the nearest thing to a full disk: each subcommand's output is larger than
+       // 4 KiB, and every one fails with one line naming the file, exit status 1 and no file, not even a temporary.
+       Workspace w;
+       const std::string in = w.sphere_ply(), out = " -o " + w.path("o.ply");
+       for(const std::string& command : {"details -i " + in + out, "curvature -i " + in + out, "scale -s 2 --roi box:-2,-2,0,2,2,2 -i " + in + out,
+                                         "enhance -s 2 -i " + in + out, "simplify --target 40 -i " + in + out,
+                                         "edit --edit " + w.write("e.json", edit_json_sphere) + " -i " + in + out,
+                                         "render -i " + in + " -o " + w.path("o.png")})
+         w.expect_failure(command, "File too large", "ulimit -f 4; ");
      }},
     {"cli_output_directory_unwritable", [] {
        // /proc takes no new files, not even from root (CI runs as root, for whom permission bits do not count).
