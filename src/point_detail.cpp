@@ -25,6 +25,7 @@ int main(int argc, char** argv)
   tune_process_environment(argv);
   CLI::App app{"point-detail: high-frequency geometric details of point-sampled surfaces (Miao et al. 2007)"};
   app.require_subcommand(1);
+  app.fallthrough(); // the global options are taken after the subcommand too, as people type them
   app.set_version_flag("--version", "point-detail (CGAL_ext); malloc: " + malloc_pages() + "; BLAS: " + blas_description(),
                        "the program and the environment it runs in (memory pages, BLAS kernels)");
   Common_options common;
