@@ -30,7 +30,6 @@
 #include <boost/range/counting_range.hpp>
 
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include <atomic>
 #include <cmath>
@@ -39,7 +38,6 @@
 #include <functional>
 #include <limits>
 #include <memory>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
