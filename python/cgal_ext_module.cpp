@@ -459,7 +459,8 @@ py::handle named_tuple(py::module_& m, const char* name, std::vector<std::string
   return type.release();
 }
 
-/// What the library threw as the ValueError / RuntimeError a Python user expects, with the library's message.
+/// `body()` with the program's Cli_error (a bad file, a bad view) raised as the ValueError a Python user expects,
+/// with the program's message.
 template <typename Body>
 auto translating_program_errors(Body&& body)
 {
