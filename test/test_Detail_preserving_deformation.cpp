@@ -234,10 +234,10 @@ TEST(DetailPreservingDeformation, ExactHandlesLeaveNoStepAtTheirBorder)
 {
   // Exact handle points follow their transform, the points next to them the blend of their sample points. As
   // rigid as possible, the sample points beside the handle turn on their own, and without the collar that
-  // carries each handle point's step into the region about it (build_handle_collar) the kNN edges across the
-  // handle's border stretched by 3.51 here against 1.93 elsewhere in the region: a step, which grows with the
-  // sampling density (the benchmark's armadillo split to 1.66M vertices: 8.6). Measured with it: 1.84 across
-  // the border, 2.10 elsewhere (propagated 1.11 and 1.65); the handle points stay exact.
+  // carries each handle point's step into the region about it (build_handle_collar, `handle_collar`) the kNN
+  // edges across the handle's border stretch more than anywhere else in the region: a step, which grows with the
+  // sampling density. With the collar the border is no worse than the rest, the region's worst edge is no worse
+  // than without it, and the handle points stay exact. (The stretches are printed; doc/editing.md quotes them.)
   namespace in = CGAL_ext::internal;
   const Tentacle t(60000);
   const std::size_t n = t.shape.points.size();
@@ -249,24 +249,34 @@ TEST(DetailPreservingDeformation, ExactHandlesLeaveNoStepAtTheirBorder)
   for(std::size_t i : t.tip) in_tip[i] = 1;
   for(std::size_t i : t.roi) in_roi[i] = 1;
   for(auto rotations : both_rotations) {
-    auto d = bend_tip_by_70_degrees(t, with_order(Detail_order::quadric, rotations));
-    d->diffuse();
-    const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
-    double border = 0, elsewhere = 0, error = 0;
-    for(std::size_t i : t.roi) {
-      if(in_tip[i]) error = std::max(error, (d->deformed_point(i) - (R * t.point(i) + shift)).norm());
-      for(const int* e = edges.begin(i); e != edges.end(i); ++e) {
-        const std::size_t j = std::size_t(*e);
-        if(!in_roi[j]) continue;
-        const double stretch = (d->deformed_point(i) - d->deformed_point(j)).norm() / (t.point(i) - t.point(j)).norm();
-        double& largest = in_tip[i] != in_tip[j] ? border : elsewhere;
-        largest = std::max(largest, stretch);
+    double border[2] = {0, 0}, elsewhere[2] = {0, 0}; // without, with the collar
+    for(bool collar : {false, true}) {
+      Settings settings = with_order(Detail_order::quadric, rotations);
+      settings.handle_collar = collar;
+      auto d = bend_tip_by_70_degrees(t, settings);
+      d->diffuse();
+      const auto [R, shift] = turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 70 * CGAL_PI / 180);
+      double error = 0;
+      for(std::size_t i : t.roi) {
+        if(in_tip[i]) error = std::max(error, (d->deformed_point(i) - (R * t.point(i) + shift)).norm());
+        for(const int* e = edges.begin(i); e != edges.end(i); ++e) {
+          const std::size_t j = std::size_t(*e);
+          if(!in_roi[j]) continue;
+          const double stretch = (d->deformed_point(i) - d->deformed_point(j)).norm() / (t.point(i) - t.point(j)).norm();
+          double& largest = in_tip[i] != in_tip[j] ? border[collar] : elsewhere[collar];
+          largest = std::max(largest, stretch);
+        }
       }
+      EXPECT_LT(error, 1e-9 * t.diagonal) << collar;
     }
-    const char* what = rotations == CGAL_ext::Detail_rotation::propagated ? "propagated" : "ARAP";
-    std::printf("%s: largest kNN edge stretch across the handle's border %.3f, elsewhere in the region %.3f\n", what, border, elsewhere);
-    EXPECT_LT(error, 1e-9 * t.diagonal) << what;
-    EXPECT_LE(border, elsewhere) << what;
+    const bool rigid = rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible;
+    std::printf("%s: largest kNN edge stretch across the handle's border / elsewhere in the region: without the collar "
+                "%.3f / %.3f, with it %.3f / %.3f\n", rigid ? "ARAP" : "propagated", border[0], elsewhere[0], border[1],
+                elsewhere[1]);
+    if(rigid) EXPECT_GT(border[0], elsewhere[0]) << "the step the collar is there to remove did not show";
+    EXPECT_LE(border[1], elsewhere[1]) << rigid;
+    EXPECT_LE(std::max(border[1], elsewhere[1]), std::max(border[0], elsewhere[0])) << rigid;
+    EXPECT_LE(elsewhere[1], 1.15 * elsewhere[0]) << rigid; // the collar's slope adds no step of its own
   }
 }
 

@@ -519,7 +519,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
   m_collar_weights.clear();
   m_handle_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
   m_handle_normal_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
-  if(m_handle_rows.empty()) return;
+  if(m_handle_rows.empty() || !m_settings.handle_collar) return;
   std::vector<double> reach(m_handle_rows.size());
   for(std::size_t h = 0; h < m_handle_rows.size(); ++h) {
     const std::size_t row = std::size_t(m_handle_rows[h]);

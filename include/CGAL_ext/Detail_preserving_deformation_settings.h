@@ -185,6 +185,10 @@ struct Detail_preserving_deformation_settings
   /// is finer. Smaller values restore coarser details and take more iterations (doc/editing.md, "Restoring
   /// the details").
   double detail_anchor = 1e-2;
+  /// With exact handles, whether each handle point's step from its blended position to its transform also moves
+  /// the region's points about the handle, fading out over twice the diffusion's reach (doc/editing.md, "Exact
+  /// handles without a seam"). Off, the kNN edges across a handle's border stretch in a step: off only to see it.
+  bool handle_collar = true;
 
   Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
 
