@@ -39,38 +39,39 @@ def program_timing(program, args, stage, reps, tmp):
     return median(times)
 
 
+def turn(step):
+    """The handle's rotation at a drag's step: about the vertical axis, one degree more each step."""
+    a = np.radians(1.0 + step)
+    return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+
+
 def drag_times(points, normals, drags, reps):
     """One drag as a Python user gets it (into reused arrays in the caller's order) and the library's own
     deform() + diffuse() for the same drags (statistics), medians over every repetition's drags."""
     wall, library = [], []
     up = points[:, 1]
-    top = np.quantile(up, 0.9)
+    region, top = up > np.quantile(up, 0.5), up > np.quantile(up, 0.9)
     for _ in range(reps):
         d = cgal_ext.Deformation(points, normals)
-        d.insert_roi(up > np.quantile(up, 0.5))  # the upper half deforms
-        g = d.create_handle_group(up > top)  # its top is dragged
+        d.insert_roi(region)  # the upper half deforms
+        g = d.create_handle_group(top)  # its top is dragged
         d.preprocess()
         P, N = np.empty_like(points), np.empty_like(normals)
-        pivot = points[up > top].mean(axis=0)
+        pivot = points[top].mean(axis=0)
         for step in range(drags + 1):
-            a = np.radians(1.0 + step)
-            R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
             start = time.perf_counter()
-            d.set_handle_transform(g, R, pivot=pivot)
+            d.set_handle_transform(g, turn(step), pivot=pivot)
             d.deform()
             d.diffuse(P, N)
             if step:  # the first writes every point; the drags after it only what the edit can move
                 wall.append(time.perf_counter() - start)
         for step in range(drags):
-            a = np.radians(1.0 + step)
-            R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
-            d.set_handle_transform(g, R, pivot=pivot)
+            d.set_handle_transform(g, turn(step), pivot=pivot)
             d.deform()
             d.diffuse()
             s = d.statistics()
             library.append(s["deform_seconds"] + s["diffuse_seconds"])
-        movable = int(np.sum(up > np.quantile(up, 0.5)))
-    return median(wall), median(library), movable
+    return median(wall), median(library), int(np.sum(region))
 
 
 def main():

@@ -670,22 +670,27 @@ Point_set_result read_points(const Path_like& path_object)
                                                                     normals, properties);
 }
 
+/// The points and normals as the program holds them (its writer and renderer take them so).
+point_detail::Point_cloud program_cloud(const Point_input& input)
+{
+  point_detail::Point_cloud cloud;
+  const Rows3 &p = input.point_rows, &v = input.normal_rows;
+  cloud.points.resize(input.size());
+  cloud.normals.resize(input.has_normals ? input.size() : 0);
+  for(std::size_t i = 0; i < input.size(); ++i) {
+    cloud.points[i] = point_detail::Point(p.at(i, 0), p.at(i, 1), p.at(i, 2));
+    if(input.has_normals) cloud.normals[i] = point_detail::Vector(v.at(i, 0), v.at(i, 1), v.at(i, 2));
+  }
+  return cloud;
+}
+
 void write_ply(const Path_like& path_object, const Array_like& points, const Optional_array_like& normals,
                const Optional_array_like& colors, const Optional_path& input_path, const py::kwargs& scalars)
 {
   const fs::path path = path_of(path_object, "path");
   const Point_input input(points, normals);
   const std::size_t n = input.size();
-  point_detail::Point_cloud cloud;
-  cloud.points.resize(n);
-  for(std::size_t i = 0; i < n; ++i)
-    cloud.points[i] = point_detail::Point(input.point_rows.at(i, 0), input.point_rows.at(i, 1), input.point_rows.at(i, 2));
-  if(input.has_normals) {
-    cloud.normals.resize(n);
-    for(std::size_t i = 0; i < n; ++i)
-      cloud.normals[i] =
-        point_detail::Vector(input.normal_rows.at(i, 0), input.normal_rows.at(i, 1), input.normal_rows.at(i, 2));
-  }
+  point_detail::Point_cloud cloud = program_cloud(input);
   if(!colors.is_none()) cloud.colors = colors_of(colors, n, "colors");
   for(const auto& [key, value] : scalars) {
     const std::string name = py::str(key);
@@ -697,7 +702,7 @@ void write_ply(const Path_like& path_object, const Array_like& points, const Opt
   std::vector<fs::path> inputs;
   if(!input_path.is_none()) inputs.push_back(path_of(input_path, "input_path"));
   translating_program_errors([&] {
-    without_gil([&] {
+    return without_gil([&] {
       // A temporary beside the destination, renamed once written whole: a failure leaves no partial file.
       point_detail::Output_files outputs(inputs);
       const fs::path temporary = outputs.add(path);
@@ -705,7 +710,6 @@ void write_ply(const Path_like& path_object, const Array_like& points, const Opt
       outputs.commit();
       return 0;
     });
-    return 0;
   });
 }
 
@@ -737,17 +741,10 @@ py::bytes render_png(const Array_like& points, const Optional_array_like& normal
   point_detail::Coloring coloring;
   if(!values.is_none()) coloring = point_detail::colors_for(values_of(values, n, "values"));
   if(!colors.is_none()) coloring.colors = colors_of(colors, n, "colors");
-  std::vector<point_detail::Point> cgal_points(n);
-  std::vector<point_detail::Vector> cgal_normals(input.has_normals ? n : 0);
-  for(std::size_t i = 0; i < n; ++i) {
-    const Rows3& p = input.point_rows;
-    cgal_points[i] = point_detail::Point(p.at(i, 0), p.at(i, 1), p.at(i, 2));
-    if(input.has_normals)
-      cgal_normals[i] = point_detail::Vector(input.normal_rows.at(i, 0), input.normal_rows.at(i, 1), input.normal_rows.at(i, 2));
-  }
   if(n == 0) throw py::value_error("points is empty: nothing to draw");
+  const point_detail::Point_cloud cloud = program_cloud(input);
   const std::string png = translating_program_errors(
-    [&] { return without_gil([&] { return point_detail::render_png(cgal_points, cgal_normals, coloring, settings); }); });
+    [&] { return without_gil([&] { return point_detail::render_png(cloud.points, cloud.normals, coloring, settings); }); });
   return py::bytes(png);
 }
 

@@ -12,11 +12,10 @@ struct Program_run
   std::string output; ///< stdout and stderr
 };
 
-/// Runs `point-detail --quiet <arguments>` through the shell and collects what it prints. `shell_prefix`
-/// runs first in the same shell (for instance `ulimit -v N;`).
-inline Program_run run(const std::string& arguments, const std::string& shell_prefix = "")
+/// Runs a shell command and collects what it prints on stdout and stderr.
+inline Program_run run_command(const std::string& command_line)
 {
-  const std::string command = shell_prefix + std::string(POINT_DETAIL_EXE) + " --quiet " + arguments + " 2>&1";
+  const std::string command = command_line + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   Program_run r{-1, {}};
   if(pipe == nullptr) return r;
@@ -25,6 +24,13 @@ inline Program_run run(const std::string& arguments, const std::string& shell_pr
   const int status = pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+/// Runs `point-detail --quiet <arguments>` through the shell and collects what it prints. `shell_prefix`
+/// runs first in the same shell (for instance `ulimit -v N;`).
+inline Program_run run(const std::string& arguments, const std::string& shell_prefix = "")
+{
+  return run_command(shell_prefix + std::string(POINT_DETAIL_EXE) + " --quiet " + arguments);
 }
 
 #endif

@@ -161,24 +161,15 @@ TEST_F(Cli, GlobalOptionsMayFollowTheSubcommand)
 {
   // `point-detail details -i a.ply -o b.ply -q --threads 1`: the same file as with the options first, quietly.
   const std::string in = write_sphere_ply("in.ply", 600);
-  const auto capture = [](const std::string& command) {
-    Program_run r{-1, {}};
-    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-    char buffer[4096];
-    while(std::size_t got = std::fread(buffer, 1, sizeof buffer, pipe)) r.output.append(buffer, got);
-    const int status = pclose(pipe);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-  };
   const std::string program = POINT_DETAIL_EXE;
-  const Program_run after = capture(program + " details -i " + in + " -o " + path("after.ply") + " -q --threads 1");
+  const Program_run after = run_command(program + " details -i " + in + " -o " + path("after.ply") + " -q --threads 1");
   ASSERT_EQ(after.exit_code, 0) << after.output;
   EXPECT_EQ(after.output, "");
-  const Program_run before = capture(program + " --threads 1 details -i " + in + " -o " + path("before.ply"));
+  const Program_run before = run_command(program + " --threads 1 details -i " + in + " -o " + path("before.ply"));
   ASSERT_EQ(before.exit_code, 0) << before.output;
   EXPECT_NE(before.output, ""); // its progress, without -q
   EXPECT_EQ(contents(path("after.ply")), contents(path("before.ply")));
-  const Program_run unknown = capture(program + " details -i " + in + " -o " + path("x.ply") + " --treads 1");
+  const Program_run unknown = run_command(program + " details -i " + in + " -o " + path("x.ply") + " --treads 1");
   EXPECT_EQ(unknown.exit_code, 109) << unknown.output; // a misspelt option is still refused
   EXPECT_NE(unknown.output.find("--treads"), std::string::npos) << unknown.output;
 }
