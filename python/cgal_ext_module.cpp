@@ -12,6 +12,7 @@
 #include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
+#include <CGAL_ext/estimate_oriented_normals.h>
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
@@ -30,6 +31,7 @@
 #include <boost/range/counting_range.hpp>
 
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <atomic>
 #include <cmath>
@@ -557,6 +559,22 @@ Ndarray bound_estimate_mean_curvature(const Array_like& points, const Optional_a
   return curvature;
 }
 
+Ndarray bound_estimate_oriented_normals(const Array_like& points, long long k, const Optional_progress& progress)
+{
+  const Point_input input(points, py::none());
+  const std::size_t n = input.size();
+  auto [normals, normal_rows] = new_rows3(n);
+  Python_progress reporter(progress);
+  const bool done = with_maps(input, [&, normal_rows = normal_rows](const auto& np) {
+    return without_gil([&] {
+      return CGAL_ext::estimate_oriented_normals(all_points(n), as_count(k, "k"),
+                                                 np.normal_map(Rows3_map<Vector>{normal_rows}).callback(reporter.callback()));
+    });
+  });
+  reporter.raise_if_cancelled(done);
+  return normals;
+}
+
 Ndarray bound_compute_simplification_sample_points(const Array_like& points, const Optional_array_like& normals,
                                              long long target_count, const Optional_int& max_cluster_size,
                                              double mode_threshold, long long k, const Optional_progress& progress)
@@ -713,11 +731,11 @@ void write_ply(const Path_like& path_object, const Array_like& points, const Opt
   });
 }
 
-Ndarray diverging_colors(const Array_like& values)
+Ndarray colors_by(point_detail::Coloring (*color_map)(const std::vector<double>&), const Array_like& values)
 {
   const py::array array = as_array(values, "values", "a 1-D array of numbers");
   const std::vector<double> v = values_of(array, std::size_t(array.ndim() == 1 ? array.size() : 0), "values");
-  const point_detail::Coloring coloring = point_detail::diverging_colors(v);
+  const point_detail::Coloring coloring = color_map(v);
   py::array_t<std::uint8_t> colors({py::ssize_t(v.size()), py::ssize_t(3)});
   std::memcpy(colors.mutable_data(), coloring.colors.data(), v.size() * 3);
   return colors;
@@ -819,6 +837,11 @@ public:
     return with_progress(progress, [&] { return m_deformation->preprocess(); });
   }
 
+  bool analyse_points(const Optional_progress& progress)
+  {
+    return with_progress(progress, [&] { return m_deformation->analyse_points(); });
+  }
+
   void set_handle_transform(long long group, const Optional_array_like& rotation, const Optional_array_like& translation,
                             const Optional_array_like& transform, const Optional_array_like& pivot)
   {
@@ -877,6 +900,90 @@ public:
     py::array_t<std::int64_t> labels(static_cast<py::ssize_t>(rows.size()));
     for(std::size_t m = 0; m < rows.size(); ++m) labels.mutable_data()[m] = std::int64_t(m_deformation->sample_point_of(rows[m]));
     return labels;
+  }
+
+  /// What a renderer that moves the points itself needs once per preprocessing (Detail_preserving_deformation,
+  /// "Moving the points elsewhere"), in input order.
+  py::dict renderer_setup() const
+  {
+    if(!m_deformation->is_preprocessed()) throw py::value_error("renderer_setup() needs preprocess() first");
+    const Detail_preserving_deformation<>& d = *m_deformation;
+    const std::size_t n = size(), m = d.stencil_size();
+    if(m > 64) throw py::value_error("renderer_setup() takes at most 64 diffusion_samples, not " + std::to_string(m));
+    py::array_t<std::int32_t> samples({py::ssize_t(n), py::ssize_t(m)});
+    py::array_t<float> weights({py::ssize_t(n), py::ssize_t(m)});
+    py::array_t<std::int8_t> exact_handle{py::ssize_t(n)};
+    std::vector<std::int32_t> collar_points, collar_slots;
+    std::vector<float> collar_weights;
+    without_gil([&, samples_out = samples.mutable_data(), weights_out = weights.mutable_data(),
+                 handle_out = exact_handle.mutable_data()] {
+      tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+        int stencil_samples[64];
+        double stencil_weights[64];
+        d.stencil(i, stencil_samples, stencil_weights);
+        for(std::size_t e = 0; e < m; ++e) {
+          samples_out[i * m + e] = stencil_samples[e];
+          weights_out[i * m + e] = float(stencil_weights[e]);
+        }
+        handle_out[i] = d.is_exact_handle_point(i) ? std::int8_t(1) : std::int8_t(0);
+      });
+      // Two entries per collar point (more only where three groups' collars overlap: the rest are dropped).
+      d.for_each_collar_point([&](std::size_t i, const int* slots, const double* w, std::size_t count) {
+        collar_points.push_back(std::int32_t(i));
+        for(std::size_t e = 0; e < 2; ++e) {
+          collar_slots.push_back(e < count ? slots[e] : -1);
+          collar_weights.push_back(e < count ? float(w[e]) : 0.0f);
+        }
+      });
+      return 0;
+    });
+    const py::ssize_t c = py::ssize_t(collar_points.size());
+    py::array_t<std::int32_t> slots({c, py::ssize_t(2)});
+    py::array_t<float> slot_weights({c, py::ssize_t(2)});
+    std::copy(collar_slots.begin(), collar_slots.end(), slots.mutable_data());
+    std::copy(collar_weights.begin(), collar_weights.end(), slot_weights.mutable_data());
+    return py::dict("stencil_samples"_a = samples, "stencil_weights"_a = weights, "exact_handle"_a = exact_handle,
+                    "collar_points"_a = py::array_t<std::int32_t>(c, collar_points.data()),
+                    "collar_handles"_a = py::array_t<std::int32_t>(py::ssize_t(d.collar_handle_points().size()),
+                                                                  d.collar_handle_points().data()),
+                    "collar_slots"_a = slots, "collar_weights"_a = slot_weights,
+                    "sample_points"_a = d.number_of_sample_points());
+  }
+
+  /// Per drag, after deform(): the sample points' motions (3x4 each, row-major), the handle groups' transforms
+  /// (3x4 each) and the collar handle points' steps (position, then normal), as one float32 array.
+  py::array_t<float> renderer_frame()
+  {
+    Detail_preserving_deformation<>& d = *m_deformation;
+    if(!d.is_preprocessed()) throw py::value_error("renderer_frame() needs deform() first");
+    const std::size_t samples = d.number_of_sample_points(), groups = d.number_of_handle_groups(),
+                      collar = d.collar_handle_points().size();
+    py::array_t<float> frame(py::ssize_t(12 * (samples + groups) + 6 * collar));
+    without_gil([&, out = frame.mutable_data()] {
+      d.update_sample_motions();
+      for(std::size_t s = 0; s < samples; ++s) {
+        const Eigen::Matrix4d& record = d.sample_motion(s);
+        for(int r = 0; r < 3; ++r)
+          for(int c = 0; c < 4; ++c) out[12 * s + 4 * r + c] = float(record(r, c));
+      }
+      float* group_out = out + 12 * samples;
+      for(std::size_t g = 0; g < groups; ++g) {
+        const Eigen::Vector3d t = d.handle_target(g, Eigen::Vector3d::Zero());
+        for(int c = 0; c < 3; ++c) {
+          const Eigen::Vector3d column = d.handle_target(g, Eigen::Vector3d::Unit(c)) - t;
+          for(int r = 0; r < 3; ++r) group_out[12 * g + 4 * r + c] = float(column(r));
+        }
+        for(int r = 0; r < 3; ++r) group_out[12 * g + 4 * r + 3] = float(t(r));
+      }
+      float* collar_out = group_out + 12 * groups;
+      for(std::size_t c = 0; c < collar; ++c) {
+        Eigen::Vector3d step, normal_step;
+        d.collar_handle_step(c, step, normal_step);
+        for(int r = 0; r < 3; ++r) collar_out[6 * c + r] = float(step(r)), collar_out[6 * c + 3 + r] = float(normal_step(r));
+      }
+      return 0;
+    });
+    return frame;
   }
 
   py::dict statistics() const
@@ -1183,7 +1290,22 @@ PYBIND11_MODULE(_core, m)
              "**scalars : (n,) array_like\n    Per-point values, written as double properties in the order given."},
             "", true)
           .c_str());
-  m.def("diverging_colors", &diverging_colors, "values"_a,
+  m.def("estimate_oriented_normals", &bound_estimate_oriented_normals, "points"_a, py::kw_only(),
+        "k"_a = default_normal_neighbors, "progress"_a = py::none(),
+        doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
+            "estimates them for an input without normals).",
+            {points_doc, "k : int\n    Neighbours of each point's fit, the point itself counted; at most the number of points.",
+             progress_doc},
+            "numpy.ndarray\n    (n, 3) float64 normals.")
+          .c_str());
+  m.def("sequential_colors", [](const Array_like& values) { return colors_by(point_detail::sequential_colors, values); },
+        "values"_a,
+        doc("The program's sequential colour map (the edit's distance moved), from the 2nd to the 98th "
+            "percentile of the values.",
+            {"values : (n,) array_like\n    The values, e.g. each point's displacement."},
+            "numpy.ndarray\n    (n, 3) uint8 colours.")
+          .c_str());
+  m.def("diverging_colors", [](const Array_like& values) { return colors_by(point_detail::diverging_colors, values); }, "values"_a,
         doc("The program's blue-white-red colour map of signed values, symmetric about zero and saturating at the "
             "98th percentile of the non-zero magnitudes (doc/geometric_details.md, \"Colour maps\").",
             {"values : (n,) array_like\n    The values, e.g. the details' magnitude."},
@@ -1320,6 +1442,12 @@ PYBIND11_MODULE(_core, m)
              "diffusion stencils, and factors the least squares; deform() calls it when the selection changed.",
              {progress_doc}, "bool\n    True (a cancelled call raises instead).", true)
            .c_str())
+    .def("analyse_points", &Deformation::analyse_points, py::kw_only(), "progress"_a = py::none(),
+         doc("Computes now what preprocess() needs whatever the selection (the points' mean-shift modes, the "
+             "clustering's most costly part), so that it can run while a user selects; preprocess() computes it "
+             "when it has not been. Safe to call in another thread while the selection is changed.",
+             {progress_doc}, "bool\n    True (a cancelled run raises).")
+           .c_str())
     .def("set_handle_transform", &Deformation::set_handle_transform, "group"_a, "rotation"_a = py::none(),
          "translation"_a = py::none(), py::kw_only(), "transform"_a = py::none(), "pivot"_a = py::none(),
          doc("Sets the rigid motion of a handle group: p -> R (p - c) + c + t (c = pivot, 0 when not given), or the "
@@ -1362,6 +1490,15 @@ PYBIND11_MODULE(_core, m)
     .def("number_of_sample_points", &Deformation::number_of_sample_points,
          "The number of sample points (0 before preprocess()).")
     .def("is_preprocessed", &Deformation::is_preprocessed, "Whether preprocess() ran since the selection last changed.")
+    .def("renderer_setup", &Deformation::renderer_setup,
+         "What a renderer that moves the points itself (a GPU) needs once per preprocessing, in input order: each\n"
+         "point's stencil (``stencil_samples`` (n, m) int32 and ``stencil_weights`` (n, m) float32), ``exact_handle``\n"
+         "(n,) int8, and the collar: ``collar_points`` (c,), their ``collar_slots`` and ``collar_weights`` (c, 2)\n"
+         "(slot -1: none) into ``collar_handles``, the handle points whose steps the collar spreads.")
+    .def("renderer_frame", &Deformation::renderer_frame,
+         "Per drag, after deform(): one float32 array of each sample point's motion (3x4, row-major: a point p it\n"
+         "carries alone moves by M (p, 1)), each handle group's transform (3x4) and each collar handle point's\n"
+         "step (position, then normal; 6 numbers). O(sample points): what a renderer's shader blends per point.")
     .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)

@@ -13,6 +13,7 @@ packages=(
   doxygen python3 python3-matplotlib
   pybind11-dev python3-dev python3-numpy python3-pytest
   python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
+  python3-aiohttp libjs-three chromium chromium-driver python3-selenium
 )
 
 missing=()

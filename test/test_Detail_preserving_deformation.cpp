@@ -280,6 +280,57 @@ TEST(DetailPreservingDeformation, ExactHandlesLeaveNoStepAtTheirBorder)
   }
 }
 
+TEST(DetailPreservingDeformation, ARendererRepeatsTheDiffusionFromTheSamplePointsMotions)
+{
+  // What a renderer that moves the points itself gets (the studio's shader): per point its stencil, the exact
+  // handles and the collar, fixed at preprocessing; per drag only the sample points' motions and the collar's
+  // handle steps. From these alone, in double precision, every point lands where diffuse() puts it, as rigid as
+  // possible too (whose sample points turn on their own and give the collar steps to take).
+  const Tentacle t(20000);
+  for(auto rotations : both_rotations) {
+    auto d = bend_tip_by_70_degrees(t, with_order(Detail_order::quadric, rotations));
+    d->update_sample_motions();
+    const std::size_t m = d->stencil_size(), n = t.shape.points.size();
+    ASSERT_EQ(m, std::size_t(d->settings().diffusion_samples));
+    std::vector<Eigen::Vector3d> moved(n), normals(n);
+    std::vector<int> samples(m);
+    std::vector<double> weights(m);
+    for(std::size_t i = 0; i < n; ++i) {
+      d->stencil(i, samples.data(), weights.data());
+      Eigen::Matrix4d blend = Eigen::Matrix4d::Zero();
+      for(std::size_t e = 0; e < m; ++e) blend += weights[e] * d->sample_motion(std::size_t(samples[e]));
+      EXPECT_NEAR(blend(3, 3), 1.0, 1e-12); // the weights sum to 1
+      const Eigen::Matrix3d map = Eigen::Matrix3d::Identity() + blend.topLeftCorner<3, 3>();
+      moved[i] = t.point(i) + blend.topLeftCorner<3, 3>() * t.point(i) + blend.topRightCorner<3, 1>();
+      normals[i] = (map.determinant() * map.inverse().transpose() * t.normal(i)).normalized();
+      if(d->is_exact_handle_point(i)) {
+        moved[i] = d->handle_target(0, t.point(i));
+        normals[i] = d->handle_target(0, t.normal(i)) - d->handle_target(0, Eigen::Vector3d::Zero());
+      }
+    }
+    std::vector<Eigen::Vector3d> steps(d->collar_handle_points().size()), normal_steps(steps.size());
+    for(std::size_t c = 0; c < steps.size(); ++c) d->collar_handle_step(c, steps[c], normal_steps[c]);
+    std::size_t collar = 0;
+    d->for_each_collar_point([&](std::size_t i, const int* handles, const double* w, std::size_t count) {
+      Eigen::Vector3d step = Eigen::Vector3d::Zero(), normal_step = Eigen::Vector3d::Zero();
+      for(std::size_t e = 0; e < count; ++e) step += w[e] * steps[std::size_t(handles[e])], normal_step += w[e] * normal_steps[std::size_t(handles[e])];
+      moved[i] += step;
+      normals[i] = (normals[i] + normal_step).normalized();
+      collar += step.norm() > 1e-6 * t.diagonal;
+    });
+    d->diffuse();
+    double error = 0, normal_error = 0;
+    for(std::size_t i = 0; i < n; ++i) {
+      error = std::max(error, (moved[i] - d->deformed_point(i)).norm());
+      normal_error = std::max(normal_error, (normals[i] - d->deformed_normal(i)).norm());
+    }
+    EXPECT_LT(error, 1e-12 * t.diagonal) << int(rotations);
+    EXPECT_LT(normal_error, 1e-12) << int(rotations);
+    if(rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible)
+      EXPECT_GT(collar, 0u) << "no collar point took a step: the test checks less than it says";
+  }
+}
+
 TEST(DetailPreservingDeformation, FixedPartStaysAndSoftHandlesComeCloserWithTheirWeight)
 {
   const Tentacle t(3000);

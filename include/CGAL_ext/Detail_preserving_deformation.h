@@ -191,6 +191,14 @@ public:
   */
   bool preprocess();
 
+  /*!
+    Computes now the part of `preprocess()` that does not depend on the selection, the points' mean-shift modes
+    (the clustering's most costly part; nothing when the clustering does not use them), so that a program can
+    compute it while its user selects. `preprocess()` computes it when it has not been.
+    \return false if the callback cancelled.
+  */
+  bool analyse_points();
+
   /// The rigid transform `p -> R p + t` (world frame, the convention of the Botsch-Sorkine `.def` files) of a
   /// handle group. `R` must be a rotation (orthonormal within 1e-6, determinant +1).
   void set_handle_transform(std::size_t group, const Eigen::Matrix3d& R, const Eigen::Vector3d& t)
@@ -318,6 +326,63 @@ public:
     });
   }
 
+  /// \name Moving the points elsewhere
+  /// A renderer that moves the points itself (a GPU's vertex shader, as the studio's) repeats `diffuse()` from
+  /// data fixed at preprocessing, each point's stencil and the collar, and per drag data proportional to the
+  /// sample points only: their motions and the collar's handle steps. With `Diffusion_origin::own_sample`, point
+  /// `p` (input index `i`) moves to `p + sum_e w_e M_{s_e} (p, 1)` over its stencil (`stencil(i, ...)`), `M_s` the
+  /// top three rows of `sample_motion(s)`; an exact handle point of group g to its transform; a collar point further
+  /// by `sum_e w_e step_e` over its entries (`for_each_collar_point()`, `collar_handle_step()`).
+  /// @{
+
+  /// The first half of `diffuse()`: each sample point's motion for the last `deform()`; moves no point.
+  /// O(sample points).
+  void update_sample_motions();
+
+  /// Sample point `s`'s motion record from `update_sample_motions()` (or `diffuse()`): `[A_s - I, c_s; 0, 1]`,
+  /// so that a point it carries alone moves by `(A_s - I) p + c_s`.
+  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_stencil.motion_record(s); }
+
+  /// The number of sample points that carry each point (the same for every point, after `preprocess()`).
+  std::size_t stencil_size() const { return m_stencil.samples.size() ? std::size_t(m_stencil.samples.degree(0)) : 0; }
+
+  /// Writes point `i`'s stencil: `stencil_size()` sample points and their weights (which sum to 1).
+  void stencil(std::size_t i, int* sample_points, double* weights) const
+  {
+    const std::size_t row = checked_row(i);
+    for(int e = m_stencil.samples.offsets[row], k = 0; e < m_stencil.samples.offsets[row + 1]; ++e, ++k) {
+      sample_points[k] = m_stencil.samples.indices[std::size_t(e)];
+      weights[k] = m_stencil.weights[std::size_t(e)];
+    }
+  }
+
+  /// Whether point `i` follows its handle group's transform exactly (exact handles, `handle_weight` infinite).
+  bool is_exact_handle_point(std::size_t i) const
+  {
+    return std::isinf(m_settings.handle_weight) && m_label[checked_row(i)] >= first_handle_label;
+  }
+
+  /// The handle points whose steps the collar spreads (input indices); `collar_handle_step(c)` is the step of the
+  /// c-th.
+  const std::vector<int>& collar_handle_points() const { return m_collar_handle_points; }
+
+  /// Calls `visit(i, handles, weights, count)` for each point `i` of the collar: it moves by the weighted sum of
+  /// the steps of `count` collar handle points (indices into `collar_handle_points()`).
+  template <typename Visitor>
+  void for_each_collar_point(const Visitor& visit) const
+  {
+    for(std::size_t c = 0; c < m_collar_rows.size(); ++c) {
+      const int first = m_collar.offsets[c];
+      visit(std::size_t(m_cloud.input_index[std::size_t(m_collar_rows[c])]), m_collar_slots.data() + first,
+            m_collar_weights.data() + first, std::size_t(m_collar.offsets[c + 1] - first));
+    }
+  }
+
+  /// The step of collar handle point `c` for the motions of `update_sample_motions()`: its transform's position
+  /// less its blended one, and the same for its normal.
+  void collar_handle_step(std::size_t c, Eigen::Vector3d& step, Eigen::Vector3d& normal_step) const;
+  /// @}
+
   /// The sample point of input point `i` (after `preprocess()`).
   std::size_t sample_point_of(std::size_t i) const { return std::size_t(m_sample_of.at(std::size_t(m_row_of.at(i)))); }
   Eigen::Vector3d sample_position(std::size_t s) const { return m_samples.row(Eigen::Index(s)).transpose(); }
@@ -374,6 +439,11 @@ private:
   void cluster(internal::Progress& progress);
   void build_strength_field();
   void build_handle_collar();
+  internal::Offset_origin offset_origin() const
+  {
+    return m_settings.diffusion_origin == Diffusion_origin::nearest_sample ? internal::Offset_origin::nearest_sample
+                                                                           : internal::Offset_origin::own_sample;
+  }
 
   Settings m_settings;
   std::function<bool(double)> m_callback;
@@ -411,6 +481,9 @@ private:
   std::vector<int> m_collar_rows;
   internal::Neighbor_graph m_collar;
   std::vector<double> m_collar_weights;
+  std::vector<int> m_collar_handles;       // the distinct handles of m_collar (indices into m_handle_rows)
+  std::vector<int> m_collar_handle_points; // their input indices
+  std::vector<int> m_collar_slots;         // per entry of m_collar, its handle's place in m_collar_handles
   Matrix_n3 m_handle_steps, m_handle_normal_steps; // per handle row, its transform's position less the blend's
   internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
   bool m_has_relaxation = false;
@@ -475,6 +548,20 @@ void Detail_preserving_deformation<ConcurrencyTag>::cluster(internal::Progress& 
 }
 
 template <typename ConcurrencyTag>
+bool Detail_preserving_deformation<ConcurrencyTag>::analyse_points()
+{
+  using namespace internal;
+  bool needs_modes = false;
+  split_rule_for(m_settings.simplification, m_cloud.size(), needs_modes);
+  if(!needs_modes || m_has_mean_shift) return true;
+  Progress progress(m_callback);
+  const std::size_t k = std::min<std::size_t>(m_settings.simplification.mean_shift_neighbors, m_cloud.size() - 1);
+  m_has_mean_shift = analyse_mean_shift<ConcurrencyTag>(m_cloud, m_normals, k, m_settings.simplification.mean_shift,
+                                                        progress, m_mean_shift);
+  return m_has_mean_shift;
+}
+
+template <typename ConcurrencyTag>
 void Detail_preserving_deformation<ConcurrencyTag>::build_strength_field()
 {
   using namespace internal;
@@ -517,6 +604,9 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
   m_collar_rows.clear();
   m_collar = internal::Neighbor_graph();
   m_collar_weights.clear();
+  m_collar_handles.clear();
+  m_collar_handle_points.clear();
+  m_collar_slots.clear();
   m_handle_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
   m_handle_normal_steps.resize(Eigen::Index(m_handle_rows.size()), 3);
   if(m_handle_rows.empty() || !m_settings.handle_collar) return;
@@ -568,6 +658,16 @@ void Detail_preserving_deformation<ConcurrencyTag>::build_handle_collar()
     m_collar.offsets.push_back(int(last));
     m_collar_rows.push_back(entries[first].row);
   }
+  m_collar_handles = m_collar.indices;
+  std::sort(m_collar_handles.begin(), m_collar_handles.end());
+  m_collar_handles.erase(std::unique(m_collar_handles.begin(), m_collar_handles.end()), m_collar_handles.end());
+  m_collar_handle_points.resize(m_collar_handles.size());
+  for(std::size_t c = 0; c < m_collar_handles.size(); ++c)
+    m_collar_handle_points[c] = m_cloud.input_index[std::size_t(m_handle_rows[std::size_t(m_collar_handles[c])])];
+  m_collar_slots.resize(m_collar.indices.size());
+  for(std::size_t e = 0; e < m_collar.indices.size(); ++e)
+    m_collar_slots[e] = int(std::lower_bound(m_collar_handles.begin(), m_collar_handles.end(), m_collar.indices[e]) -
+                            m_collar_handles.begin());
 }
 
 template <typename ConcurrencyTag>
@@ -760,12 +860,11 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
 }
 
 template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
+void Detail_preserving_deformation<ConcurrencyTag>::update_sample_motions()
 {
   using namespace internal;
   if(!m_preprocessed)
-    throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
-  const auto start = std::chrono::steady_clock::now();
+    throw Invalid_input(std::string(who) + ": the sample points' motions need preprocess() or deform() first");
   // Each region sample point carries its points by the best linear map or rotation of its neighbourhood, or
   // turns by its deformed frame against its original one (settings.diffusion_turn). A sample point whose
   // neighbourhood did not move (and, with frames, that was not turned) keeps the identity exactly, so unchanged
@@ -799,12 +898,34 @@ void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
     const Eigen::Vector3d hint = m_propagated[s] * m_sample_normals.row(Eigen::Index(s)).transpose();
     m_sample_map[s] = m_frame_builder.frame(m_deformed_samples, s, hint) * m_frames[s].transpose();
   });
-  m_stencil.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_samples, m_deformed_samples,
-                                           m_sample_map,
-                                           m_settings.diffusion_origin == Diffusion_origin::nearest_sample
-                                             ? Offset_origin::nearest_sample
-                                             : Offset_origin::own_sample,
-                                           m_deformed_points, m_deformed_normals, &m_active_points);
+  m_stencil.template set_motions<ConcurrencyTag>(m_samples, m_deformed_samples, m_sample_map);
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::collar_handle_step(std::size_t c, Eigen::Vector3d& step,
+                                                                       Eigen::Vector3d& normal_step) const
+{
+  const Eigen::Index row = m_handle_rows[std::size_t(m_collar_handles.at(c))];
+  const std::size_t g = std::size_t(m_label[std::size_t(row)] - first_handle_label);
+  const Eigen::Matrix3d R = m_transforms[g].rotation.toRotationMatrix();
+  Eigen::Vector3d blended, blended_normal;
+  m_stencil.move_point(std::size_t(row), m_cloud.positions, m_normals, m_samples, m_deformed_samples, offset_origin(),
+                       blended, blended_normal);
+  step = R * m_cloud.positions.row(row).transpose() + m_transforms[g].translation - blended;
+  normal_step = R * m_normals.row(row).transpose() - blended_normal;
+}
+
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
+{
+  using namespace internal;
+  if(!m_preprocessed)
+    throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
+  const auto start = std::chrono::steady_clock::now();
+  update_sample_motions();
+  m_stencil.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_samples, m_deformed_samples, m_sample_map,
+                                           offset_origin(), m_deformed_points, m_deformed_normals, &m_active_points);
+  const std::vector<Eigen::Matrix3d>& rotation = m_group_rotations;
   // Exact handles: the handle points themselves follow their transform, not the blend of their neighbourhood,
   // and the points of the collar about them blend into it (build_handle_collar()).
   for_range<ConcurrencyTag>(0, m_handle_rows.size(), [&](std::size_t h) {

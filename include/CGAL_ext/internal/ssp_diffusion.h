@@ -141,6 +141,28 @@ public:
              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& map,
              Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr);
 
+  /// The first half of apply(): each sample point's motion record, from its map and its move. O(sample points).
+  template <typename ConcurrencyTag>
+  void set_motions(const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                   const std::vector<Eigen::Matrix3d>& map);
+
+  /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `(A_j - I) p + c_j`
+  /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
+  /// stencil's records applied to `(p, 1)`.
+  const Eigen::Matrix4d& motion_record(std::size_t j) const { return m_records[j]; }
+
+  /// apply() for the one point `i` with the current records: its moved position and normal.
+  void move_point(std::size_t i, const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
+                  const Matrix_n3& deformed_sample_positions, Offset_origin origin, Eigen::Vector3d& moved_point,
+                  Eigen::Vector3d& moved_normal) const
+  {
+    Eigen::Matrix3d turn;
+    Eigen::Vector3d displacement;
+    blend(i, points, sample_positions, deformed_sample_positions, origin, turn, displacement);
+    moved_point = points.row(Eigen::Index(i)).transpose() + displacement;
+    moved_normal = cofactor_times(Eigen::Matrix3d::Identity() + turn, normals.row(Eigen::Index(i)).transpose()).normalized();
+  }
+
   /// Whether apply() may use the processor's 4-wide vectors with fused multiply-add (AVX2 and FMA, when the
   /// compiler can target them and the processor has them): a third faster; off, it computes the same up to
   /// rounding (the tests compare the two).
@@ -154,6 +176,32 @@ private:
   // c = (s' - s) - (A - I) s (column-major, 128 bytes). Blending the records of a point's stencil by weight
   // blends the maps, the constants and, in the corner, the weights' sum.
   std::vector<Eigen::Matrix4d> m_records;
+
+  // Point i's blended turn `sum_j w_j (A_j - I)` and displacement.
+  void blend(std::size_t i, const Matrix_n3& points, const Matrix_n3& sample_positions,
+             const Matrix_n3& deformed_sample_positions, Offset_origin origin, Eigen::Matrix3d& turn,
+             Eigen::Vector3d& displacement) const
+  {
+    Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
+    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e)
+      blended.noalias() += weights[std::size_t(e)] * m_records[std::size_t(samples.indices[std::size_t(e)])];
+    turn = blended.topLeftCorner<3, 3>();
+    const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
+    if(origin == Offset_origin::nearest_sample) {
+      // The paper's: every frame decodes p - s_0 from s'_0.
+      const Eigen::Index o = *samples.begin(i);
+      displacement = blended(3, 3) * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
+                     turn * (p - sample_positions.row(o).transpose());
+    } else {
+      displacement = blended.topRightCorner<3, 1>() + turn * p;
+    }
+  }
+
+  // The cofactor matrix of `M` (`det(M) M^-T`) times `n`, column by column: the cross products of the others.
+  static Eigen::Vector3d cofactor_times(const Eigen::Matrix3d& M, const Eigen::Vector3d& n)
+  {
+    return n.x() * M.col(1).cross(M.col(2)) + n.y() * M.col(2).cross(M.col(0)) + n.z() * M.col(0).cross(M.col(1));
+  }
 
   void apply_block(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Offset_origin origin,
@@ -205,16 +253,7 @@ void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals,
                               Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
                               const std::vector<int>* active)
 {
-  const std::size_t count = map.size();
-  m_records.resize(count);
-  for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
-    const Eigen::Matrix3d turn = map[j] - Eigen::Matrix3d::Identity();
-    const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
-    Eigen::Matrix4d& record = m_records[j];
-    record.topLeftCorner<3, 3>() = turn;
-    record.topRightCorner<3, 1>() = (deformed_sample_positions.row(Eigen::Index(j)).transpose() - s) - turn * s;
-    record.row(3) << 0, 0, 0, 1;
-  });
+  set_motions<ConcurrencyTag>(sample_positions, deformed_sample_positions, map);
   // Blocks of points: first every point's position and unnormalised normal, then the block's normalisations,
   // which are independent of each other and so overlap (one point's square root and division after another
   // left the processor waiting for each in turn: a third of the time).
@@ -235,6 +274,22 @@ void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals,
   });
 }
 
+template <typename ConcurrencyTag>
+void Diffusion_stencil::set_motions(const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                                    const std::vector<Eigen::Matrix3d>& map)
+{
+  const std::size_t count = map.size();
+  m_records.resize(count);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
+    const Eigen::Matrix3d turn = map[j] - Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
+    Eigen::Matrix4d& record = m_records[j];
+    record.topLeftCorner<3, 3>() = turn;
+    record.topRightCorner<3, 1>() = (deformed_sample_positions.row(Eigen::Index(j)).transpose() - s) - turn * s;
+    record.row(3) << 0, 0, 0, 1;
+  });
+}
+
 inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, const Matrix_n3& points,
                                            const Matrix_n3& normals, const Matrix_n3& sample_positions,
                                            const Matrix_n3& deformed_sample_positions, Offset_origin origin,
@@ -245,31 +300,17 @@ inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, 
   std::size_t turned_count = 0;
   for(std::size_t a = first; a < last; ++a) {
     const std::size_t i = active ? std::size_t((*active)[a]) : a;
-    Eigen::Matrix4d blend = Eigen::Matrix4d::Zero();
-    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e)
-      blend.noalias() += weights[std::size_t(e)] * m_records[std::size_t(samples.indices[std::size_t(e)])];
-    const Eigen::Matrix3d turn = blend.topLeftCorner<3, 3>();
-    const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
+    Eigen::Matrix3d turn;
     Eigen::Vector3d displacement;
-    if(origin == Offset_origin::nearest_sample) {
-      // The paper's: every frame decodes p - s_0 from s'_0.
-      const Eigen::Index o = *samples.begin(i);
-      displacement = blend(3, 3) * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
-                     turn * (p - sample_positions.row(o).transpose());
-    } else {
-      displacement = blend.topRightCorner<3, 1>() + turn * p;
-    }
+    blend(i, points, sample_positions, deformed_sample_positions, origin, turn, displacement);
     if(turn.isZero(0) && displacement.isZero(0)) {
       out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i));
       out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
       continue;
     }
-    // The cofactor matrix of the blended map I + turn, column by column: the cross products of the others.
-    const Eigen::Matrix3d blended = Eigen::Matrix3d::Identity() + turn;
-    const Eigen::Vector3d n = normals.row(Eigen::Index(i)).transpose();
-    out_points.row(Eigen::Index(i)) = (p + displacement).transpose();
-    out_normals.row(Eigen::Index(i)) = (n.x() * blended.col(1).cross(blended.col(2)) + n.y() * blended.col(2).cross(blended.col(0)) +
-                                        n.z() * blended.col(0).cross(blended.col(1))).transpose();
+    out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i)) + displacement.transpose();
+    out_normals.row(Eigen::Index(i)) =
+      cofactor_times(Eigen::Matrix3d::Identity() + turn, normals.row(Eigen::Index(i)).transpose()).transpose();
     turned[turned_count++] = i;
   }
   for(std::size_t t = 0; t < turned_count; ++t) out_normals.row(Eigen::Index(turned[t])).normalize();
@@ -378,6 +419,8 @@ inline bool Diffusion_stencil::wide_vectors_available() { return false; }
 #define CGAL_EXT_SSP_DIFFUSION_INSTANCES(EXTERN, Tag) \
   EXTERN template void Diffusion_stencil::setup<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t, \
                                                      const std::vector<int>*); \
+  EXTERN template void Diffusion_stencil::set_motions<Tag>(const Matrix_n3&, const Matrix_n3&, \
+                                                           const std::vector<Eigen::Matrix3d>&); \
   EXTERN template void Diffusion_stencil::apply<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, \
                                                      const Matrix_n3&, const std::vector<Eigen::Matrix3d>&, \
                                                      Offset_origin, Matrix_n3&, Matrix_n3&, \

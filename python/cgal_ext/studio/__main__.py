@@ -1,0 +1,43 @@
+"""python3 -m cgal_ext.studio SCAN [--port P] [--open]: the editing studio in the browser (doc/studio.md)."""
+import argparse
+import asyncio
+import pathlib
+import sys
+import webbrowser
+
+from .server import Studio, serve
+from .session import StudioError
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python3 -m cgal_ext.studio",
+                                     description="Paint a region and handles on a scan, drag, keep its details, save. "
+                                                 "Files are read and written only inside the scan's folder.")
+    parser.add_argument("scan", help="a PLY, OFF, XYZ or PWN point set (its folder is the studio's folder)")
+    parser.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (default: any free one)")
+    parser.add_argument("--open", action="store_true", help="open the page in the default browser")
+    args = parser.parse_args(argv)
+    scan = pathlib.Path(args.scan)
+    if not scan.is_file():
+        parser.error("%s: no such file" % scan)
+    try:
+        studio = Studio(scan.resolve().parent, scan.name)
+    except StudioError as error:
+        parser.error(str(error))
+
+    def ready(url):
+        print("studio: open %s" % url, flush=True)
+        print("studio: Ctrl-C stops it", flush=True)
+        if args.open:
+            webbrowser.open(url)
+
+    try:
+        asyncio.run(serve(studio, args.port, ready))
+    except KeyboardInterrupt:
+        print("studio: stopped", file=sys.stderr)
+    except OSError as error:
+        sys.exit("studio: %s" % error)
+
+
+if __name__ == "__main__":
+    main()

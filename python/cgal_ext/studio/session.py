@@ -1,0 +1,449 @@
+"""The studio's state: one scan, its selection, its edit and the edit's history, over the cgal_ext library.
+
+Every public method either completes or raises StudioError before changing anything, so a refused message
+leaves the session as it was (doc/studio.md, "Bad messages"). The web server (server.py) only parses messages
+and calls these methods; nothing here knows about HTTP.
+"""
+import concurrent.futures
+import json
+import math
+import os
+import pathlib
+import tempfile
+
+import numpy as np
+
+import cgal_ext
+
+FIXED, ROI, FIRST_HANDLE = 0, 1, 2
+MAX_GROUPS = 8  # the page's shader holds this many handle transforms
+ORDERS = ("linear", "quadric", "cubic")
+ROTATIONS = ("propagate", "arap")  # as the edit JSON and the Python package spell them
+STRENGTHS = ("euclidean", "geodesic")
+
+
+class StudioError(Exception):
+    """A request the session refuses; its message is shown in the page."""
+
+
+def _identity():
+    return np.eye(4)
+
+
+class Session:
+    """A scan opened in the studio, inside the folder `root` that bounds every file it reads or writes."""
+
+    def __init__(self, root):
+        self.root = pathlib.Path(root).resolve()
+        if not self.root.is_dir():
+            raise StudioError("%s is not a folder" % root)
+        self.scan = None  # path relative to root
+        self.points = self.normals = None
+        self.settings = {"order": "cubic", "rotations": "propagate", "strength": "euclidean"}
+        self.deformation = None
+        self.base_changed = False  # details applied: the edit's input is no longer the scan file
+        # One Deformation per scan and settings, whose selection-independent part (the mean shift) is computed in
+        # the background from the moment the scan is open, while its user paints.
+        self._editor = None  # a future of the Deformation
+        self._worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="studio-analysis")
+
+    # ---- files ------------------------------------------------------------------------------------------------
+
+    def inside(self, name, must_exist=True):
+        """The path `name` (relative, inside the root, no link out of it) or StudioError."""
+        if not isinstance(name, str) or not name or "\0" in name:
+            raise StudioError("a file name must be a non-empty string")
+        relative = pathlib.PurePosixPath(name)
+        if relative.is_absolute() or ".." in relative.parts:
+            raise StudioError("%r: give a path inside the studio's folder, without '..'" % name)
+        path = self.root / relative
+        resolved = path.resolve()
+        if resolved != self.root and self.root not in resolved.parents:
+            raise StudioError("%r leads out of the studio's folder" % name)
+        if must_exist and not resolved.is_file():
+            raise StudioError("%r: no such file in the studio's folder" % name)
+        return path
+
+    def files(self):
+        """The scans the page may open: point files under the root, relative paths."""
+        found = []
+        for dirpath, dirnames, filenames in os.walk(self.root):
+            dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
+            for f in sorted(filenames):
+                if f.lower().endswith((".ply", ".off", ".xyz", ".pwn")):
+                    found.append(str(pathlib.Path(dirpath, f).relative_to(self.root)))
+                    if len(found) >= 1000:
+                        return found
+        return found
+
+    def load(self, name, progress=None):
+        """Reads a scan (normals estimated when it has none, as the program does) and starts a new edit."""
+        path = self.inside(name)
+        try:
+            cloud = cgal_ext.read_points(path)
+        except (OSError, ValueError) as error:
+            raise StudioError(str(error))
+        points = cloud.points
+        if len(points) < 20:
+            raise StudioError("%s has %d points; editing needs at least 20" % (name, len(points)))
+        normals = cloud.normals
+        if normals is None or not np.all(np.isfinite(normals)) or np.any(np.all(normals == 0, axis=1)):
+            if normals is not None:
+                raise StudioError("%s has missing or zero normals; give all or none" % name)
+            normals = cgal_ext.estimate_oriented_normals(points, k=min(18, len(points)), progress=progress)
+        self.scan, self.points, self.normals = name, points, normals
+        self.base_changed = False
+        self._new_edit()
+        self._start_editor()
+
+    def _new_edit(self):
+        n = len(self.points)
+        self.labels = np.zeros(n, np.int8)
+        self.groups = 0
+        self.transforms = []  # per group, the 4x4 of the drag under way or of the shown state
+        self.history = [[]]   # committed transform lists; history[self.step] is shown
+        self.step = 0
+        self.shown_points, self.shown_normals = self.points.copy(), self.normals.copy()
+        self._drop_deformation()
+
+    def _drop_deformation(self):
+        self.deformation = None
+        self.renderer = None
+
+    def _start_editor(self):
+        """A new Deformation for the scan and the settings, its points analysed in the background."""
+        points, normals, settings = self.points, self.normals, dict(self.settings)
+
+        def make():
+            editor = cgal_ext.Deformation(points, normals, order=settings["order"], rotations=settings["rotations"],
+                                          strength=settings["strength"])
+            editor.analyse_points()
+            return editor
+        self._editor = self._worker.submit(make)  # one worker: made after any editor before it
+
+    def _require_scan(self):
+        if self.points is None:
+            raise StudioError("open a scan first")
+
+    # ---- selection --------------------------------------------------------------------------------------------
+
+    def _require_undeformed(self, what):
+        if any(not np.array_equal(t, _identity()) for t in self.transforms) or self.step != 0:
+            raise StudioError("%s changes the edit's selection or settings: undo the drags first (or start a new "
+                              "edit)" % what)
+
+    def new_group(self):
+        self._require_scan()
+        self._require_undeformed("a new handle group")
+        if self.groups >= MAX_GROUPS:
+            raise StudioError("at most %d handle groups" % MAX_GROUPS)
+        self.groups += 1
+        self.transforms.append(_identity())
+        self.history = [[_identity() for _ in range(self.groups)]]
+        self._drop_deformation()
+        return self.groups - 1
+
+    def select(self, target, mode, indices, group=0):
+        """Paints `indices` into the region (target 'roi') or a handle group ('handle'), or erases them."""
+        self._require_scan()
+        self._require_undeformed("painting")
+        indices = np.asarray(indices)
+        if indices.dtype.kind not in "iu" or indices.ndim != 1:
+            raise StudioError("a selection is a list of point indices")
+        if len(indices) and (indices.min() < 0 or indices.max() >= len(self.points)):
+            raise StudioError("a selected index is out of range (%d points)" % len(self.points))
+        if target not in ("roi", "handle") or mode not in ("add", "erase"):
+            raise StudioError("select: target must be roi or handle, mode add or erase")
+        if target == "handle" and not (isinstance(group, int) and 0 <= group < self.groups):
+            raise StudioError("there is no handle group %r (%d groups)" % (group, self.groups))
+        labels = self.labels.copy()
+        if target == "roi":
+            labels[indices] = ROI if mode == "add" else FIXED  # erasing the region erases its handles too
+        else:
+            handle = FIRST_HANDLE + group
+            if mode == "add":
+                labels[indices] = handle  # a handle point is in the region; it leaves any other group
+            else:
+                labels[indices[labels[indices] == handle]] = ROI
+        self.labels = labels
+        self._drop_deformation()
+
+    def invert(self):
+        """Swaps the region and the fixed part (handle points stay handles)."""
+        self._require_scan()
+        self._require_undeformed("inverting")
+        labels = self.labels.copy()
+        labels[self.labels == FIXED] = ROI
+        labels[self.labels == ROI] = FIXED
+        self.labels = labels
+        self._drop_deformation()
+
+    def clear(self):
+        self._require_scan()
+        self._require_undeformed("clearing")
+        self.labels = np.zeros(len(self.points), np.int8)
+        self.groups, self.transforms, self.history = 0, [], [[]]
+        self._drop_deformation()
+
+    def _checked_settings(self, settings):
+        new = dict(self.settings)
+        for key, value in settings.items():
+            allowed = {"order": ORDERS, "rotations": ROTATIONS, "strength": STRENGTHS}.get(key)
+            if allowed is None:
+                raise StudioError("unknown setting %r (order, rotations, strength)" % key)
+            if value not in allowed:
+                raise StudioError("%s must be one of %s, not %r" % (key, ", ".join(allowed), value))
+            new[key] = value
+        return new
+
+    def _use_settings(self, settings):
+        if settings != self.settings:
+            self.settings = settings
+            self._drop_deformation()
+            self._start_editor()
+
+    def set_settings(self, **settings):
+        self._require_scan()
+        self._require_undeformed("changing the settings")
+        self._use_settings(self._checked_settings(settings))
+
+    # ---- editing ----------------------------------------------------------------------------------------------
+
+    def preprocess(self, progress=None):
+        """Builds the deformation of the current selection; returns what the page's shader needs."""
+        self._require_scan()
+        if not np.any(self.labels != FIXED):
+            raise StudioError("paint a region of interest first")
+        if self.groups == 0 or not all(np.any(self.labels == FIRST_HANDLE + g) for g in range(self.groups)):
+            raise StudioError("every handle group needs points: paint a handle")
+        if self.deformation is not None:
+            return self.renderer
+        try:
+            deformation = self._editor.result()
+        except ValueError as error:
+            raise StudioError(str(error))
+        deformation.reset()
+        deformation.clear_selection()
+        deformation.insert_roi(self.labels != FIXED)
+        for g in range(self.groups):
+            deformation.create_handle_group(self.labels == FIRST_HANDLE + g)
+        try:
+            if not deformation.preprocess(progress=progress):
+                raise StudioError("preprocessing was cancelled")
+        except ValueError as error:
+            raise StudioError(str(error))
+        setup = deformation.renderer_setup()
+        region_samples = np.unique(deformation.sample_point_of(self.labels != FIXED))
+        carried = np.isin(setup["stencil_samples"], region_samples).any(axis=1) | (setup["exact_handle"] != 0)
+        setup["movable"] = np.flatnonzero(carried).astype(np.uint32)
+        setup["handle_group"] = np.where(self.labels >= FIRST_HANDLE, self.labels - FIRST_HANDLE, -1).astype(np.int8)
+        self.deformation, self.renderer = deformation, setup
+        return setup
+
+    def _transform(self, matrix, group):
+        if not (isinstance(group, int) and 0 <= group < self.groups):
+            raise StudioError("there is no handle group %r (%d groups)" % (group, self.groups))
+        try:
+            T = np.array(matrix, dtype=float).reshape(4, 4)
+        except (TypeError, ValueError):
+            raise StudioError("a transform is 16 numbers (a 4x4 matrix, row by row)")
+        if not np.all(np.isfinite(T)):
+            raise StudioError("the transform is not finite")
+        if not np.allclose(T[3], [0, 0, 0, 1]) or not np.allclose(T[:3, :3].T @ T[:3, :3], np.eye(3), atol=1e-5) \
+                or np.linalg.det(T[:3, :3]) <= 0:
+            raise StudioError("the transform is not a rigid motion (rotation and translation)")
+        # The nearest rotation: the page's float32 matrix is orthonormal to about 1e-7, the library wants 1e-6.
+        u, _, vt = np.linalg.svd(T[:3, :3])
+        T[:3, :3] = u @ vt
+        T[3] = (0, 0, 0, 1)
+        return T
+
+    def drag(self, group, matrix):
+        """One frame of a drag: the handle group's transform (from the rest pose); returns the frame's motions."""
+        if self.deformation is None:
+            raise StudioError("a drag needs the edit preprocessed: paint a region and a handle, then edit")
+        T = self._transform(matrix, group)
+        self.deformation.set_handle_transform(group, transform=T)
+        self.transforms[group] = T
+        self.deformation.deform()
+        return self.deformation.renderer_frame()
+
+    def release(self):
+        """The end of a drag: the full diffusion and restore_details become the shown state (a step of history)."""
+        if self.deformation is None:
+            raise StudioError("release without a drag")
+        self._show(self.transforms)
+        del self.history[self.step + 1:]
+        self.history.append([t.copy() for t in self.transforms])
+        self.step += 1
+
+    def _show(self, transforms):
+        d = self.deformation
+        for g, T in enumerate(transforms):
+            d.set_handle_transform(g, transform=T)
+        if all(np.array_equal(T, _identity()) for T in transforms):
+            d.reset()
+            self.shown_points, self.shown_normals = self.points.copy(), self.normals.copy()
+            return
+        d.deform()
+        self.shown_normals = d.diffuse().normals
+        self.shown_points = d.restore_details().points
+        self.transforms = [t.copy() for t in transforms]
+
+    def undo(self):
+        if self.step == 0:
+            raise StudioError("nothing to undo")
+        self.step -= 1
+        self.transforms = [t.copy() for t in self.history[self.step]]
+        self._show(self.transforms)
+
+    def redo(self):
+        if self.step + 1 >= len(self.history):
+            raise StudioError("nothing to redo")
+        self.step += 1
+        self.transforms = [t.copy() for t in self.history[self.step]]
+        self._show(self.transforms)
+
+    # ---- details ----------------------------------------------------------------------------------------------
+
+    def details(self, mode, s, apply=False):
+        """Scales or enhances the details of the painted region (its points: region and handles) by `s`, as
+        point-detail scale / enhance do; with `apply`, the result becomes the scan the edit starts from."""
+        self._require_scan()
+        self._require_undeformed("changing the details")
+        if mode not in ("scale", "enhance"):
+            raise StudioError("details: mode must be scale or enhance")
+        if not isinstance(s, (int, float)) or isinstance(s, bool) or not math.isfinite(s) or not 0 <= s <= 3:
+            raise StudioError("details: s must be a number from 0 to 3")
+        roi = self.labels != FIXED
+        if not roi.any():
+            raise StudioError("paint the region whose details change first")
+        function = cgal_ext.scale_geometric_details if mode == "scale" else cgal_ext.enhance_geometric_details
+        try:
+            result = function(self.points, self.normals, roi=roi, s=float(s))
+        except ValueError as error:
+            raise StudioError(str(error))
+        if apply:
+            self.points = result
+            self.base_changed = True
+            self.shown_points = result.copy()
+            self._drop_deformation()
+            self._start_editor()
+        return result
+
+    # ---- saving -----------------------------------------------------------------------------------------------
+
+    def edit_json(self, name):
+        """The edit as the program's edit JSON, its selections in index files beside it."""
+        handles = []
+        for g in range(self.groups):
+            T = self.transforms[g]
+            handles.append({"select": ["indices:%s.handle%d.txt" % (name, g)],
+                            "matrix": T[:3, :3].tolist(), "translation": T[:3, 3].tolist()})
+        return {"roi": ["indices:%s.roi.txt" % name], "handles": handles,
+                "filter": {"order": self.settings["order"]}, "rotations": self.settings["rotations"],
+                "strength_distance": self.settings["strength"]}
+
+    def save(self, name):
+        """Writes NAME.ply (the shown state with the program's fields) and NAME.json (+ index files) such that
+        `point-detail edit -i SCAN --edit NAME.json` reproduces NAME.ply; the scan itself is never written."""
+        self._require_scan()
+        if not isinstance(name, str) or not name or "/" in name or "\\" in name or name.startswith("."):
+            raise StudioError("save: give a file name without folders, e.g. 'edited'")
+        target = self.inside(name + ".ply", must_exist=False)
+        if target.resolve() == self.inside(self.scan).resolve():
+            raise StudioError("save: %s.ply is the scan itself; the input is never overwritten" % name)
+        moved = np.linalg.norm(self.shown_points - self.points, axis=1)
+        sample = (self.deformation.sample_point_of(np.ones(len(self.points), bool)).astype(float)
+                  if self.deformation is not None else np.zeros(len(self.points)))
+        status = np.minimum(self.labels, 2).astype(float)
+        files = {}
+        if self.groups and (self.labels != FIXED).any():
+            files[name + ".roi.txt"] = "".join("%d\n" % i for i in np.flatnonzero(self.labels != FIXED))
+            for g in range(self.groups):
+                files["%s.handle%d.txt" % (name, g)] = "".join(
+                    "%d\n" % i for i in np.flatnonzero(self.labels == FIRST_HANDLE + g))
+            files[name + ".json"] = json.dumps(self.edit_json(name), indent=2) + "\n"
+        if self.base_changed:
+            files[name + ".base.ply"] = None  # the scaled input the edit starts from
+        # Every file to a temporary name first, renamed once all are whole.
+        temporaries = []
+        try:
+            for file_name, text in files.items():
+                path = self.inside(file_name, must_exist=False)
+                fd, temporary = tempfile.mkstemp(prefix="." + file_name + ".", dir=path.parent)
+                os.close(fd)
+                temporaries.append((temporary, path))
+                if text is None:
+                    cgal_ext.write_ply(temporary, self.points, self.normals)
+                else:
+                    with open(temporary, "w") as out:
+                        out.write(text)
+            fd, temporary = tempfile.mkstemp(prefix="." + name + ".ply.", dir=target.parent)
+            os.close(fd)
+            temporaries.append((temporary, target))
+            cgal_ext.write_ply(temporary, self.shown_points, self.shown_normals,
+                               colors=cgal_ext.sequential_colors(moved), displacement=moved, status=status,
+                               ssp_index=sample)
+            for temporary, path in temporaries:
+                os.replace(temporary, path)
+        except (OSError, ValueError) as error:
+            for temporary, _ in temporaries:
+                if os.path.exists(temporary):
+                    os.unlink(temporary)
+            raise StudioError("save failed, nothing written: %s" % error)
+        return sorted([name + ".ply"] + list(files))
+
+    def load_edit(self, name):
+        """Loads a selection (and settings) from an edit JSON the studio saved: indices files beside it."""
+        self._require_scan()
+        self._require_undeformed("loading a selection")
+        path = self.inside(name)
+        try:
+            edit = json.loads(path.read_text())
+            roi_files = edit["roi"]
+            handle_files = [h["select"] for h in edit["handles"]]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise StudioError("%s is not an edit the studio saved: %s" % (name, error))
+        n = len(self.points)
+
+        def indices(specs):
+            chosen = []
+            for spec in specs:
+                if not isinstance(spec, str) or not spec.startswith("indices:"):
+                    raise StudioError("%s: the studio loads index-file selections (indices:FILE), not %r" % (name, spec))
+                file = self.inside(str(pathlib.PurePosixPath(name).parent / spec[len("indices:"):]))
+                try:
+                    values = np.array([int(line.split("#")[0]) for line in file.read_text().splitlines()
+                                       if line.split("#")[0].strip()], dtype=np.int64)
+                except ValueError as error:
+                    raise StudioError("%s: %s" % (file.name, error))
+                if len(values) and (values.min() < 0 or values.max() >= n):
+                    raise StudioError("%s: an index is out of range (%d points)" % (file.name, n))
+                chosen.append(values)
+            return np.concatenate(chosen) if chosen else np.zeros(0, np.int64)
+
+        labels = np.zeros(n, np.int8)
+        labels[indices(roi_files)] = ROI
+        if len(handle_files) > MAX_GROUPS:
+            raise StudioError("%s has %d handle groups; the studio holds %d" % (name, len(handle_files), MAX_GROUPS))
+        for g, specs in enumerate(handle_files):
+            labels[indices(specs)] = FIRST_HANDLE + g
+        settings = self._checked_settings({"order": edit.get("filter", {}).get("order", self.settings["order"]),
+                                           "rotations": edit.get("rotations", self.settings["rotations"]),
+                                           "strength": edit.get("strength_distance", self.settings["strength"])})
+        self.labels, self.groups = labels, len(handle_files)
+        self.transforms = [_identity() for _ in range(self.groups)]
+        self.history, self.step = [[_identity() for _ in range(self.groups)]], 0
+        self._drop_deformation()
+        self._use_settings(settings)
+
+    # ---- what the page shows ----------------------------------------------------------------------------------
+
+    def state(self):
+        return {"scan": self.scan, "points": None if self.points is None else len(self.points),
+                "groups": self.groups if self.points is not None else 0, "settings": self.settings,
+                "step": getattr(self, "step", 0), "steps": len(getattr(self, "history", [[]])) - 1,
+                "preprocessed": self.deformation is not None, "base_changed": self.base_changed,
+                "region": int(np.count_nonzero(self.labels != FIXED)) if self.points is not None else 0,
+                "transforms": [t.reshape(-1).tolist() for t in getattr(self, "transforms", [])]}

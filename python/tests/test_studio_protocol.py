@@ -1,0 +1,271 @@
+# The studio's server against what a hostile or confused client sends: requests without the token, another
+# origin, a second tab, paths out of its folder, and malformed, unknown, out-of-order or oversized messages,
+# each refused with an error while the session stays as it was; then a soak of 2,000 drags.
+import asyncio
+import json
+import os
+import struct
+
+import numpy as np
+import pytest
+from aiohttp import ClientOSError, ClientSession, WSMsgType, WSServerHandshakeError
+
+import cgal_ext
+from conftest import bumpy_sphere
+from studio_support import Server
+
+IDENTITY = np.eye(4).reshape(-1).tolist()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("studio_protocol")
+    points, normals = bumpy_sphere(6000)
+    cgal_ext.write_ply(folder / "sphere.ply", points, normals)
+    (folder / "inner").mkdir()
+    os.symlink("/etc/hostname", folder / "outside.ply")
+    studio = Server(folder / "sphere.ply")
+    yield studio
+    status, err = studio.stop()
+    assert status == 0 and "stopped" in err and "Traceback" not in err  # Ctrl-C stops it cleanly
+
+
+def frame(header, indices=()):
+    text = json.dumps(dict({"count": len(indices)}, **header)).encode()
+    text += b" " * (-len(text) % 4)
+    return struct.pack("<I", len(text)) + text + np.asarray(indices, "<u4").tobytes()
+
+
+class Client:
+    """One tab's WebSocket, as the page opens it."""
+
+    def __init__(self, server, http, ws):
+        self.server, self.http, self.ws = server, http, ws
+
+    @classmethod
+    async def open(cls, server, origin=None, token=None):
+        http = ClientSession()
+        try:
+            ws = await http.ws_connect("ws://127.0.0.1:%d/ws?token=%s" % (server.port, token or server.token),
+                                       headers={"Origin": origin or server.base}, max_msg_size=0)
+        except BaseException:
+            await http.close()
+            raise
+        return cls(server, http, ws)
+
+    async def close(self):
+        await self.ws.close()
+        await self.http.close()
+
+    async def receive(self):
+        message = await asyncio.wait_for(self.ws.receive(), 60)
+        if message.type == WSMsgType.TEXT:
+            return json.loads(message.data)
+        if message.type == WSMsgType.BINARY:
+            (length,) = struct.unpack_from("<I", message.data)
+            header = json.loads(message.data[4:4 + length])
+            for a in header["arrays"]:
+                start = 4 + length + a["offset"]
+                count = int(np.prod(a["shape"]))
+                header[a["name"]] = np.frombuffer(message.data, a["dtype"], count, start).reshape(a["shape"])
+            return header
+        return {"type": "closed", "code": self.ws.close_code}
+
+    async def until(self, *types):
+        """Messages until one of `types` (progress skipped); errors are returned too."""
+        while True:
+            m = await self.receive()
+            if m["type"] in types or m["type"] in ("error", "closed", "refused"):
+                return m
+
+    async def command(self, command, *replies):
+        if isinstance(command, bytes):
+            await self.ws.send_bytes(command)
+        elif isinstance(command, str):
+            await self.ws.send_str(command)
+        else:
+            await self.ws.send_str(json.dumps(command))
+        return await self.until(*(replies or ("state",)))
+
+    async def snapshot(self):
+        state = await self.command({"type": "state"})
+        labels = await self.command({"type": "labels"}, "labels")
+        state.pop("files")
+        return state, labels["labels"].tobytes()
+
+
+def run(coroutine):
+    return asyncio.run(coroutine)
+
+
+def test_every_request_needs_the_token_and_the_origin(server):
+    import urllib.error
+    import urllib.request
+
+    for path in ("/", "/static/studio.js", "/three/build/three.min.js", "/ws"):
+        for query in ("", "?token=wrong", "?token="):
+            with pytest.raises(urllib.error.HTTPError) as error:
+                urllib.request.urlopen(server.base + path + query)
+            assert error.value.code == 403
+    assert urllib.request.urlopen(server.url).status == 200
+    # Traversal in a static path is not served, with or without the token.
+    with pytest.raises(urllib.error.HTTPError) as error:
+        urllib.request.urlopen(server.base + "/three/../../../../etc/passwd?token=" + server.token)
+    assert error.value.code in (403, 404)
+
+    async def wrong_origin():
+        for origin in ("http://evil.example", "http://127.0.0.1:1", "null"):
+            with pytest.raises(WSServerHandshakeError) as error:
+                await Client.open(server, origin=origin)
+            assert error.value.status == 403
+        with pytest.raises(WSServerHandshakeError):
+            await Client.open(server, token="wrong")
+    run(wrong_origin())
+
+
+def test_a_second_tab_is_refused(server):
+    async def scenario():
+        first = await Client.open(server)
+        assert (await first.until("state"))["type"] == "state"
+        second = await Client.open(server)
+        refused = await second.receive()
+        assert refused["type"] == "refused" and "another tab" in refused["message"]
+        assert (await second.receive())["type"] == "closed"
+        assert (await first.command({"type": "state"}))["type"] == "state"  # the first tab is unaffected
+        await second.close()
+        await first.close()
+    run(scenario())
+
+
+BAD_BEFORE_EDITING = [
+    ("{", "not JSON"),
+    ("[1, 2]", "JSON object with a type"),
+    ({"x": 1}, "JSON object with a type"),
+    ({"type": 5}, "JSON object with a type"),
+    ({"type": "explode"}, "unknown command"),
+    ({"type": "__init__"}, "unknown command"),
+    ({"type": "drag", "group": 0, "matrix": IDENTITY}, "needs the edit preprocessed"),
+    ({"type": "release"}, "release without a drag"),
+    ({"type": "undo"}, "nothing to undo"),
+    ({"type": "redo"}, "nothing to redo"),
+    ({"type": "preprocess"}, "paint a region of interest first"),
+    (b"\x01\x00", "shorter than its header"),
+    (struct.pack("<I", 400) + b"{}  ", "bad header length"),
+    (struct.pack("<I", 4) + b"nope", "not JSON"),
+    (frame({"type": "select", "target": "roi", "mode": "add"}, [1, 2, 3])[:-4], "bytes for 3 indices"),
+    (frame({"type": "select", "target": "roi", "mode": "add"}, [1, 2, 10 ** 7]), "out of range"),
+    (frame({"type": "select", "target": "lung", "mode": "add"}, [1]), "target must be roi or handle"),
+    (frame({"type": "select", "target": "handle", "mode": "add", "group": 3}, [1]), "no handle group 3"),
+    ({"type": "load", "path": "../sphere.ply"}, "without '..'"),
+    ({"type": "load", "path": "/etc/passwd"}, "inside the studio's folder"),
+    ({"type": "load", "path": "outside.ply"}, "leads out of the studio's folder"),
+    ({"type": "load", "path": "missing.ply"}, "no such file"),
+    ({"type": "load", "path": "inner"}, "no such file"),
+    ({"type": "load", "path": 7}, "non-empty string"),
+    ({"type": "save", "name": "../escape"}, "without folders"),
+    ({"type": "save", "name": "sphere"}, "never overwritten"),
+    ({"type": "settings", "order": "septic"}, "order must be one of"),
+    ({"type": "settings", "colour": "red"}, "unknown setting"),
+    ({"type": "details", "mode": "scale", "s": 5}, "from 0 to 3"),
+    ('{"type": "details", "mode": "scale", "s": NaN}', "from 0 to 3"),
+    ({"type": "details", "mode": "melt", "s": 1}, "scale or enhance"),
+    ({"type": "colors", "by": "mood"}, "colour by"),
+    ({"type": "colors", "by": "clusters"}, "once the edit is preprocessed"),
+    ({"type": "load_edit", "path": "sphere.ply"}, "not an edit the studio saved"),
+    (json.dumps({"type": "state", "pad": "x" * (2 << 20)}), "at most"),
+]
+
+
+def test_bad_messages_are_refused_and_change_nothing(server):
+    async def scenario():
+        client = await Client.open(server)
+        await client.until("state")
+        before = await client.snapshot()
+        for message, expected in BAD_BEFORE_EDITING:
+            reply = await client.command(message)
+            assert reply["type"] == "error" and expected in reply["message"], (message if len(str(message)) < 200
+                                                                               else str(message)[:200], reply)
+            assert await client.snapshot() == before, message
+        await client.close()
+    run(scenario())
+
+
+def test_bad_messages_while_editing_change_nothing(server):
+    async def scenario():
+        client = await Client.open(server)
+        await client.until("state")
+        points = cgal_ext.read_points(server_scan(server)).points
+        region = np.flatnonzero(points[:, 2] > 0.0)
+        await client.command(frame({"type": "select", "target": "roi", "mode": "add"}, region))
+        await client.command({"type": "new_group"})
+        handle = np.flatnonzero(points[:, 2] > 0.9)
+        await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 0}, handle))
+        assert (await client.command({"type": "preprocess"}))["preprocessed"]
+        T = np.eye(4)
+        T[:3, 3] = (0.1, 0, 0.2)
+        assert (await client.command({"type": "drag", "group": 0, "matrix": T.reshape(-1).tolist()}, "frame"))["type"] == "frame"
+        assert (await client.command({"type": "release"}))["step"] == 1
+        before = await client.snapshot()
+        scale = np.diag([2.0, 2, 2, 1]).reshape(-1).tolist()
+        bad = [
+            ('{"type": "drag", "group": 0, "matrix": [NaN, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}', "not finite"),
+            ({"type": "drag", "group": 0, "matrix": scale}, "not a rigid motion"),
+            ({"type": "drag", "group": 0, "matrix": [1, 0, 0]}, "16 numbers"),
+            ({"type": "drag", "group": 0, "matrix": "identity"}, "16 numbers"),
+            ({"type": "drag", "group": 4, "matrix": IDENTITY}, "no handle group 4"),
+            ({"type": "drag", "group": "0", "matrix": IDENTITY}, "no handle group"),
+            (frame({"type": "select", "target": "roi", "mode": "add"}, [0]), "undo the drags first"),
+            ({"type": "settings", "order": "linear"}, "undo the drags first"),
+            ({"type": "new_group"}, "undo the drags first"),
+            ({"type": "details", "mode": "scale", "s": 2}, "undo the drags first"),
+            ({"type": "redo"}, "nothing to redo"),
+        ]
+        for message, expected in bad:
+            reply = await client.command(message, "frame")
+            assert reply["type"] == "error" and expected in reply["message"], (message, reply)
+            assert await client.snapshot() == before, message
+        # 100 MB of JSON: past the WebSocket's size limit, the connection is closed; the session is kept.
+        try:
+            await client.ws.send_str(json.dumps({"type": "state", "pad": "x" * (100 << 20)}))
+            assert (await client.until("state"))["type"] == "closed"
+        except (ClientOSError, ConnectionResetError):
+            pass  # the server closed the connection while the message was still being sent
+        await client.close()
+        client = await Client.open(server)
+        await client.until("state")
+        assert await client.snapshot() == before
+        # Undo returns the input bit for bit, then the session starts over.
+        assert (await client.command({"type": "undo"}))["step"] == 0
+        await client.command({"type": "clear"})
+        await client.close()
+    run(scenario())
+
+
+def server_scan(server):
+    return server.process.args[3]
+
+
+def test_soak_2000_drags_keep_memory_flat(server):
+    async def scenario():
+        client = await Client.open(server)
+        await client.until("state")
+        points = cgal_ext.read_points(server_scan(server)).points
+        await client.command(frame({"type": "select", "target": "roi", "mode": "add"}, np.flatnonzero(points[:, 0] > 0)))
+        await client.command({"type": "new_group"})
+        await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 0},
+                                   np.flatnonzero(points[:, 0] > 0.9)))
+        await client.command({"type": "preprocess"})
+        rng = np.random.default_rng(3)
+        resident = []
+        for drag in range(2000):
+            for step in range(3):
+                T = np.eye(4)
+                T[:3, 3] = rng.normal(scale=0.05, size=3)
+                reply = await client.command({"type": "drag", "group": 0, "matrix": T.reshape(-1).tolist()}, "frame")
+                assert reply["type"] == "frame"
+            assert (await client.command({"type": "release"}, "state"))["type"] == "state"
+            if drag in (99, 1999):
+                resident.append(server.resident_bytes())
+        await client.close()
+        assert resident[1] <= 1.05 * resident[0], resident
+    run(scenario())
