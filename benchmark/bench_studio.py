@@ -92,7 +92,7 @@ def browser_costs(folder, name, frame_seconds):
             if target == "handle":
                 driver.execute_script("send({type: 'new_group'})")
                 wait_for(driver, "studio.state.groups === 1")
-            driver.execute_script("studio.painted = false; sendIndices({type: 'select', target: arguments[0], mode: 'add', "
+            driver.execute_script("sendIndices({type: 'select', target: arguments[0], mode: 'add', "
                                   "group: 0}, new Uint32Array(arguments[1])); ", target, indices.tolist())
             wait_for(driver, "studio.state.region >= %d" % (len(region) if target == "roi" else 1), timeout=120)
         painting = time.perf_counter()

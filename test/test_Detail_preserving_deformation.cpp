@@ -326,8 +326,9 @@ TEST(DetailPreservingDeformation, ARendererRepeatsTheDiffusionFromTheSamplePoint
     }
     EXPECT_LT(error, 1e-12 * t.diagonal) << int(rotations);
     EXPECT_LT(normal_error, 1e-12) << int(rotations);
-    if(rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible)
+    if(rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) {
       EXPECT_GT(collar, 0u) << "no collar point took a step: the test checks less than it says";
+    }
   }
 }
 

@@ -17,7 +17,6 @@ uniform highp sampler2D collarSteps; // per collar handle point 2 texels: positi
 uniform mat4 groupT[${MAX_GROUPS}];
 uniform float pointSize;
 uniform bool showSelection;
-uniform mat4 readbackMatrix;         // unused unless reading back
 uniform bool readback;
 uniform float readbackWidth;
 attribute vec3 shown;
@@ -137,7 +136,6 @@ studio.material = new THREE.ShaderMaterial({
     live: { value: false }, records: { value: emptyTexture(3) }, collarSteps: { value: emptyTexture(2) },
     groupT: { value: Array.from({ length: MAX_GROUPS }, () => new THREE.Matrix4()) },
     pointSize: { value: 2 }, showSelection: { value: true }, readback: { value: false }, readbackWidth: { value: 1 },
-    readbackMatrix: { value: new THREE.Matrix4() },
   },
 });
 
