@@ -74,15 +74,20 @@ def drag_times(points, normals, drags, reps):
     return median(wall), median(library), int(np.sum(region))
 
 
-def main():
-    if "GLIBC_TUNABLES" not in os.environ:
-        os.execve(sys.executable, [sys.executable] + sys.argv, dict(os.environ, GLIBC_TUNABLES="glibc.malloc.hugetlb=1"))
+def harness_arguments():
+    """The options every Python stage of the harness takes: --out DIR [--build build] [--data data] [--quick]."""
     parser = argparse.ArgumentParser()
     parser.add_argument("--out", required=True)
     parser.add_argument("--build", default="build")
     parser.add_argument("--data", default="data")
     parser.add_argument("--quick", action="store_true")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main():
+    if "GLIBC_TUNABLES" not in os.environ:
+        os.execve(sys.executable, [sys.executable] + sys.argv, dict(os.environ, GLIBC_TUNABLES="glibc.malloc.hugetlb=1"))
+    args = harness_arguments()
     n, reps, drags = (100000, 1, 5) if args.quick else (1000000, 5, 20)
     program = os.path.join(args.build, "src", "point-detail")
     rows = []

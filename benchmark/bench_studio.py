@@ -11,7 +11,6 @@
 Medians over the repetitions. Writes OUT/studio_results.csv and OUT/studio_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_studio.py --out DIR [--build build] [--data data] [--quick]
 """
-import argparse
 import csv
 import json
 import os
@@ -26,11 +25,9 @@ import cgal_ext
 from cgal_ext.studio.server import pack
 from cgal_ext.studio.session import Session
 
+from bench_python import harness_arguments, median
+
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python", "tests"))
-
-
-def median(values):
-    return float(np.median(values))
 
 
 def selection(points):
@@ -131,12 +128,7 @@ def browser_costs(folder, name, frame_seconds):
 
 
 def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--build", default="build")
-    parser.add_argument("--data", default="data")
-    parser.add_argument("--quick", action="store_true")
-    args = parser.parse_args()
+    args = harness_arguments()
     server_sizes, browser_sizes = ([100000], [100000]) if args.quick else ([1000000, 4000000], [100000, 1000000])
     frames, releases, frame_seconds = (20, 1, 2) if args.quick else (200, 5, 8)
     rows = []

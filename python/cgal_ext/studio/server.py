@@ -251,7 +251,7 @@ class Studio:
 
     async def send_shown(self, ws):
         s = self.session
-        movable = s.renderer["movable"] if s.renderer is not None else np.flatnonzero(s.labels != FIXED)
+        movable = s.renderer["movable"]  # release, undo and redo need the edit prepared
         await ws.send_bytes(pack({"type": "shown"}, [("indices", movable.astype("<u4")),
                                                      ("positions", s.shown_points[movable].astype("<f4")),
                                                      ("normals", s.shown_normals[movable].astype("<f4"))]))

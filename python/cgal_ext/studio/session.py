@@ -181,9 +181,7 @@ class Session:
     def clear(self):
         self._require_scan()
         self._require_undeformed("clearing")
-        self.labels = np.zeros(len(self.points), np.int8)
-        self.groups, self.transforms, self.history = 0, [], [[]]
-        self._drop_deformation()
+        self._new_edit()
 
     def _checked_settings(self, settings):
         new = dict(self.settings)
