@@ -60,7 +60,7 @@ class CMakeBuild(build_ext):
             name = source.name
             if source.is_dir() and name != "__pycache__":
                 shutil.copytree(source, destination / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
-                continue  # a subpackage: the studio
+                continue  # a subpackage: the studio, the tiled runs
             if source.is_dir() or name.endswith((".in", ".pyc")):
                 continue  # __pycache__, CMake's _version.py.in
             if name.endswith(".so"):

@@ -40,6 +40,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -731,7 +732,8 @@ void write_ply(const Path_like& path_object, const Array_like& points, const Opt
   });
 }
 
-Ndarray colors_by(point_detail::Coloring (*color_map)(const std::vector<double>&), const Array_like& values)
+Ndarray colors_by(const std::function<point_detail::Coloring(const std::vector<double>&)>& color_map,
+                  const Array_like& values)
 {
   const py::array array = as_array(values, "values", "a 1-D array of numbers");
   const std::vector<double> v = values_of(array, std::size_t(array.ndim() == 1 ? array.size() : 0), "values");
@@ -1305,10 +1307,20 @@ PYBIND11_MODULE(_core, m)
             {"values : (n,) array_like\n    The values, e.g. each point's displacement."},
             "numpy.ndarray\n    (n, 3) uint8 colours.")
           .c_str());
-  m.def("diverging_colors", [](const Array_like& values) { return colors_by(point_detail::diverging_colors, values); }, "values"_a,
+  m.def("diverging_colors",
+        [](const Array_like& values, std::optional<double> limit) {
+          if(!limit) return colors_by([](const std::vector<double>& v) { return point_detail::diverging_colors(v); }, values);
+          if(!(*limit > 0) || !std::isfinite(*limit))
+            throw std::invalid_argument("diverging_colors: limit must be positive and finite, not " +
+                                        std::to_string(*limit));
+          return colors_by([&](const std::vector<double>& v) { return point_detail::diverging_colors(v, *limit); },
+                           values);
+        },
+        "values"_a, py::kw_only(), "limit"_a = py::none(),
         doc("The program's blue-white-red colour map of signed values, symmetric about zero and saturating at the "
             "98th percentile of the non-zero magnitudes (doc/geometric_details.md, \"Colour maps\").",
-            {"values : (n,) array_like\n    The values, e.g. the details' magnitude."},
+            {"values : (n,) array_like\n    The values, e.g. the details' magnitude.",
+             "limit : float, optional\n    Saturate at +-limit instead (the tiled runs pass the whole scan's)."},
             "numpy.ndarray\n    (n, 3) uint8 colours.")
           .c_str());
   const point_detail::Render_settings render;

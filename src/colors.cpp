@@ -60,14 +60,18 @@ Coloring diverging_colors(const std::vector<double>& values)
     magnitude.resize(values.size());
     std::transform(values.begin(), values.end(), magnitude.begin(), [](double v) { return std::abs(v); });
   }
-  double r = percentile(std::move(magnitude), 0.98);
-  if(!(r > 0)) r = 1;
+  const double r = percentile(std::move(magnitude), 0.98);
+  return diverging_colors(values, r > 0 ? r : 1.0);
+}
+
+Coloring diverging_colors(const std::vector<double>& values, double limit)
+{
   Coloring out;
   out.scale = Coloring::Scale::diverging;
-  out.lo = -r;
-  out.hi = r;
+  out.lo = -limit;
+  out.hi = limit;
   out.colors.reserve(values.size());
-  for(double v : values) out.colors.push_back(sample(cool_warm, 0.5 + 0.5 * v / r));
+  for(double v : values) out.colors.push_back(sample(cool_warm, 0.5 + 0.5 * v / limit));
   return out;
 }
 

@@ -28,6 +28,8 @@ constexpr Color flag_color{255, 0, 200};
 /// |values| (of all of them when most are non-zero): a map of a small change (a few points moved, the rest 0)
 /// spans that change instead of collapsing to white (doc/geometric_details.md, "Colour maps").
 Coloring diverging_colors(const std::vector<double>& values);
+/// The same map saturating at `limit` (> 0) instead: the tiled runs colour each tile with the whole scan's limit.
+Coloring diverging_colors(const std::vector<double>& values, double limit);
 /// Sequential colours from the 2nd to the 98th percentile; when those are equal (most points share one value),
 /// from that value to the percentiles of the values that differ from it.
 Coloring sequential_colors(const std::vector<double>& values);

@@ -24,8 +24,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 def test_the_stub_matches_the_extension(tmp_path):
     """mypy's stubtest: every name of the stub exists in the extension, and every public name there is in it."""
     package_root = os.path.dirname(os.path.dirname(os.path.abspath(cgal_ext.__file__)))
+    # The tiled runs use libraries that ship no type information.
+    (tmp_path / "mypy.ini").write_text("[mypy]\n[mypy-scipy.*,zarr.*,distributed.*]\nignore_missing_imports = True\n")
     result = subprocess.run([sys.executable, "-m", "mypy.stubtest", "cgal_ext", "--allowlist",
-                             os.path.join(HERE, "stubtest_allowlist.txt")],
+                             os.path.join(HERE, "stubtest_allowlist.txt"), "--mypy-config-file", "mypy.ini"],
                             capture_output=True, text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=package_root))
     assert result.returncode == 0, result.stdout + result.stderr
 

@@ -1,0 +1,114 @@
+"""Tiled runs on Dask distributed for scans larger than one machine's memory: details, normals, curvature and
+enhancement of a binary PLY (read by memory map) or a Zarr group, written tile by tile to PLY or Zarr.
+
+    from cgal_ext import tiled
+    report = tiled.run("details", "scan.ply", "details.zarr", order="cubic")
+
+Each tile reads its box and a halo around it and writes only its own points; the halo is checked to hold every
+point those depend on and widened where it did not, so details, normals (up to orientation) and curvature equal the
+one-process results. Enhancement is a global solve and is approximated with a margin (doc/scaling.md).
+The command line: `python3 -m cgal_ext.tiled --help`.
+"""
+import importlib.util
+import os
+import shutil
+import uuid
+from pathlib import Path
+
+from . import ops
+from .runner import Run
+from .store import TiledError, open_source
+
+__all__ = ["TiledError", "run", "OPERATIONS"]
+
+OPERATIONS = tuple(ops.OPERATIONS)
+
+
+def run(operation, input, output, *, scheduler=None, client=None, workers=None, memory_limit="auto", tiles=None,
+        halo=None, scratch=None, threads_per_task=1, connect_timeout=20, progress=False, log=None, **options):
+    """Runs one operation over a scan tile by tile on Dask and writes the result whole, or nothing.
+
+    Parameters
+    ----------
+    operation : {"details", "normals", "curvature", "enhance"}
+        What to compute; the output holds the fields of the program's PLY for that subcommand.
+    input : path
+        A binary PLY file (memory-mapped) or a Zarr group with 1-D arrays x, y, z (and nx, ny, nz).
+    output : path
+        OUT.ply or OUT.zarr; written under a temporary name and renamed when complete. Never the input.
+    scheduler : str, optional
+        The address of a running Dask scheduler; by default a LocalCluster is started.
+    client : distributed.Client, optional
+        A client to run on instead (not closed at the end).
+    workers : int, optional
+        Workers of the LocalCluster (default: one per core), one thread each.
+    memory_limit : str or int
+        Memory limit per LocalCluster worker ("3GiB", bytes, or "auto").
+    tiles : int, optional
+        Number of tiles (default: about one million points each, at least two per worker).
+    halo : float, optional
+        The first halo width (default: from the operation's rings and the scan's spacing); a halo too small for
+        a tile is widened by that tile.
+    scratch : path, optional
+        A folder every worker can reach for the tiles' intermediate results (default: beside the output).
+    threads_per_task : int or None
+        The library's threads inside each task (None: all cores).
+    connect_timeout : float
+        Seconds to wait for `scheduler` to answer.
+    progress : bool
+        Dask's progress bar per pass on the terminal.
+    log : callable, optional
+        Receives one-line messages (the plan, the dashboard's address).
+    **options
+        The library function's options: details (`k`, `order`, `lam`, `mu`, `weights`, `color_by`), curvature
+        (`k`, `fitting`), normals (`k`), enhance (`s`, `k`, `order`, `lam`, `mu`, `weights`, `margin` in
+        neighbourhood radii).
+
+    Returns
+    -------
+    dict
+        The run's report: tiles, halos, widened tiles, orientation, timings per pass.
+    """
+    log = log or (lambda message: None)
+    op = ops.operation(operation, **options)
+    source = open_source(input)
+    output = Path(output)
+    if output.suffix.lower() not in (".ply", ".zarr"):
+        raise TiledError(f"{output}: the output's name must end in .ply or .zarr")
+    if output.resolve() == Path(source.path):
+        raise TiledError(f"{output}: is the input; the tiled runs never overwrite their input")
+    if not output.parent.is_dir():
+        raise TiledError(f"{output.parent}: no such folder for the output")
+    scratch_root = Path(scratch) if scratch else output.parent
+    folder = scratch_root / f".{output.name}.tiles-{uuid.uuid4().hex[:8]}"
+    own_client, cluster = client is None, None
+    try:
+        if client is None:
+            client, cluster = _connect(scheduler, workers, memory_limit, connect_timeout, log)
+        folder.mkdir(parents=True)
+        return Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+        if own_client and client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _connect(scheduler, workers, memory_limit, timeout, log):
+    from distributed import Client, LocalCluster
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout=f"{timeout}s")
+        except (OSError, TimeoutError) as error:
+            raise TiledError(f"the Dask scheduler at {scheduler} does not answer ({error})") from None
+        log(f"running on the scheduler at {scheduler}; dashboard: {client.dashboard_link}")
+        return client, None
+    workers = workers or os.cpu_count() or 1
+    dashboard = ":0" if importlib.util.find_spec("bokeh") else None  # Dask's dashboard needs bokeh
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit=memory_limit,
+                           dashboard_address=dashboard, silence_logs=40)
+    client = Client(cluster)
+    log(f"LocalCluster of {workers} worker(s), memory limit {memory_limit} each; dashboard: "
+        + (client.dashboard_link if dashboard else "none (install bokeh for Dask's dashboard)"))
+    return client, cluster

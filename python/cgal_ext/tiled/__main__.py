@@ -1,0 +1,87 @@
+"""python3 -m cgal_ext.tiled details|normals|curvature|enhance INPUT -o OUTPUT [options]: a tiled run on Dask."""
+import argparse
+import json
+import sys
+
+from . import TiledError, run
+
+S = argparse.SUPPRESS  # options left out are left to the library's defaults
+
+
+def parser():
+    main = argparse.ArgumentParser(
+        prog="python3 -m cgal_ext.tiled",
+        description="Details, normals, curvature or enhancement of a scan larger than memory, tile by tile on Dask. "
+                    "The input is a binary PLY (memory-mapped) or a Zarr group; the output OUT.ply or OUT.zarr holds "
+                    "the fields of the program's PLY for the same subcommand and is written whole or not at all.")
+    commands = main.add_subparsers(dest="operation", required=True, metavar="OPERATION")
+
+    def command(name, help_text):
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        sub.add_argument("input", metavar="INPUT", help="binary PLY or Zarr group (x, y, z; nx, ny, nz if any)")
+        sub.add_argument("-o", "--output", required=True, help="OUT.ply or OUT.zarr")
+        engine = sub.add_argument_group("engine")
+        engine.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster)")
+        engine.add_argument("--workers", type=int, help="LocalCluster workers (default: one per core)")
+        engine.add_argument("--memory-limit", default="auto", help="memory limit per LocalCluster worker, e.g. 3GiB")
+        engine.add_argument("--tiles", type=int, help="number of tiles (default: about 1M points each)")
+        engine.add_argument("--halo", type=float, help="first halo width (default: from the operation and spacing)")
+        engine.add_argument("--scratch", help="folder every worker can reach (default: beside the output)")
+        engine.add_argument("--threads-per-task", type=int, default=1, help="library threads inside each task")
+        engine.add_argument("--connect-timeout", type=float, default=20, help="seconds to wait for --scheduler")
+        engine.add_argument("--report", help="write the run's report as JSON")
+        return sub
+
+    def filter_options(sub):
+        sub.add_argument("-k", type=int, default=S, help="neighbours of the Laplacian")
+        sub.add_argument("--order", choices=["linear", "quadric", "cubic"], default=S)
+        sub.add_argument("--lambda", dest="lam", type=float, default=S)
+        sub.add_argument("--mu", type=float, default=S)
+        sub.add_argument("--weights", choices=["uniform", "distance"], default=S)
+
+    details = command("details", "geometric details of every point, as PLY properties and a colour map")
+    filter_options(details)
+    details.add_argument("--color-by", dest="color_by", choices=["detail_normal", "detail_magnitude"], default=S)
+    normals = command("normals", "normals by jet fitting, oriented consistently across the tiles")
+    normals.add_argument("-k", type=int, default=S, help="neighbours of each fit, the point itself counted")
+    curvature = command("curvature", "signed mean curvature of every point")
+    curvature.add_argument("-k", type=int, default=S, help="neighbours of each fit")
+    curvature.add_argument("--fitting", choices=["closed_form", "monge"], default=S)
+    enhance = command("enhance", "the whole scan's details enhanced by s against the balanced-flow base surface "
+                                 "(approximate: each tile reads --margin neighbourhood radii around it; normals as "
+                                 "given or estimated, not re-fitted)")
+    enhance.add_argument("-s", type=float, required=True, help="the enhancement: 1 keeps the points")
+    filter_options(enhance)
+    enhance.add_argument("--margin", type=float, default=S, help="neighbourhood radii each tile reads around it")
+    return main
+
+
+ENGINE = ("operation", "input", "output", "scheduler", "workers", "memory_limit", "tiles", "halo", "scratch",
+          "threads_per_task", "connect_timeout", "report")
+
+
+def main(argv=None):
+    arguments = vars(parser().parse_args(argv))
+    options = {key: value for key, value in arguments.items() if key not in ENGINE}
+    try:
+        report = run(arguments["operation"], arguments["input"], arguments["output"],
+                     scheduler=arguments["scheduler"], workers=arguments["workers"],
+                     memory_limit=arguments["memory_limit"], tiles=arguments["tiles"], halo=arguments["halo"],
+                     scratch=arguments["scratch"], threads_per_task=arguments["threads_per_task"],
+                     connect_timeout=arguments["connect_timeout"], progress=sys.stderr.isatty(),
+                     log=lambda message: print(message, file=sys.stderr, flush=True), **options)
+    except (TiledError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    seconds = sum(report["seconds"].values())
+    print(f"{report['points']} points in {report['tiles']} tiles: {seconds:.1f} s "
+          f"({report['points'] / seconds:,.0f} points/s), {report['widened_tiles']} tile(s) widened their halo; "
+          f"wrote {arguments['output']}", file=sys.stderr)
+    if arguments["report"]:
+        with open(arguments["report"], "w") as f:
+            json.dump(report, f, indent=1, default=float)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,204 @@
+"""The per-tile computations of the tiled runs: what each operation computes on the points a tile read, what it
+writes, and which of its own points the halo certifies.
+
+Each operation calls the package's one-process function on the tile's points; nothing here re-implements it.
+Options the caller leaves out are left to those functions, whose defaults are read from their signatures.
+"""
+import ast
+import re
+from typing import Any, Callable, Dict, Optional, Tuple
+
+import numpy as np
+
+from .. import _core
+from . import plan
+
+XYZ = [("x", "f8"), ("y", "f8"), ("z", "f8")]
+NORMALS = [("nx", "f8"), ("ny", "f8"), ("nz", "f8")]
+RGB = [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+RINGS = {"linear": 1, "quadric": 2, "cubic": 3}  # the highest power of K in f(K)
+
+
+def signature_defaults(function):
+    """{keyword: default} of a compiled function, from the signature line of its docstring."""
+    line = function.__doc__.splitlines()[0]
+    defaults = {}
+    for name, value in re.findall(r"(\w+): [^=,()]+ = ('[^']*'|[-\w.]+)", line):
+        try:
+            defaults[name] = ast.literal_eval(value)
+        except ValueError:
+            pass  # None-like or an expression: nothing the runs need
+    return defaults
+
+
+class Operation:
+    """One subcommand: `options` are the library function's keywords the caller gave."""
+    name: str = ""
+    function: Callable[..., Any]
+    value_fields: Tuple[str, ...] = ()
+    sign_fields: Tuple[str, ...] = ()  # fields whose sign follows the normals' orientation
+    color_field: Optional[str] = None
+    exact = True
+    extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
+    extra_defaults: Dict[str, Any] = {}
+
+    def __init__(self, **options):
+        keywords = set(re.findall(r"(\w+): ", self.function.__doc__.splitlines()[0])) - {"points", "normals", "progress"}
+        unknown = set(options) - keywords - set(self.extra_options)
+        if unknown:
+            raise ValueError(f"{self.name}: unknown option(s) {', '.join(sorted(unknown))}")
+        self.options = options
+        self.settings = {**signature_defaults(self.function), **self.extra_defaults, **options}
+
+    def library_options(self):
+        return {key: value for key, value in self.options.items() if key not in self.extra_options}
+
+    def fields(self):
+        return XYZ + NORMALS + [(name, "f8") for name in self.value_fields] + (RGB if self.color_field else [])
+
+    def neighbors(self, estimate_normals):
+        """The most neighbours (itself not counted) any certified quantity uses."""
+        return max(self.own_neighbors(), self.normal_neighbors() if estimate_normals else 0)
+
+    @staticmethod
+    def normal_neighbors():
+        return signature_defaults(_core.estimate_oriented_normals)["k"] - 1  # the jet's k counts the point
+
+    def certify(self, neighborhoods, own, reach, estimate_normals):
+        certified = self.certify_values(neighborhoods, own, reach)
+        if estimate_normals:
+            certified &= plan.certify_directed(neighborhoods, self.normal_neighbors(), own)
+        return certified
+
+    def halo(self, spacing):
+        """A first halo width from the typical k-th-neighbour distance of the scan."""
+        return 1.5 * (self.rings() + 1) * spacing
+
+    def rings(self):
+        return 1
+
+    def required_halo(self, neighborhoods, own):
+        """The halo an approximate operation needs beyond what `certify` checks (0: none)."""
+        return 0.0
+
+
+class Details(Operation):
+    name = "details"
+    function = _core.compute_geometric_details
+    value_fields = ("detail_x", "detail_y", "detail_z", "detail_magnitude", "detail_normal")
+    sign_fields = ("detail_magnitude", "detail_normal")
+    extra_options = ("color_by",)
+    extra_defaults = {"color_by": "detail_normal"}
+
+    def __init__(self, **options):
+        super().__init__(**options)
+        if self.settings["color_by"] not in ("detail_normal", "detail_magnitude"):
+            raise ValueError(f"details: color_by must be detail_normal or detail_magnitude, not "
+                             f"'{self.settings['color_by']}'")
+        if self.settings["order"] not in RINGS:
+            raise ValueError(f"details: order must be one of {', '.join(RINGS)}, not '{self.settings['order']}'")
+        self.color_field = self.settings["color_by"]
+
+    def own_neighbors(self):
+        return int(self.settings["k"])
+
+    def rings(self):
+        return RINGS[self.settings["order"]]
+
+    def certify_values(self, neighborhoods, own, reach):
+        return plan.certify_symmetric(neighborhoods, self.own_neighbors(), own, reach, self.rings())
+
+    def compute(self, points, normals):
+        details, magnitude = _core.compute_geometric_details(points, normals, **self.library_options())
+        along_normal = np.einsum("ij,ij->i", details, normals) / np.linalg.norm(normals, axis=1)
+        return {"detail_x": details[:, 0], "detail_y": details[:, 1], "detail_z": details[:, 2],
+                "detail_magnitude": magnitude, "detail_normal": along_normal}
+
+
+class Curvature(Operation):
+    name = "curvature"
+    function = _core.estimate_mean_curvature
+    value_fields = ("mean_curvature",)
+    sign_fields = ("mean_curvature",)
+    color_field = "mean_curvature"
+
+    def own_neighbors(self):
+        return int(self.settings["k"])
+
+    def certify_values(self, neighborhoods, own, reach):
+        return plan.certify_directed(neighborhoods, self.own_neighbors(), own)
+
+    def compute(self, points, normals):
+        return {"mean_curvature": _core.estimate_mean_curvature(points, normals, **self.library_options())}
+
+
+class Normals(Operation):
+    name = "normals"
+    function = _core.estimate_oriented_normals
+
+    def own_neighbors(self):
+        return int(self.settings["k"]) - 1
+
+    def neighbors(self, estimate_normals):
+        return self.own_neighbors()
+
+    def certify(self, neighborhoods, own, reach, estimate_normals):
+        return plan.certify_directed(neighborhoods, self.own_neighbors(), own)
+
+    def estimate(self, points):
+        return _core.estimate_oriented_normals(points, **self.library_options())
+
+    def compute(self, points, normals):
+        return {}
+
+
+class Enhance(Operation):
+    """Whole-scan enhancement, p~ + s (p - p~): the balanced flow's base surface p~ is a global solve whose
+    influence fades with distance, so a tile reads `margin` neighbourhood radii around it (as the one-process
+    call does for a partial region) and its result is close to, not equal to, the one-process result."""
+    name = "enhance"
+    function = _core.enhance_geometric_details
+    value_fields = ("displacement", "in_roi")
+    sign_fields = ("displacement",)
+    extra_options = ("margin",)
+    extra_defaults = {"margin": 80.0}
+    exact = False
+
+    def __init__(self, **options):
+        if "s" not in options:
+            raise ValueError("enhance: s (the enhancement factor) is required")
+        for name in ("roi", "anchors"):
+            if name in options:
+                raise ValueError(f"enhance: the tiled runs enhance the whole scan; {name} is not supported")
+        super().__init__(**options)
+        if not (np.isfinite(self.settings["margin"]) and self.settings["margin"] > 0):
+            raise ValueError(f"enhance: margin must be a positive number of neighbourhood radii, not "
+                             f"{self.settings['margin']}")
+
+    def own_neighbors(self):
+        return int(self.settings["k"])
+
+    def halo(self, spacing):
+        return float(self.settings["margin"]) * spacing
+
+    def required_halo(self, neighborhoods, own):
+        radius = np.median(neighborhoods.kth_distance(self.own_neighbors())[own])
+        return float(self.settings["margin"]) * radius
+
+    def certify_values(self, neighborhoods, own, reach):
+        return plan.certify_symmetric(neighborhoods, self.own_neighbors(), own, reach, RINGS[self.settings["order"]])
+
+    def compute(self, points, normals):
+        moved = _core.enhance_geometric_details(points, normals, **self.library_options())
+        displacement = np.einsum("ij,ij->i", moved - points, normals)
+        return {"x": moved[:, 0], "y": moved[:, 1], "z": moved[:, 2], "displacement": displacement,
+                "in_roi": np.ones(len(points))}
+
+
+OPERATIONS = {op.name: op for op in (Details, Curvature, Normals, Enhance)}
+
+
+def operation(name, **options):
+    if name not in OPERATIONS:
+        raise ValueError(f"unknown operation '{name}': one of {', '.join(OPERATIONS)}")
+    return OPERATIONS[name](**options)

@@ -1,0 +1,413 @@
+"""The passes of a tiled run on Dask distributed: scan, bucket, tiles, orientation, colours, write.
+
+The client holds only a sample of the scan, the tiles' boxes and each task's small summary; the points travel
+from the input file to the tasks and from the tasks to the output through a scratch folder that every worker can
+reach. See doc/scaling.md.
+"""
+import os
+import shutil
+import time
+import uuid
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .. import _core, threads
+from . import ops, plan, store
+from .store import TiledError
+
+CHUNK_ROWS = 1 << 20
+POINTS_PER_TILE = 1 << 20
+SAMPLE_PER_TILE = 4000
+
+
+# ---- tasks (run on the workers; arguments and results are small) -------------------------------------------------
+
+def scan_rows(begin, end, source, stride):
+    """Bounding box, first non-finite row and every stride-th point of rows [begin, end)."""
+    try:
+        points = source.coordinates(begin, end)
+    except Exception as error:
+        raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+    finite = np.isfinite(points).all(axis=1)
+    bad = None if finite.all() else begin + int(np.argmin(finite))
+    return {"lo": points.min(axis=0), "hi": points.max(axis=0), "bad_row": bad,
+            "sample": points[(-begin) % stride::stride].copy()}
+
+
+def bucket_rows(begin, end, source, tiling, halo, folder):
+    """Writes, for every tile, the rows of [begin, end) its read box holds: `folder/c{begin}_t{tile}.npy`."""
+    try:
+        points = source.coordinates(begin, end)
+    except Exception as error:
+        raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+    counts = {}
+    for tile, rows in tiling.read_sets(points, halo).items():
+        np.save(folder / f"c{begin}_t{tile}.npy", rows + begin)
+        counts[tile] = len(rows)
+    return counts
+
+
+def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_starts):
+    """Global rows, points and normals (or None) inside the tile's box grown by `halo`."""
+    if halo <= bucket_halo:
+        parts = [np.load(path) for path in (bucket_folder / f"c{b}_t{tile}.npy" for b in chunk_starts)
+                 if path.exists()]
+        rows = np.concatenate(parts) if parts else np.empty(0, dtype=np.int64)
+    else:  # widened beyond the buckets: scan the source for the larger box
+        found = []
+        for begin in range(0, source.count, CHUNK_ROWS):
+            end = min(source.count, begin + CHUNK_ROWS)
+            points = source.coordinates(begin, end)
+            found.append(begin + np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo)))
+        rows = np.concatenate(found)
+    points, normals = source.take(rows)
+    return rows, points, normals
+
+
+def run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch, diagonal,
+             threads_per_task):
+    """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
+    spans the scan: then the tile read every point), and saves the own points' values under `scratch/tile_{tile}`.
+    Returns the tile's summary."""
+    lo, hi = tiling.lo[tile], tiling.hi[tile]
+    estimate_normals = not source.has_normals
+    k = operation.neighbors(estimate_normals)
+    attempts = []
+    while True:
+        try:
+            rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
+                                               chunk_starts)
+        except Exception as error:
+            raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
+                             f"{error}") from None
+        order = plan.spatial_order(points) if len(points) else np.empty(0, dtype=np.int64)
+        rows, points = rows[order], points[order]
+        normals = normals[order] if normals is not None else None
+        own = plan.own_mask(points, lo, hi)
+        if not own.any():
+            return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
+                    "reach": reach}
+        border = plan.border_distance(points, lo - halo, hi + halo)
+        neighborhoods = plan.Neighborhoods(points, k, border)
+        kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
+        tile_reach = max(reach, 1.25 * kth)
+        certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
+        needed = operation.required_halo(neighborhoods, own)
+        if (certified.all() and halo >= needed) or halo > diagonal:
+            break
+        attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
+        halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
+    with threads(threads_per_task):
+        if estimate_normals:
+            normals = _core.estimate_oriented_normals(points)
+        values = operation.compute(points, normals)
+    folder = scratch / f"tile_{tile}"
+    partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
+    partial.mkdir()
+    own_rows = np.flatnonzero(own)
+    own_rows = own_rows[np.argsort(rows[own_rows])]  # the file's order, for the writers' searches
+    np.save(partial / "rows.npy", rows[own_rows])
+    for name, value in values.items():
+        np.save(partial / f"{name}.npy", np.asarray(value)[own_rows])
+    summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
+               "kth": kth, "reach": tile_reach}
+    if estimate_normals:
+        np.save(partial / "normals.npy", normals[own_rows])
+        # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
+        shared = ~own & neighborhoods.exact(ops.Operation.normal_neighbors())
+        shared = np.flatnonzero(shared)
+        shared = shared[np.argsort(rows[shared])]
+        np.save(partial / "halo_rows.npy", rows[shared])
+        np.save(partial / "halo_normals.npy", normals[shared])
+        top = int(np.argmax(np.where(own, points[:, 2], -np.inf)))
+        summary["top"] = (float(points[top, 2]), bool(normals[top, 2] >= 0))
+    if operation.color_field:
+        summary["largest"] = float(np.abs(values[operation.color_field][own_rows]).max())
+    shutil.rmtree(folder, ignore_errors=True)  # a rerun of the task (its worker died) replaces the old result
+    os.replace(partial, folder)
+    return summary
+
+
+def orientation_votes(scratch, tile, neighbours):
+    """{neighbour: agreeing minus disagreeing normals} on the tile's halo points the neighbour owns."""
+    halo_rows = np.load(scratch / f"tile_{tile}" / "halo_rows.npy")
+    halo_normals = np.load(scratch / f"tile_{tile}" / "halo_normals.npy")
+    votes = {}
+    for other in neighbours:
+        rows = np.load(scratch / f"tile_{other}" / "rows.npy", mmap_mode="r")
+        at = np.searchsorted(rows, halo_rows)
+        at = np.minimum(at, len(rows) - 1)
+        shared = rows[at] == halo_rows
+        if shared.any():
+            theirs = np.load(scratch / f"tile_{other}" / "normals.npy", mmap_mode="r")[at[shared]]
+            dots = np.einsum("ij,ij->i", halo_normals[shared], theirs)
+            votes[other] = int((dots > 0).sum()) - int((dots < 0).sum())
+    return votes
+
+
+def magnitude_histogram(scratch, tile, field, largest, every, prefix, shift):
+    """Counts of the 16-bit digit at `shift` of the magnitudes (as ordered bit patterns) under `prefix`, and the
+    count of the magnitudes the colour map ranks (all when `every`, else those above 1e-12 of the largest)."""
+    magnitude = np.abs(np.load(scratch / f"tile_{tile}" / f"{field}.npy"))
+    if not every:
+        magnitude = magnitude[magnitude > 1e-12 * largest]
+    bits = magnitude.view(np.int64)
+    if shift < 48:
+        bits = bits[(bits >> (shift + 16)) == prefix]
+    return len(magnitude), np.bincount((bits >> shift) & 0xFFFF, minlength=1 << 16)
+
+
+def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color_limit):
+    """Assembles rows [begin, end) of the output from the tiles' results and writes them to the sink."""
+    count = end - begin
+    columns = {name: np.empty(count, dtype=kind) for name, kind in sink_fields(operation)}
+    points, normals = source.rows(begin, end)
+    for axis, name in enumerate("xyz"):
+        columns[name][:] = points[:, axis]
+    if normals is not None:
+        for axis, name in enumerate(("nx", "ny", "nz")):
+            columns[name][:] = normals[:, axis]
+    covered = np.zeros(count, dtype=np.int64)
+    for tile in tiles:
+        folder = scratch / f"tile_{tile}"
+        rows = np.load(folder / "rows.npy", mmap_mode="r")
+        a, b = np.searchsorted(rows, [begin, end])
+        if a == b:
+            continue
+        at = np.asarray(rows[a:b]) - begin
+        covered[at] += 1
+        sign = -1.0 if flips.get(tile) else 1.0
+        if normals is None:
+            own_normals = sign * np.load(folder / "normals.npy", mmap_mode="r")[a:b]
+            for axis, name in enumerate(("nx", "ny", "nz")):
+                columns[name][at] = own_normals[:, axis]
+        for name in operation.value_fields + (("x", "y", "z") if isinstance(operation, ops.Enhance) else ()):
+            value = np.load(folder / f"{name}.npy", mmap_mode="r")[a:b]
+            columns[name][at] = sign * value if name in operation.sign_fields else value
+    if not (covered == 1).all():
+        row = begin + int(np.argmax(covered != 1))
+        raise TiledError(f"row {row} was computed by {int(covered[row - begin])} tiles, not exactly one")
+    if operation.color_field:
+        colors = _core.diverging_colors(columns[operation.color_field], limit=color_limit)
+        for axis, name in enumerate(("red", "green", "blue")):
+            columns[name][:] = colors[:, axis]
+    sink.write(begin, columns)
+    return count
+
+
+def sink_fields(operation):
+    return operation.fields()
+
+
+def _box_text(lo, hi):
+    return "[" + ", ".join(f"{a:.6g}..{b:.6g}" for a, b in zip(lo, hi)) + "]"
+
+
+# ---- the client's side ------------------------------------------------------------------------------------------
+
+class Run:
+    """One tiled run on a Dask client; `execute()` returns its report."""
+
+    def __init__(self, client, source, sink_path, operation, tiles, halo, scratch, threads_per_task, progress, log):
+        self.client, self.source, self.operation = client, source, operation
+        self.sink_path, self.tiles, self.halo = Path(sink_path), tiles, halo
+        self.threads_per_task = threads_per_task
+        self.scratch = scratch
+        self.progress, self.log = progress, log
+        self.report = {"operation": operation.name, "points": source.count, "exact": operation.exact,
+                       "normals": "given" if source.has_normals else "estimated", "seconds": {}}
+
+    def _gather(self, futures, what):
+        started = time.perf_counter()
+        if self.progress:
+            from distributed import progress
+            self.log(f"{what}:")
+            progress(futures)
+            print(flush=True)
+        try:
+            results = self.client.gather(futures)
+        except TiledError:
+            raise
+        except Exception as error:
+            raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
+        self.report["seconds"][what] = self.report["seconds"].get(what, 0) + time.perf_counter() - started
+        return results
+
+    def _map(self, function, items, *args, what, **kwargs):
+        futures = [self.client.submit(function, *item, *args, pure=False, **kwargs) for item in items]
+        return self._gather(futures, what)
+
+    def execute(self):
+        n = self.source.count
+        if n == 0:
+            raise TiledError(f"{self.source.path}: the scan has no points")
+        starts = list(range(0, n, CHUNK_ROWS))
+        ranges = [(b, min(n, b + CHUNK_ROWS)) for b in starts]
+        tile_count = self.tiles or max(2 * len(self.client.scheduler_info()["workers"]),
+                                       -(-n // POINTS_PER_TILE))
+        stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
+
+        scans = self._map(scan_rows, ranges, self.source, stride, what="scan")
+        bad = [s["bad_row"] for s in scans if s["bad_row"] is not None]
+        if bad:
+            raise TiledError(f"{self.source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
+        sample = np.concatenate([s["sample"] for s in scans])
+        lo = np.min([s["lo"] for s in scans], axis=0)
+        hi = np.max([s["hi"] for s in scans], axis=0)
+        tile_count = min(tile_count, max(1, len(sample) // 8))
+        tiling = plan.Tiling(sample, tile_count)
+        k = self.operation.neighbors(not self.source.has_normals)
+        spacing = self._spacing(sample, stride, k)
+        halo = self.halo if self.halo is not None else self.operation.halo(spacing)
+        reach = 2.0 * spacing
+        self.report.update(tiles=tiling.count, chunks=len(ranges), initial_halo=halo, spacing=spacing,
+                           diagonal=float(np.linalg.norm(hi - lo)))
+        self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})")
+
+        (self.scratch / "buckets").mkdir(parents=True)
+        self._map(bucket_rows, ranges, self.source, tiling, halo, self.scratch / "buckets", what="bucket")
+        all_tiles = list(range(tiling.count))
+        summaries = self._run_tiles(tiling, halo, starts, {t: (halo, reach) for t in all_tiles})
+        summaries = self._verify_reach(summaries, tiling, halo, starts)
+        shutil.rmtree(self.scratch / "buckets")
+
+        flips = self._orient(summaries, tiling) if not self.source.has_normals else {}
+        limit = self._color_limit(summaries) if self.operation.color_field else None
+
+        sink = store.open_sink(self.sink_path, n, sink_fields(self.operation), CHUNK_ROWS)
+        sink.create()
+        try:
+            tiles = [t for t in all_tiles if summaries[t]["own"] > 0]
+            self._map(write_rows, ranges, self.source, sink, self.operation, self.scratch, tiles, flips,
+                      color_limit=limit, what="write")
+            sink.commit()
+        except BaseException:
+            sink.discard()
+            raise
+        widened = [s for s in summaries.values() if s["attempts"]]
+        self.report.update(widened_tiles=len(widened), flipped_tiles=sum(1 for f in flips.values() if f),
+                           largest_halo=max(s["halo"] for s in summaries.values()),
+                           read_points=int(sum(s["read"] for s in summaries.values())),
+                           color_limit=limit, tile_summaries=[summaries[t] for t in all_tiles],
+                           tile_boxes=[[None if not np.isfinite(v) else float(v) for v in (*tiling.lo[t], *tiling.hi[t])]
+                                       for t in all_tiles])
+        return self.report
+
+    @staticmethod
+    def _spacing(sample, stride, k):
+        """The scan's typical (90th percentile) k-th-neighbour distance, from the sample: on a surface,
+        distances in a sample of one point in `stride` are sqrt(stride) times the scan's."""
+        count = min(k + 1, len(sample))
+        distances, _ = cKDTree(sample).query(sample, count)
+        return float(np.percentile(distances[:, -1], 90)) / np.sqrt(stride)
+
+    def _run_tiles(self, tiling, bucket_halo, starts, tiles):
+        """Runs the tiles {tile: (first halo, assumed reach)}."""
+        items = [(t, halo, bucket_halo, reach) for t, (halo, reach) in tiles.items()]
+        results = self._map(run_tile, items, self.source, self.operation, tiling, starts, self.scratch,
+                            self.report["diagonal"], self.threads_per_task, what="tiles")
+        return {s["tile"]: s for s in results}
+
+    def _verify_reach(self, summaries, tiling, halo, starts):
+        """Reruns the tiles whose certification assumed a k-th-neighbour distance smaller than a neighbouring
+        tile measured (symmetrised-graph operations only)."""
+        if not isinstance(self.operation, (ops.Details, ops.Enhance)):
+            return summaries
+        lo, hi = tiling.boxes()
+        for _ in range(8):
+            rerun = {}
+            for t, s in summaries.items():
+                read_lo, read_hi = plan.read_box(lo[t], hi[t], s["halo"])
+                for u, other in summaries.items():
+                    if other["kth"] >= s["reach"] and \
+                            plan.box_distance(read_lo, read_hi, lo[u], hi[u]) <= other["kth"]:
+                        rerun[t] = max(rerun.get(t, 0.0), 1.25 * other["kth"])
+            if not rerun:
+                return summaries
+            self.log(f"{len(rerun)} tile(s) rerun with the k-th-neighbour distance their neighbours measured")
+            again = self._run_tiles(tiling, halo, starts, {t: (summaries[t]["halo"], r) for t, r in rerun.items()})
+            for t, s in again.items():
+                s["attempts"] = summaries[t]["attempts"] + [{"reach": summaries[t]["reach"]}] + s["attempts"]
+                summaries[t] = s
+        raise TiledError("the tiles' k-th-neighbour distances did not settle after 8 reruns")
+
+    def _orient(self, summaries, tiling):
+        """Each tile's normals flipped or not: agreed with its neighbours on the points they share, propagated
+        over a maximum spanning tree of the tile graph, and each component turned so that its highest point's
+        normal points up (+z), as the one-process orientation does."""
+        lo, hi = tiling.boxes()
+        live = [t for t, s in summaries.items() if s["own"] > 0]
+        items = []
+        for t in live:
+            read_lo, read_hi = plan.read_box(lo[t], hi[t], summaries[t]["halo"])
+            near = [u for u in live if u != t and plan.box_distance(read_lo, read_hi, lo[u], hi[u]) == 0]
+            items.append((self.scratch, t, near))
+        votes = self._map(orientation_votes, items, what="orient")
+        weight = {}
+        for (_, t, _), vote in zip(items, votes):
+            for u, v in vote.items():
+                key = (min(t, u), max(t, u))
+                weight[key] = weight.get(key, 0) + v
+        parent = {t: t for t in live}
+
+        def find(t):
+            while parent[t] != t:
+                parent[t] = parent[parent[t]]
+                t = parent[t]
+            return t
+
+        adjacency = {t: [] for t in live}
+        for (t, u), v in sorted(weight.items(), key=lambda item: -abs(item[1])):
+            if v != 0 and find(t) != find(u):
+                parent[find(t)] = find(u)
+                adjacency[t].append((u, v < 0))
+                adjacency[u].append((t, v < 0))
+        flips, disagreements = {}, []
+        for seed in live:
+            if seed in flips:
+                continue
+            flips[seed], component, queue = False, [seed], [seed]
+            while queue:
+                t = queue.pop()
+                for u, opposite in adjacency[t]:
+                    if u not in flips:
+                        flips[u] = flips[t] != opposite
+                        component.append(u)
+                        queue.append(u)
+            top = max(component, key=lambda t: summaries[t]["top"][0])
+            if summaries[top]["top"][1] == flips[top]:  # the highest normal would point down
+                for t in component:
+                    flips[t] = not flips[t]
+        for (t, u), v in weight.items():
+            if v != 0 and (flips[t] != flips[u]) != (v < 0):
+                disagreements.append((t, u))
+        self.report["orientation_conflicts"] = len(disagreements)
+        return flips
+
+    def _color_limit(self, summaries):
+        """The colour map's saturation over the whole scan, exactly as the one-process map computes it: the
+        98th percentile of the magnitudes, found digit by digit from the tiles' histograms."""
+        field = self.operation.color_field
+        live = [t for t, s in summaries.items() if s["own"] > 0]
+        largest = max(summaries[t]["largest"] for t in live)
+        n = sum(summaries[t]["own"] for t in live)
+        ranked = sum(c for c, _ in self._map(magnitude_histogram, [(self.scratch, t) for t in live], field,
+                                             largest, False, 0, 48, what="colours"))
+        every = 2 * ranked > n
+        total = n if every else ranked
+        if total == 0:
+            return 1.0
+        rank = min(total - 1, int(0.98 * (total - 1)))
+        prefix = 0
+        for shift in (48, 32, 16, 0):
+            histograms = self._map(magnitude_histogram, [(self.scratch, t) for t in live], field, largest, every,
+                                   prefix, shift, what="colours")
+            counts = np.sum([h for _, h in histograms], axis=0)
+            cumulative = np.cumsum(counts)
+            digit = int(np.searchsorted(cumulative, rank, side="right"))
+            rank -= int(cumulative[digit - 1]) if digit else 0
+            prefix = (prefix << 16) | digit
+        limit = float(np.array([prefix], dtype=np.int64).view(np.float64)[0])
+        return limit if limit > 0 else 1.0

@@ -1,0 +1,269 @@
+"""Where the tiled runs read and write points: binary PLY by memory map and Zarr groups, row ranges at a time.
+
+A source never loads its file whole: `rows(a, b)` and `take(indices)` read what they are asked for. Sources and
+sinks are small picklable descriptions (a path and a layout); each Dask worker opens the file itself.
+"""
+import os
+import re
+import uuid
+from pathlib import Path
+
+import numpy as np
+
+PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+             "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+             "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
+PLY_NAMES = {"u1": "uchar", "f8": "double", "f4": "float", "i4": "int", "u4": "uint"}
+MAX_HEADER = 1 << 20
+
+
+class TiledError(Exception):
+    """A tiled run cannot go on: bad input, a tile that cannot be read, a cluster that does not answer."""
+
+
+def open_source(path):
+    """A `PlySource` or `ZarrSource` for `path`, checked: coordinates present, sizes consistent."""
+    path = Path(path)
+    if not path.exists():
+        raise TiledError(f"{path}: no such file or directory")
+    if path.is_dir():
+        return ZarrSource(path)
+    if path.suffix.lower() != ".ply":
+        raise TiledError(f"{path}: the tiled runs read binary PLY (by memory map) or a Zarr group, not "
+                         f"'{path.suffix}' files; convert it with `point-detail render` or cgal_ext.write_ply")
+    return PlySource(path)
+
+
+def _parse_ply_header(path):
+    """(byte order, vertex count, structured dtype, data offset) of a binary PLY whose first element is `vertex`."""
+    with open(path, "rb") as f:
+        head = f.read(MAX_HEADER)
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        raise TiledError(f"{path}: not a PLY file (no 'ply' magic or no end_header in its first MiB)")
+    newline = head.find(b"\n", end)
+    if newline < 0:
+        raise TiledError(f"{path}: the PLY header does not end with a line break")
+    offset = newline + 1
+    lines = [line.strip() for line in head[:end].decode("ascii", "replace").splitlines()]
+    order, elements = None, []
+    for line in lines[1:]:
+        words = line.split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        if words[0] == "format":
+            formats = {"binary_little_endian": "<", "binary_big_endian": ">"}
+            if len(words) < 2 or words[1] not in formats:
+                raise TiledError(f"{path}: format '{' '.join(words[1:])}' cannot be memory-mapped; the tiled "
+                                 "runs read binary PLY (write it with cgal_ext.write_ply)")
+            order = formats[words[1]]
+        elif words[0] == "element" and len(words) == 3 and re.fullmatch(r"\d+", words[2]):
+            elements.append((words[1], int(words[2]), []))
+        elif words[0] == "property" and elements:
+            if len(words) != 3 or words[1] == "list":
+                raise TiledError(f"{path}: property '{' '.join(words[1:])}' of element '{elements[-1][0]}' is "
+                                 "not a scalar; the tiled runs read point sets (vertex elements of scalars)")
+            if words[1] not in PLY_TYPES:
+                raise TiledError(f"{path}: unknown PLY type '{words[1]}'")
+            elements[-1][2].append((words[2], order + PLY_TYPES[words[1]] if order else PLY_TYPES[words[1]]))
+        else:
+            raise TiledError(f"{path}: malformed PLY header line '{line}'")
+    if order is None:
+        raise TiledError(f"{path}: the PLY header names no format")
+    if not elements or elements[0][0] != "vertex":
+        raise TiledError(f"{path}: the first PLY element must be 'vertex'")
+    name, count, properties = elements[0]
+    names = [p[0] for p in properties]
+    if len(set(names)) != len(names):
+        raise TiledError(f"{path}: a vertex property appears twice")
+    dtype = np.dtype([(p, order + t[-2:]) for p, t in properties])
+    return count, dtype, offset
+
+
+class PlySource:
+    """A binary PLY file's vertices, read by memory map."""
+
+    def __init__(self, path):
+        self.path = str(Path(path).resolve())
+        self.count, self.dtype, self.offset = _parse_ply_header(self.path)
+        missing = [c for c in "xyz" if c not in self.dtype.names]
+        if missing:
+            raise TiledError(f"{self.path}: the vertices have no {', '.join(missing)} coordinate")
+        need = self.offset + self.count * self.dtype.itemsize
+        size = os.path.getsize(self.path)
+        if size < need:
+            raise TiledError(f"{self.path}: truncated: the header announces {self.count} vertices "
+                             f"({need} bytes with the header), the file has {size} bytes")
+        self.has_normals = all(c in self.dtype.names for c in ("nx", "ny", "nz"))
+        self._map = None
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_map"] = None
+        return state
+
+    def _vertices(self):
+        if self._map is None:
+            self._map = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
+        return self._map
+
+    def _columns(self, records, names):
+        return np.stack([records[n].astype(np.float64) for n in names], axis=1)
+
+    def coordinates(self, begin, end):
+        """The points of rows [begin, end), float64 (n, 3)."""
+        return self._columns(self._vertices()[begin:end], "xyz")
+
+    def rows(self, begin, end):
+        """(points, normals or None) of rows [begin, end), float64."""
+        records = self._vertices()[begin:end]
+        return (self._columns(records, "xyz"),
+                self._columns(records, ("nx", "ny", "nz")) if self.has_normals else None)
+
+    def take(self, indices):
+        """(points, normals or None) of the sorted row `indices`."""
+        records = self._vertices()[indices]
+        return (self._columns(records, "xyz"),
+                self._columns(records, ("nx", "ny", "nz")) if self.has_normals else None)
+
+
+class ZarrSource:
+    """A Zarr group with one 1-D array per field (x, y, z; nx, ny, nz when it has normals), as the runs write."""
+
+    def __init__(self, path):
+        import zarr
+        self.path = str(Path(path).resolve())
+        try:
+            group = zarr.open_group(self.path, mode="r")
+        except Exception as error:  # zarr raises several kinds for a folder that is not a group
+            raise TiledError(f"{self.path}: not a Zarr group ({error})") from None
+        missing = [c for c in "xyz" if c not in group.array_keys()]
+        if missing:
+            raise TiledError(f"{self.path}: the Zarr group has no array {', '.join(missing)} (one 1-D array per "
+                             "coordinate, named as the PLY properties)")
+        self.has_normals = all(c in group.array_keys() for c in ("nx", "ny", "nz"))
+        fields = list("xyz") + (["nx", "ny", "nz"] if self.has_normals else [])
+        shapes = {f: group[f].shape for f in fields}
+        if any(len(s) != 1 for s in shapes.values()) or len(set(shapes.values())) != 1:
+            raise TiledError(f"{self.path}: the arrays {', '.join(fields)} must be 1-D of one length, not "
+                             + ", ".join(f"{f} {s}" for f, s in shapes.items()))
+        for f in fields:
+            if group[f].dtype.kind != "f":
+                raise TiledError(f"{self.path}: array {f} holds {group[f].dtype}, not floating-point numbers")
+        self.count = shapes["x"][0]
+        self._group = None
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_group"] = None
+        return state
+
+    def _arrays(self):
+        if self._group is None:
+            import zarr
+            self._group = zarr.open_group(self.path, mode="r")
+        return self._group
+
+    def _columns(self, names, selection):
+        group = self._arrays()
+        return np.stack([np.asarray(group[n].get_orthogonal_selection(selection), dtype=np.float64)
+                         for n in names], axis=1)
+
+    def coordinates(self, begin, end):
+        return self._columns("xyz", slice(begin, end))
+
+    def rows(self, begin, end):
+        selection = slice(begin, end)
+        return (self._columns("xyz", selection),
+                self._columns(("nx", "ny", "nz"), selection) if self.has_normals else None)
+
+    def take(self, indices):
+        return (self._columns("xyz", indices),
+                self._columns(("nx", "ny", "nz"), indices) if self.has_normals else None)
+
+
+def temporary_beside(path):
+    """A hidden name beside `path` for writing it whole before renaming."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+
+
+class PlySink:
+    """The output PLY, written by row ranges into a file of its final size (binary little endian, as the program
+    writes), under a temporary name until `commit`."""
+
+    def __init__(self, path, count, fields):
+        self.path = str(path)
+        self.temporary = str(temporary_beside(path))
+        self.count = count
+        self.dtype = np.dtype([(name, "<" + kind) for name, kind in fields])
+        header = ["ply", "format binary_little_endian 1.0", "comment written by cgal_ext.tiled",
+                  f"element vertex {count}"]
+        header += [f"property {PLY_NAMES[kind]} {name}" for name, kind in fields]
+        self.header = ("\n".join(header) + "\nend_header\n").encode("ascii")
+
+    def create(self):
+        with open(self.temporary, "wb") as f:
+            f.write(self.header)
+            f.truncate(len(self.header) + self.count * self.dtype.itemsize)
+
+    def write(self, begin, columns):
+        rows = len(next(iter(columns.values())))
+        body = np.memmap(self.temporary, dtype=self.dtype, mode="r+", offset=len(self.header),
+                         shape=(self.count,))
+        block = np.empty(rows, dtype=self.dtype)
+        for name in self.dtype.names:
+            block[name] = columns[name]
+        body[begin:begin + rows] = block
+        body.flush()
+        del body
+
+    def commit(self):
+        os.replace(self.temporary, self.path)
+
+    def discard(self):
+        Path(self.temporary).unlink(missing_ok=True)
+
+
+class ZarrSink:
+    """The output Zarr group, one 1-D array per field chunked as the writers' row ranges, under a temporary name
+    until `commit`."""
+
+    def __init__(self, path, count, fields, chunk_rows):
+        self.path = str(path)
+        self.temporary = str(temporary_beside(path))
+        self.count, self.fields, self.chunk_rows = count, fields, chunk_rows
+
+    def create(self):
+        import zarr
+        group = zarr.open_group(self.temporary, mode="w")
+        for name, kind in self.fields:
+            group.create_dataset(name, shape=(self.count,), chunks=(self.chunk_rows,), dtype=kind)
+
+    def write(self, begin, columns):
+        import zarr
+        group = zarr.open_group(self.temporary, mode="r+")
+        for name, _ in self.fields:
+            values = columns[name]
+            group[name][begin:begin + len(values)] = values
+
+    def commit(self):
+        import shutil
+        if Path(self.path).exists():
+            if not (Path(self.path) / ".zgroup").exists():
+                raise TiledError(f"{self.path}: exists and is not a Zarr group; not replaced")
+            shutil.rmtree(self.path)
+        os.replace(self.temporary, self.path)
+
+    def discard(self):
+        import shutil
+        shutil.rmtree(self.temporary, ignore_errors=True)
+
+
+def open_sink(path, count, fields, chunk_rows):
+    path = Path(path)
+    if path.suffix.lower() == ".ply":
+        return PlySink(path, count, fields)
+    if path.suffix.lower() == ".zarr":
+        return ZarrSink(path, count, fields, chunk_rows)
+    raise TiledError(f"{path}: the output's name must end in .ply or .zarr")

@@ -1,0 +1,243 @@
+# The tiled runs on Dask (cgal_ext.tiled): a 2M-point analytic shape in 8 tiles on a LocalCluster of 2 workers
+# against the one-process calls, a halo too small, a worker killed mid-run, unreadable tiles and bad inputs.
+import glob
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import zarr
+from distributed import Client, LocalCluster
+
+import cgal_ext
+from cgal_ext import tiled
+
+N = 2_000_000
+
+
+def bumpy_sphere(n, seed=7):
+    """n random samples of r = 1 + 0.02 sin(12 theta) sin(12 phi) and its exact unit normals."""
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    theta, phi = np.arccos(d[:, 2]), np.arctan2(d[:, 1], d[:, 0])
+    r = 1 + 0.02 * np.sin(12 * theta) * np.sin(12 * phi)
+    r_theta = 0.24 * np.cos(12 * theta) * np.sin(12 * phi)
+    r_phi = 0.24 * np.sin(12 * theta) * np.cos(12 * phi)
+    e_theta = np.stack([np.cos(theta) * np.cos(phi), np.cos(theta) * np.sin(phi), -np.sin(theta)], axis=1)
+    e_phi = np.stack([-np.sin(phi), np.cos(phi), np.zeros(n)], axis=1)
+    normals = d - (r_theta / r)[:, None] * e_theta - (r_phi / (r * np.maximum(np.sin(theta), 1e-12)))[:, None] * e_phi
+    return d * r[:, None], normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
+def write_zarr(path, points, normals=None, chunk=250_000):
+    group = zarr.open_group(str(path), mode="w")
+    for axis, name in enumerate("xyz"):
+        group.array(name, points[:, axis], chunks=(chunk,))
+    if normals is not None:
+        for axis, name in enumerate(("nx", "ny", "nz")):
+            group.array(name, normals[:, axis], chunks=(chunk,))
+
+
+def columns(result, names):
+    return np.stack([result[name] for name in names], axis=1)
+
+
+def read_output(path):
+    """{field: array} of a tiled run's PLY or Zarr output."""
+    if str(path).endswith(".zarr"):
+        group = zarr.open_group(str(path), mode="r")
+        return {name: group[name][:] for name in group.array_keys()}
+    from conftest import read_ply
+    data = read_ply(path)
+    return {name: np.asarray(data[name]) for name in data.dtype.names}
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="4GiB",
+                           dashboard_address=None, silence_logs=40)
+    with Client(cluster) as c:
+        yield c
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def scan(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("tiled")
+    points, normals = bumpy_sphere(N)
+    cgal_ext.write_ply(folder / "scan.ply", points, normals)
+    write_zarr(folder / "bare.zarr", points)
+    small_points, small_normals = bumpy_sphere(100_000, seed=3)
+    cgal_ext.write_ply(folder / "small.ply", small_points, small_normals)
+    return SimpleNamespace(folder=folder, points=points, normals=normals, ply=folder / "scan.ply",
+                           bare=folder / "bare.zarr", small=folder / "small.ply", small_points=small_points,
+                           small_normals=small_normals)
+
+
+def no_leftovers(folder, name):
+    return not [p for p in glob.glob(str(folder / f".{name}*"))]
+
+
+def test_details_equal_the_one_process_call(scan, client):
+    report = tiled.run("details", scan.ply, scan.folder / "details.ply", client=client, tiles=8)
+    assert report["tiles"] == 8 and report["widened_tiles"] == 0
+    out = read_output(scan.folder / "details.ply")
+    details, magnitude = cgal_ext.compute_geometric_details(scan.points, scan.normals)
+    along_normal = np.einsum("ij,ij->i", details, scan.normals)
+    assert np.abs(columns(out, ("detail_x", "detail_y", "detail_z")) - details).max() <= 1e-12
+    assert np.abs(out["detail_magnitude"] - magnitude).max() <= 1e-12
+    assert np.abs(out["detail_normal"] - along_normal).max() <= 1e-12
+    # The colour map saturates at the whole scan's percentile, as the one-process map does.
+    assert np.array_equal(columns(out, ("red", "green", "blue")), cgal_ext.diverging_colors(along_normal))
+    assert np.array_equal(columns(out, "xyz"), scan.points)
+    assert np.array_equal(columns(out, ("nx", "ny", "nz")), scan.normals)
+    assert no_leftovers(scan.folder, "details.ply")
+
+
+def test_curvature_equals_the_one_process_call_with_a_worker_killed(scan, client):
+    """A worker process is killed (SIGKILL) while tiles are being computed; Dask reruns its tasks."""
+    output = scan.folder / "curvature.zarr"
+    result = {}
+
+    def run():
+        try:
+            result["report"] = tiled.run("curvature", scan.ply, output, client=client, tiles=8,
+                                         scratch=scan.folder / "scratch")
+        except Exception as error:  # reported by the assertion below
+            result["error"] = error
+
+    worker = threading.Thread(target=run)
+    (scan.folder / "scratch").mkdir()
+    pids = list(client.run(os.getpid).values())
+    worker.start()
+    deadline = time.monotonic() + 120
+    while not glob.glob(str(scan.folder / "scratch" / ".*" / "tile_*")) and time.monotonic() < deadline:
+        assert "error" not in result, result["error"]
+        time.sleep(0.05)
+    assert glob.glob(str(scan.folder / "scratch" / ".*" / "tile_*")), f"no tile finished: {result}"
+    os.kill(pids[0], signal.SIGKILL)
+    worker.join(300)
+    assert "report" in result, f"the run did not complete after a worker was killed: {result}"
+    assert pids[0] not in client.run(os.getpid).values()
+    out = read_output(output)
+    curvature = cgal_ext.estimate_mean_curvature(scan.points, scan.normals)
+    assert np.abs(out["mean_curvature"] - curvature).max() <= 1e-12
+    assert np.array_equal(columns(out, ("red", "green", "blue")), cgal_ext.diverging_colors(curvature))
+
+
+def test_without_normals_the_tiles_agree_on_one_orientation(scan, client):
+    report = tiled.run("details", scan.bare, scan.folder / "bare_details.ply", client=client, tiles=8)
+    out = read_output(scan.folder / "bare_details.ply")
+    reference = cgal_ext.estimate_oriented_normals(scan.points)
+    same = np.einsum("ij,ij->i", columns(out, ("nx", "ny", "nz")), reference) > 0
+    assert same.mean() >= 0.999
+    # Flips along the tile borders (within 3 spacings of a face between tiles) no more frequent than inside.
+    lo = np.array([[-np.inf if v is None else v for v in box[:3]] for box in report["tile_boxes"]])
+    hi = np.array([[np.inf if v is None else v for v in box[3:]] for box in report["tile_boxes"]])
+    gap = np.full(N, np.inf)
+    for a, b in zip(lo, hi):
+        inside = np.all((scan.points >= a) & (scan.points < b), axis=1)
+        gap[inside] = np.min(np.minimum(scan.points[inside] - a, b - scan.points[inside]), axis=1)
+    border = gap < 3 * report["spacing"]
+    assert border.sum() > 10_000 and (~border).sum() > 10_000
+    assert (~same[border]).mean() <= (~same[~border]).mean()
+    # The signed fields follow each tile's orientation: equal to the one-process call's where the normals agree.
+    _, magnitude = cgal_ext.compute_geometric_details(scan.points)
+    assert np.abs(out["detail_magnitude"] - magnitude)[same].max() <= 1e-12
+    assert report["orientation_conflicts"] == 0
+
+
+def test_normals_of_a_small_scan_match_the_one_process_call(scan, client, tmp_path):
+    cgal_ext.write_ply(tmp_path / "bare.ply", scan.small_points)
+    tiled.run("normals", tmp_path / "bare.ply", tmp_path / "normals.ply", client=client, tiles=8)
+    out = read_output(tmp_path / "normals.ply")
+    reference = cgal_ext.estimate_oriented_normals(scan.small_points)
+    dots = np.einsum("ij,ij->i", columns(out, ("nx", "ny", "nz")), reference)
+    assert (dots > 0).mean() >= 0.999 and np.abs(np.abs(dots) - 1).max() <= 1e-12
+    assert sorted(out) == ["nx", "ny", "nz", "x", "y", "z"]
+
+
+def test_a_halo_too_small_is_detected_and_widened(scan, client, tmp_path):
+    report = tiled.run("details", scan.small, tmp_path / "out.ply", client=client, tiles=8, halo=1e-4,
+                       order="cubic")
+    assert report["widened_tiles"] == 8
+    assert all(s["halo"] > 1e-4 and s["attempts"][0]["uncertified"] > 0 for s in report["tile_summaries"])
+    out = read_output(tmp_path / "out.ply")
+    details, _ = cgal_ext.compute_geometric_details(scan.small_points, scan.small_normals, order="cubic")
+    assert np.abs(columns(out, ("detail_x", "detail_y", "detail_z")) - details).max() <= 1e-12
+
+
+def test_enhancement_matches_the_one_process_call(scan, client, tmp_path):
+    # A halo that covers the whole scan gives the one-process result; the default margin of 80 neighbourhood
+    # radii gives it within a small fraction of the displacement (the base surface is a global solve).
+    moved = cgal_ext.enhance_geometric_details(scan.small_points, scan.small_normals, s=2)
+    tiled.run("enhance", scan.small, tmp_path / "whole.ply", client=client, tiles=8, s=2, margin=1e4)
+    assert np.abs(columns(read_output(tmp_path / "whole.ply"), "xyz") - moved).max() <= 1e-12
+    report = tiled.run("enhance", scan.ply, tmp_path / "out.ply", client=client, tiles=8, s=2)
+    assert not report["exact"]
+    moved = cgal_ext.enhance_geometric_details(scan.points, scan.normals, s=2)
+    out = read_output(tmp_path / "out.ply")
+    displacement = np.linalg.norm(moved - scan.points, axis=1)
+    error = np.abs(columns(out, "xyz") - moved).max()
+    assert error <= 2e-6 * np.sqrt((displacement ** 2).mean())
+    assert np.abs(out["displacement"] - np.einsum("ij,ij->i", moved - scan.points, scan.normals)).max() <= 1e-9
+
+
+def test_an_unreadable_tile_fails_the_run_naming_it(scan, client, tmp_path):
+    write_zarr(tmp_path / "scan.zarr", scan.small_points, scan.small_normals, chunk=20_000)
+    (tmp_path / "scan.zarr" / "nx" / "2").write_bytes(b"not a compressed chunk")
+    with pytest.raises(tiled.TiledError, match=r"tile \d+ .*cannot be read"):
+        tiled.run("curvature", tmp_path / "scan.zarr", tmp_path / "out.ply", client=client, tiles=8)
+    assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
+    (tmp_path / "scan.zarr" / "x" / "1").write_bytes(b"garbage")
+    with pytest.raises(tiled.TiledError, match=r"rows 0\.\.99999 of .*scan.zarr cannot be read"):
+        tiled.run("curvature", tmp_path / "scan.zarr", tmp_path / "out.zarr", client=client, tiles=8)
+    assert not (tmp_path / "out.zarr").exists() and no_leftovers(tmp_path, "out.zarr")
+
+
+def test_bad_inputs_get_clear_errors(scan, client, tmp_path):
+    with pytest.raises(tiled.TiledError, match="no such file"):
+        tiled.run("details", tmp_path / "missing.ply", tmp_path / "out.ply", client=client)
+    (tmp_path / "nox.ply").write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double a\n"
+                                       b"property double y\nproperty double z\nend_header\n" + bytes(48))
+    with pytest.raises(tiled.TiledError, match="no x coordinate"):
+        tiled.run("details", tmp_path / "nox.ply", tmp_path / "out.ply", client=client)
+    group = zarr.open_group(str(tmp_path / "short.zarr"), mode="w")
+    for name, length in (("x", 10), ("y", 10), ("z", 9)):
+        group.zeros(name, shape=(length,))
+    with pytest.raises(tiled.TiledError, match=r"1-D of one length.*z \(9,\)"):
+        tiled.run("details", tmp_path / "short.zarr", tmp_path / "out.ply", client=client)
+    points = scan.small_points.copy()
+    points[12345, 1] = np.nan
+    write_zarr(tmp_path / "nan.zarr", points)
+    with pytest.raises(tiled.TiledError, match="point 12345 has a non-finite coordinate"):
+        tiled.run("curvature", tmp_path / "nan.zarr", tmp_path / "out.ply", client=client)
+    with pytest.raises(tiled.TiledError, match="is the input"):
+        tiled.run("details", scan.small, scan.small, client=client)
+    with pytest.raises(ValueError, match="unknown option"):
+        tiled.run("curvature", scan.small, tmp_path / "out.ply", client=client, order="cubic")
+    assert not list(tmp_path.glob("out*")) and not list(tmp_path.glob(".out*"))
+    started = time.monotonic()
+    with pytest.raises(tiled.TiledError, match="does not answer"):
+        tiled.run("details", scan.small, tmp_path / "out.ply", scheduler="tcp://127.0.0.1:9", connect_timeout=5)
+    assert time.monotonic() - started < 30
+
+
+def test_the_command_line_runs_on_its_own_cluster(scan, tmp_path):
+    command = [sys.executable, "-m", "cgal_ext.tiled", "curvature", str(scan.small), "-o", str(tmp_path / "c.ply"),
+               "--workers", "2", "--tiles", "4", "-k", "12", "--report", str(tmp_path / "r.json")]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert "4 tiles" in run.stderr and "dashboard" in run.stderr
+    out = read_output(tmp_path / "c.ply")
+    curvature = cgal_ext.estimate_mean_curvature(scan.small_points, scan.small_normals, k=12)
+    assert np.abs(out["mean_curvature"] - curvature).max() <= 1e-12
+    failed = subprocess.run(command[:4] + [str(tmp_path / "missing.ply"), "-o", str(tmp_path / "x.ply")],
+                            capture_output=True, text=True, timeout=60)
+    assert failed.returncode == 1 and "missing.ply: no such file" in failed.stderr
