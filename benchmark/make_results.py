@@ -351,7 +351,8 @@ def main():
                "[editing](editing_results.md), [up-sampling](upsampling_results.md), "
                "[SSPs](simplification_results.md), [curvature](curvature_results.md), [normals](normals_results.md), "
                "[detail scaling](scaling_results.md), [details](details_results.md), [memory](memory_results.md), "
-               "[raw scans](raw_scan_results.md), [Python](python_results.md), [studio](studio_results.md).\n")
+               "[raw scans](raw_scan_results.md), [Python](python_results.md), [studio](studio_results.md), "
+               "[tiled runs on Dask](tiled_results.md).\n")
     table(out, ["machine", ""], machine_facts(build_dir, threads))
     table1_section(out, editing)
     peers_section(out, editing, simplification, upsampling, curvature,
@@ -367,7 +368,8 @@ def main():
                        ("bench_scaling", read_csv(os.path.join(out_dir, "scaling_results.csv"))),
                        ("bench_details", read_csv(os.path.join(out_dir, "details_results.csv"))),
                        ("bench_python", read_csv(os.path.join(out_dir, "python_results.csv"))),
-                       ("bench_studio", read_csv(os.path.join(out_dir, "studio_results.csv")))]:
+                       ("bench_studio", read_csv(os.path.join(out_dir, "studio_results.csv"))),
+                       ("bench_tiled", read_csv(os.path.join(out_dir, "tiled_results.csv")))]:
         sources.append((name, "", rows))
     write_long_csv(os.path.join(out_dir, "results.csv"), sources)
     print(f"wrote {out_dir}/RESULTS.md, {out_dir}/results.csv and {out_dir}/scaling.png")

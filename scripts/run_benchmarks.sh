@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up, builds in Release and runs the whole benchmark harness on CGAL's real scans and on 100k, 1M
 # and 4M-point samplings of the armadillo surface; writes benchmark/RESULTS.md, benchmark/results.csv,
-# benchmark/scaling.png and each stage's *_results.{md,csv}. About 30 minutes on 2 cores.
+# benchmark/scaling.png and each stage's *_results.{md,csv}. About 45 minutes on 2 cores.
 # Usage: scripts/run_benchmarks.sh [--quick]
 #   --quick: small sizes, one repetition, results under build/benchmark/quick (what CI runs so the harness
 #            cannot rot; the committed figures are never overwritten by it).
@@ -43,5 +43,8 @@ PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_python.py "${flags[@
 echo "== bench_studio.py" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_studio.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_studio.log"
+echo "== bench_tiled.py (10M, 30M and 100M points: about 15 minutes, 15 GB of temporary files)" >&2
+PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled.py "${flags[@]}" --build "$build" --data data --out "$out" \
+  > "$build/benchmark/logs/bench_tiled.log"
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"
 echo "run_benchmarks.sh: $((SECONDS - start)) s of benchmarks" >&2

@@ -192,7 +192,7 @@ def test_enhancement_matches_the_one_process_call(scan, client, tmp_path):
 def test_an_unreadable_tile_fails_the_run_naming_it(scan, client, tmp_path):
     write_zarr(tmp_path / "scan.zarr", scan.small_points, scan.small_normals, chunk=20_000)
     (tmp_path / "scan.zarr" / "nx" / "2").write_bytes(b"not a compressed chunk")
-    with pytest.raises(tiled.TiledError, match=r"tile \d+ .*cannot be read"):
+    with pytest.raises(tiled.TiledError, match=r"tile\(s\) [\d, ]+ cannot be read: the normals of rows 0\.\.99999"):
         tiled.run("curvature", tmp_path / "scan.zarr", tmp_path / "out.ply", client=client, tiles=8)
     assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
     (tmp_path / "scan.zarr" / "x" / "1").write_bytes(b"garbage")
@@ -241,3 +241,44 @@ def test_the_command_line_runs_on_its_own_cluster(scan, tmp_path):
     failed = subprocess.run(command[:4] + [str(tmp_path / "missing.ply"), "-o", str(tmp_path / "x.ply")],
                             capture_output=True, text=True, timeout=60)
     assert failed.returncode == 1 and "missing.ply: no such file" in failed.stderr
+
+
+@pytest.mark.parametrize("order", ["linear", "quadric", "cubic"])
+def test_the_certificate_holds_exactly_where_it_says(scan, order):
+    """Details computed on a box of the scan: every point the certificate accepts equals the whole scan's value;
+    the points next to the box's faces, which it rejects, do not."""
+    from cgal_ext.tiled import ops, plan
+    points, normals = scan.small_points, scan.small_normals
+    whole, _ = cgal_ext.compute_geometric_details(points, normals, order=order)
+    lo, hi = np.array([-0.3, -np.inf, -np.inf]), np.array([0.4, np.inf, 0.5])
+    halo = 0.02
+    read = plan.own_mask(points, lo - halo, hi + halo)
+    part, _ = cgal_ext.compute_geometric_details(points[read], normals[read], order=order)
+    own = plan.own_mask(points[read], lo, hi)
+    neighborhoods = plan.Neighborhoods(points[read], 10, plan.border_distance(points[read], lo - halo, hi + halo))
+    reach = 1.25 * neighborhoods.kth_distance(10).max()
+    certified = plan.certify_symmetric(neighborhoods, 10, own, reach, ops.RINGS[order])
+    error = np.abs(part[own] - whole[read][own]).max(axis=1)
+    assert 0.5 < certified.mean() < 1 and error[certified].max() <= 1e-12
+    # Beyond the certified points, some values do differ: the check is not idle.
+    assert (error[~certified] > 1e-9).any()
+    with_border = plan.certify_symmetric(neighborhoods, 10, np.ones(read.sum(), dtype=bool), reach,
+                                         ops.RINGS[order])
+    outside = plan.border_distance(points[read], lo - halo, hi + halo) < 1e-3
+    assert not with_border[outside].any()
+
+
+
+def test_a_sparser_neighbour_tile_makes_a_tile_rerun(client, tmp_path):
+    """Half the sphere ten times sparser: the dense tiles' first assumption about their neighbours' k-th-neighbour
+    distances is too small, which the check after the tiles finds; the rerun tiles give the one-process result."""
+    points, normals = bumpy_sphere(300_000, seed=5)
+    keep = (points[:, 2] > 0) | (np.arange(len(points)) % 10 == 0)
+    points, normals = points[keep], normals[keep]
+    cgal_ext.write_ply(tmp_path / "uneven.ply", points, normals)
+    report = tiled.run("details", tmp_path / "uneven.ply", tmp_path / "out.ply", client=client, tiles=8,
+                       order="cubic")
+    assert any("reach" in attempt for s in report["tile_summaries"] for attempt in s["attempts"])
+    details, _ = cgal_ext.compute_geometric_details(points, normals, order="cubic")
+    out = read_output(tmp_path / "out.ply")
+    assert np.abs(columns(out, ("detail_x", "detail_y", "detail_z")) - details).max() <= 1e-12

@@ -45,7 +45,7 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     memory_limit : str or int
         Memory limit per LocalCluster worker ("3GiB", bytes, or "auto").
     tiles : int, optional
-        Number of tiles (default: about one million points each, at least two per worker).
+        Number of tiles (default: about 262,000 points each, at least two per worker).
     halo : float, optional
         The first halo width (default: from the operation's rings and the scan's spacing); a halo too small for
         a tile is widened by that tile.

@@ -39,6 +39,7 @@ class Operation:
     sign_fields: Tuple[str, ...] = ()  # fields whose sign follows the normals' orientation
     color_field: Optional[str] = None
     exact = True
+    symmetric = False  # on the symmetrised kNN graph: the certificate assumes a reach, verified after the tiles
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 
@@ -52,6 +53,10 @@ class Operation:
 
     def library_options(self):
         return {key: value for key, value in self.options.items() if key not in self.extra_options}
+
+    def computed_fields(self):
+        """The output fields the tiles compute (the others are the input's)."""
+        return self.value_fields
 
     def fields(self):
         return XYZ + NORMALS + [(name, "f8") for name in self.value_fields] + (RGB if self.color_field else [])
@@ -87,6 +92,7 @@ class Details(Operation):
     function = _core.compute_geometric_details
     value_fields = ("detail_x", "detail_y", "detail_z", "detail_magnitude", "detail_normal")
     sign_fields = ("detail_magnitude", "detail_normal")
+    symmetric = True
     extra_options = ("color_by",)
     extra_defaults = {"color_by": "detail_normal"}
 
@@ -160,6 +166,7 @@ class Enhance(Operation):
     function = _core.enhance_geometric_details
     value_fields = ("displacement", "in_roi")
     sign_fields = ("displacement",)
+    symmetric = True
     extra_options = ("margin",)
     extra_defaults = {"margin": 80.0}
     exact = False
@@ -180,6 +187,9 @@ class Enhance(Operation):
 
     def halo(self, spacing):
         return float(self.settings["margin"]) * spacing
+
+    def computed_fields(self):
+        return ("x", "y", "z") + self.value_fields
 
     def required_halo(self, neighborhoods, own):
         radius = np.median(neighborhoods.kth_distance(self.own_neighbors())[own])

@@ -12,8 +12,9 @@ farther than every k-th-neighbour distance of the points around (`reach`, verifi
 tiles' measured distances after the run).
 """
 import numpy as np
-import scipy.sparse
 from scipy.spatial import cKDTree
+
+from .. import _core
 
 
 class Tiling:
@@ -116,7 +117,9 @@ class Neighborhoods:
     def __init__(self, points, k, border):
         self.k = k
         count = min(k + 1, len(points))
-        self.distances, self.indices = cKDTree(points, balanced_tree=False, compact_nodes=False).query(points, count)
+        tree = cKDTree(points, leafsize=32, balanced_tree=False, compact_nodes=False)
+        distances, indices = tree.query(points, count, workers=_core.get_num_threads())
+        self.distances, self.indices = distances.reshape(len(points), count), indices.reshape(len(points), count)
         if count < k + 1:  # fewer points read than neighbours asked: nothing can be certified
             self.distances = np.pad(self.distances, ((0, 0), (0, k + 1 - count)), constant_values=np.inf)
         self.border = border
@@ -128,13 +131,9 @@ class Neighborhoods:
         """Each point's k nearest (itself not counted) are its k nearest in the whole scan."""
         return self.distances[:, k] < self.border
 
-    def symmetric_graph(self, k):
-        """The symmetrised k-nearest-neighbour graph of the points read, as a boolean sparse matrix."""
-        n = len(self.indices)
-        rows = np.repeat(np.arange(n), k)
-        columns = self.indices[:, 1:k + 1].reshape(-1)
-        directed = scipy.sparse.csr_matrix((np.ones(len(rows), dtype=bool), (rows, columns)), shape=(n, n))
-        return directed, (directed + directed.T).tocsr()
+    def neighbors(self, k):
+        """Each point's k nearest, itself left out (m, k)."""
+        return self.indices[:, 1:k + 1]
 
 
 def certify_directed(neighborhoods, k, own):
@@ -151,14 +150,15 @@ def certify_symmetric(neighborhoods, k, own, reach, rings):
     the rows within `rings - 1` hops.
     """
     exact = neighborhoods.exact(k)
-    directed, graph = neighborhoods.symmetric_graph(k)
-    # Rows whose reverse neighbours include an inexact point: column j of directed holds i when j is in i's k nearest.
-    inexact_pointing = directed.T.tocsr() @ (~exact).astype(np.int8)
-    row_exact = exact & (neighborhoods.border > reach) & (inexact_pointing == 0)
-    bad = (~row_exact).astype(np.int8)
-    for _ in range(rings - 1):
-        bad = np.minimum(bad + graph @ bad, 1).astype(np.int8)
-    return bad[own] == 0
+    neighbors = neighborhoods.neighbors(k)
+    pointed_by_inexact = np.zeros(len(exact), dtype=bool)
+    pointed_by_inexact[neighbors[~exact].reshape(-1)] = True
+    bad = ~(exact & (neighborhoods.border > reach) & ~pointed_by_inexact)
+    for _ in range(rings - 1):  # one hop of the symmetrised graph: a bad point's neighbours, and who has one
+        spread = bad | bad[neighbors].any(axis=1)
+        spread[neighbors[bad].reshape(-1)] = True
+        bad = spread
+    return ~bad[own]
 
 
 def box_distance(lo_a, hi_a, lo_b, hi_b):

@@ -18,7 +18,7 @@ from . import ops, plan, store
 from .store import TiledError
 
 CHUNK_ROWS = 1 << 20
-POINTS_PER_TILE = 1 << 20
+POINTS_PER_TILE = 1 << 18
 SAMPLE_PER_TILE = 4000
 
 
@@ -37,16 +37,29 @@ def scan_rows(begin, end, source, stride):
 
 
 def bucket_rows(begin, end, source, tiling, halo, folder):
-    """Writes, for every tile, the rows of [begin, end) its read box holds: `folder/c{begin}_t{tile}.npy`."""
+    """Copies, for every tile, the rows of [begin, end) its read box holds (row number, point, normal) to
+    `folder/c{begin}_t{tile}.npy`, so that the tile tasks read small files instead of the whole scan."""
     try:
         points = source.coordinates(begin, end)
     except Exception as error:
         raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+    read_sets = tiling.read_sets(points, halo)
+    try:
+        normals = source.normals(begin, end)
+    except Exception as error:
+        raise TiledError(f"tile(s) {', '.join(map(str, sorted(read_sets)))} cannot be read: the normals of rows "
+                         f"{begin}..{end - 1} of {source.path}: {error}") from None
     counts = {}
-    for tile, rows in tiling.read_sets(points, halo).items():
-        np.save(folder / f"c{begin}_t{tile}.npy", rows + begin)
+    for tile, rows in read_sets.items():
+        np.save(folder / f"c{begin}_t{tile}.npy", _bucket(begin + rows, points[rows],
+                                                         None if normals is None else normals[rows]))
         counts[tile] = len(rows)
     return counts
+
+
+def _bucket(rows, points, normals):
+    """Row numbers (exact in float64 below 2^53), points and normals side by side."""
+    return np.column_stack([rows.astype(np.float64), points] + ([] if normals is None else [normals]))
 
 
 def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_starts):
@@ -54,16 +67,18 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
     if halo <= bucket_halo:
         parts = [np.load(path) for path in (bucket_folder / f"c{b}_t{tile}.npy" for b in chunk_starts)
                  if path.exists()]
-        rows = np.concatenate(parts) if parts else np.empty(0, dtype=np.int64)
     else:  # widened beyond the buckets: scan the source for the larger box
-        found = []
+        parts = []
         for begin in range(0, source.count, CHUNK_ROWS):
             end = min(source.count, begin + CHUNK_ROWS)
             points = source.coordinates(begin, end)
-            found.append(begin + np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo)))
-        rows = np.concatenate(found)
-    points, normals = source.take(rows)
-    return rows, points, normals
+            inside = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
+            normals = source.normals(begin, end) if source.has_normals else None
+            parts.append(_bucket(begin + inside, points[inside], None if normals is None else normals[inside]))
+    width = 7 if source.has_normals else 4
+    table = np.concatenate(parts) if parts else np.empty((0, width))
+    return (table[:, 0].astype(np.int64), np.ascontiguousarray(table[:, 1:4]),
+            np.ascontiguousarray(table[:, 4:7]) if source.has_normals else None)
 
 
 def run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch, diagonal,
@@ -75,6 +90,13 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_st
     estimate_normals = not source.has_normals
     k = operation.neighbors(estimate_normals)
     attempts = []
+    with threads(threads_per_task):
+        return _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch,
+                         diagonal, lo, hi, estimate_normals, k, attempts)
+
+
+def _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch, diagonal, lo, hi,
+              estimate_normals, k, attempts):
     while True:
         try:
             rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
@@ -99,10 +121,9 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_st
             break
         attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
         halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
-    with threads(threads_per_task):
-        if estimate_normals:
-            normals = _core.estimate_oriented_normals(points)
-        values = operation.compute(points, normals)
+    if estimate_normals:
+        normals = _core.estimate_oriented_normals(points)
+    values = operation.compute(points, normals)
     folder = scratch / f"tile_{tile}"
     partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
     partial.mkdir()
@@ -162,8 +183,8 @@ def magnitude_histogram(scratch, tile, field, largest, every, prefix, shift):
 def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color_limit):
     """Assembles rows [begin, end) of the output from the tiles' results and writes them to the sink."""
     count = end - begin
-    columns = {name: np.empty(count, dtype=kind) for name, kind in sink_fields(operation)}
-    points, normals = source.rows(begin, end)
+    columns = {name: np.empty(count, dtype=kind) for name, kind in operation.fields()}
+    points, normals = source.coordinates(begin, end), source.normals(begin, end)
     for axis, name in enumerate("xyz"):
         columns[name][:] = points[:, axis]
     if normals is not None:
@@ -183,7 +204,7 @@ def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color
             own_normals = sign * np.load(folder / "normals.npy", mmap_mode="r")[a:b]
             for axis, name in enumerate(("nx", "ny", "nz")):
                 columns[name][at] = own_normals[:, axis]
-        for name in operation.value_fields + (("x", "y", "z") if isinstance(operation, ops.Enhance) else ()):
+        for name in operation.computed_fields():
             value = np.load(folder / f"{name}.npy", mmap_mode="r")[a:b]
             columns[name][at] = sign * value if name in operation.sign_fields else value
     if not (covered == 1).all():
@@ -195,10 +216,6 @@ def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color
             columns[name][:] = colors[:, axis]
     sink.write(begin, columns)
     return count
-
-
-def sink_fields(operation):
-    return operation.fields()
 
 
 def _box_text(lo, hi):
@@ -228,9 +245,10 @@ class Run:
             print(flush=True)
         try:
             results = self.client.gather(futures)
-        except TiledError:
-            raise
-        except Exception as error:
+        except BaseException as error:
+            self.client.cancel(futures)
+            if isinstance(error, (TiledError, KeyboardInterrupt)):
+                raise
             raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
         self.report["seconds"][what] = self.report["seconds"].get(what, 0) + time.perf_counter() - started
         return results
@@ -276,7 +294,7 @@ class Run:
         flips = self._orient(summaries, tiling) if not self.source.has_normals else {}
         limit = self._color_limit(summaries) if self.operation.color_field else None
 
-        sink = store.open_sink(self.sink_path, n, sink_fields(self.operation), CHUNK_ROWS)
+        sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
         sink.create()
         try:
             tiles = [t for t in all_tiles if summaries[t]["own"] > 0]
@@ -313,7 +331,7 @@ class Run:
     def _verify_reach(self, summaries, tiling, halo, starts):
         """Reruns the tiles whose certification assumed a k-th-neighbour distance smaller than a neighbouring
         tile measured (symmetrised-graph operations only)."""
-        if not isinstance(self.operation, (ops.Details, ops.Enhance)):
+        if not self.operation.symmetric:
             return summaries
         lo, hi = tiling.boxes()
         for _ in range(8):

@@ -1,7 +1,9 @@
 """Where the tiled runs read and write points: binary PLY by memory map and Zarr groups, row ranges at a time.
 
-A source never loads its file whole: `rows(a, b)` and `take(indices)` read what they are asked for. Sources and
-sinks are small picklable descriptions (a path and a layout); each Dask worker opens the file itself.
+A source never loads its file whole: `rows(a, b)` reads one row range at a time. A PLY file is mapped for the
+call only: pages of a mapping that stays open count in the worker's resident memory, which Dask's memory limit
+watches, and would grow to the file's size. Sources and sinks are small picklable descriptions (a path and a
+layout); each Dask worker opens the file itself.
 """
 import os
 import re
@@ -95,36 +97,24 @@ class PlySource:
             raise TiledError(f"{self.path}: truncated: the header announces {self.count} vertices "
                              f"({need} bytes with the header), the file has {size} bytes")
         self.has_normals = all(c in self.dtype.names for c in ("nx", "ny", "nz"))
-        self._map = None
 
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        state["_map"] = None
-        return state
+    def _records(self, begin, end):
+        vertices = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
+        records = np.array(vertices[begin:end])
+        del vertices  # unmapped: its pages leave the resident set
+        return records
 
-    def _vertices(self):
-        if self._map is None:
-            self._map = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
-        return self._map
-
-    def _columns(self, records, names):
+    @staticmethod
+    def _columns(records, names):
         return np.stack([records[n].astype(np.float64) for n in names], axis=1)
 
     def coordinates(self, begin, end):
         """The points of rows [begin, end), float64 (n, 3)."""
-        return self._columns(self._vertices()[begin:end], "xyz")
+        return self._columns(self._records(begin, end), "xyz")
 
-    def rows(self, begin, end):
-        """(points, normals or None) of rows [begin, end), float64."""
-        records = self._vertices()[begin:end]
-        return (self._columns(records, "xyz"),
-                self._columns(records, ("nx", "ny", "nz")) if self.has_normals else None)
-
-    def take(self, indices):
-        """(points, normals or None) of the sorted row `indices`."""
-        records = self._vertices()[indices]
-        return (self._columns(records, "xyz"),
-                self._columns(records, ("nx", "ny", "nz")) if self.has_normals else None)
+    def normals(self, begin, end):
+        """The normals of rows [begin, end), float64 (n, 3); None when the scan has none."""
+        return self._columns(self._records(begin, end), ("nx", "ny", "nz")) if self.has_normals else None
 
 
 class ZarrSource:
@@ -151,35 +141,17 @@ class ZarrSource:
             if group[f].dtype.kind != "f":
                 raise TiledError(f"{self.path}: array {f} holds {group[f].dtype}, not floating-point numbers")
         self.count = shapes["x"][0]
-        self._group = None
-
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        state["_group"] = None
-        return state
-
-    def _arrays(self):
-        if self._group is None:
-            import zarr
-            self._group = zarr.open_group(self.path, mode="r")
-        return self._group
 
     def _columns(self, names, selection):
-        group = self._arrays()
-        return np.stack([np.asarray(group[n].get_orthogonal_selection(selection), dtype=np.float64)
-                         for n in names], axis=1)
+        import zarr
+        group = zarr.open_group(self.path, mode="r")
+        return np.stack([np.asarray(group[n][selection], dtype=np.float64) for n in names], axis=1)
 
     def coordinates(self, begin, end):
         return self._columns("xyz", slice(begin, end))
 
-    def rows(self, begin, end):
-        selection = slice(begin, end)
-        return (self._columns("xyz", selection),
-                self._columns(("nx", "ny", "nz"), selection) if self.has_normals else None)
-
-    def take(self, indices):
-        return (self._columns("xyz", indices),
-                self._columns(("nx", "ny", "nz"), indices) if self.has_normals else None)
+    def normals(self, begin, end):
+        return self._columns(("nx", "ny", "nz"), slice(begin, end)) if self.has_normals else None
 
 
 def temporary_beside(path):
