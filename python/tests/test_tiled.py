@@ -154,10 +154,10 @@ def test_without_normals_the_tiles_agree_on_one_orientation(scan, client):
 
 
 def test_normals_of_a_small_scan_match_the_one_process_call(scan, client, tmp_path):
-    cgal_ext.write_ply(tmp_path / "bare.ply", scan.small_points)
-    tiled.run("normals", tmp_path / "bare.ply", tmp_path / "normals.ply", client=client, tiles=8)
+    """The normals operation replaces the scan's own normals by estimated ones, with the k it is given."""
+    tiled.run("normals", scan.small, tmp_path / "normals.ply", client=client, tiles=8, k=12)
     out = read_output(tmp_path / "normals.ply")
-    reference = cgal_ext.estimate_oriented_normals(scan.small_points)
+    reference = cgal_ext.estimate_oriented_normals(scan.small_points, k=12)
     dots = np.einsum("ij,ij->i", columns(out, ("nx", "ny", "nz")), reference)
     assert (dots > 0).mean() >= 0.999 and np.abs(np.abs(dots) - 1).max() <= 1e-12
     assert sorted(out) == ["nx", "ny", "nz", "x", "y", "z"]

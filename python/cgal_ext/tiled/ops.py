@@ -61,12 +61,20 @@ class Operation:
     def fields(self):
         return XYZ + NORMALS + [(name, "f8") for name in self.value_fields] + (RGB if self.color_field else [])
 
+    def estimates_normals(self, has_normals):
+        """Whether the tiles estimate (and orient) the normals: when the scan has none."""
+        return not has_normals
+
+    def oriented_normals(self, points):
+        """The normals the one-process function estimates for points without any."""
+        return _core.estimate_oriented_normals(points)
+
     def neighbors(self, estimate_normals):
         """The most neighbours (itself not counted) any certified quantity uses."""
         return max(self.own_neighbors(), self.normal_neighbors() if estimate_normals else 0)
 
-    @staticmethod
-    def normal_neighbors():
+    def normal_neighbors(self):
+        """The neighbours of an estimated normal's fit (itself not counted)."""
         return signature_defaults(_core.estimate_oriented_normals)["k"] - 1  # the jet's k counts the point
 
     def certify(self, neighborhoods, own, reach, estimate_normals):
@@ -145,13 +153,19 @@ class Normals(Operation):
     def own_neighbors(self):
         return int(self.settings["k"]) - 1
 
+    def normal_neighbors(self):
+        return self.own_neighbors()
+
     def neighbors(self, estimate_normals):
         return self.own_neighbors()
 
     def certify(self, neighborhoods, own, reach, estimate_normals):
         return plan.certify_directed(neighborhoods, self.own_neighbors(), own)
 
-    def estimate(self, points):
+    def estimates_normals(self, has_normals):
+        return True  # the scan's own normals, if any, are replaced
+
+    def oriented_normals(self, points):
         return _core.estimate_oriented_normals(points, **self.library_options())
 
     def compute(self, points, normals):

@@ -161,8 +161,9 @@ def certify_symmetric(neighborhoods, k, own, reach, rings):
     return ~bad[own]
 
 
-def box_distance(lo_a, hi_a, lo_b, hi_b):
-    """Euclidean distance between two axis-aligned boxes (0 when they meet)."""
-    gap = np.maximum(0.0, np.maximum(lo_a - hi_b, lo_b - hi_a))
+def box_distances(lo, hi, los, his):
+    """Euclidean distance from the box [lo, hi] to each box [los[i], his[i]] (0 where they meet)."""
+    with np.errstate(invalid="ignore"):
+        gap = np.maximum(0.0, np.maximum(lo - his, los - hi))
     gap = np.where(np.isfinite(gap), gap, 0.0)
-    return float(np.sqrt((gap * gap).sum()))
+    return np.sqrt((gap * gap).sum(axis=1))

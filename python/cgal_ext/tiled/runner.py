@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import _core, threads
-from . import ops, plan, store
+from . import plan, store
 from .store import TiledError
 
 CHUNK_ROWS = 1 << 20
@@ -81,13 +81,12 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
             np.ascontiguousarray(table[:, 4:7]) if source.has_normals else None)
 
 
-def run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch, diagonal,
-             threads_per_task):
+def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals, tiling, chunk_starts, scratch,
+             diagonal, threads_per_task):
     """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
     spans the scan: then the tile read every point), and saves the own points' values under `scratch/tile_{tile}`.
     Returns the tile's summary."""
     lo, hi = tiling.lo[tile], tiling.hi[tile]
-    estimate_normals = not source.has_normals
     k = operation.neighbors(estimate_normals)
     attempts = []
     with threads(threads_per_task):
@@ -122,7 +121,7 @@ def _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_s
         attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
         halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
     if estimate_normals:
-        normals = _core.estimate_oriented_normals(points)
+        normals = operation.oriented_normals(points)
     values = operation.compute(points, normals)
     folder = scratch / f"tile_{tile}"
     partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
@@ -137,7 +136,7 @@ def _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_s
     if estimate_normals:
         np.save(partial / "normals.npy", normals[own_rows])
         # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
-        shared = ~own & neighborhoods.exact(ops.Operation.normal_neighbors())
+        shared = ~own & neighborhoods.exact(operation.normal_neighbors())
         shared = np.flatnonzero(shared)
         shared = shared[np.argsort(rows[shared])]
         np.save(partial / "halo_rows.npy", rows[shared])
@@ -180,11 +179,12 @@ def magnitude_histogram(scratch, tile, field, largest, every, prefix, shift):
     return len(magnitude), np.bincount((bits >> shift) & 0xFFFF, minlength=1 << 16)
 
 
-def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color_limit):
+def write_rows(begin, end, source, sink, operation, estimate_normals, scratch, tiles, flips, color_limit):
     """Assembles rows [begin, end) of the output from the tiles' results and writes them to the sink."""
     count = end - begin
     columns = {name: np.empty(count, dtype=kind) for name, kind in operation.fields()}
-    points, normals = source.coordinates(begin, end), source.normals(begin, end)
+    points = source.coordinates(begin, end)
+    normals = None if estimate_normals else source.normals(begin, end)
     for axis, name in enumerate("xyz"):
         columns[name][:] = points[:, axis]
     if normals is not None:
@@ -200,7 +200,7 @@ def write_rows(begin, end, source, sink, operation, scratch, tiles, flips, color
         at = np.asarray(rows[a:b]) - begin
         covered[at] += 1
         sign = -1.0 if flips.get(tile) else 1.0
-        if normals is None:
+        if estimate_normals:
             own_normals = sign * np.load(folder / "normals.npy", mmap_mode="r")[a:b]
             for axis, name in enumerate(("nx", "ny", "nz")):
                 columns[name][at] = own_normals[:, axis]
@@ -233,8 +233,9 @@ class Run:
         self.threads_per_task = threads_per_task
         self.scratch = scratch
         self.progress, self.log = progress, log
+        self.estimate_normals = operation.estimates_normals(source.has_normals)
         self.report = {"operation": operation.name, "points": source.count, "exact": operation.exact,
-                       "normals": "given" if source.has_normals else "estimated", "seconds": {}}
+                       "normals": "estimated" if self.estimate_normals else "given", "seconds": {}}
 
     def _gather(self, futures, what):
         started = time.perf_counter()
@@ -276,7 +277,7 @@ class Run:
         hi = np.max([s["hi"] for s in scans], axis=0)
         tile_count = min(tile_count, max(1, len(sample) // 8))
         tiling = plan.Tiling(sample, tile_count)
-        k = self.operation.neighbors(not self.source.has_normals)
+        k = self.operation.neighbors(self.estimate_normals)
         spacing = self._spacing(sample, stride, k)
         halo = self.halo if self.halo is not None else self.operation.halo(spacing)
         reach = 2.0 * spacing
@@ -291,15 +292,15 @@ class Run:
         summaries = self._verify_reach(summaries, tiling, halo, starts)
         shutil.rmtree(self.scratch / "buckets")
 
-        flips = self._orient(summaries, tiling) if not self.source.has_normals else {}
+        flips = self._orient(summaries, tiling) if self.estimate_normals else {}
         limit = self._color_limit(summaries) if self.operation.color_field else None
 
         sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
         sink.create()
         try:
             tiles = [t for t in all_tiles if summaries[t]["own"] > 0]
-            self._map(write_rows, ranges, self.source, sink, self.operation, self.scratch, tiles, flips,
-                      color_limit=limit, what="write")
+            self._map(write_rows, ranges, self.source, sink, self.operation, self.estimate_normals, self.scratch,
+                      tiles, flips, color_limit=limit, what="write")
             sink.commit()
         except BaseException:
             sink.discard()
@@ -324,8 +325,8 @@ class Run:
     def _run_tiles(self, tiling, bucket_halo, starts, tiles):
         """Runs the tiles {tile: (first halo, assumed reach)}."""
         items = [(t, halo, bucket_halo, reach) for t, (halo, reach) in tiles.items()]
-        results = self._map(run_tile, items, self.source, self.operation, tiling, starts, self.scratch,
-                            self.report["diagonal"], self.threads_per_task, what="tiles")
+        results = self._map(run_tile, items, self.source, self.operation, self.estimate_normals, tiling, starts,
+                            self.scratch, self.report["diagonal"], self.threads_per_task, what="tiles")
         return {s["tile"]: s for s in results}
 
     def _verify_reach(self, summaries, tiling, halo, starts):
@@ -336,12 +337,12 @@ class Run:
         lo, hi = tiling.boxes()
         for _ in range(8):
             rerun = {}
+            kth = np.array([summaries[u]["kth"] for u in range(tiling.count)])
             for t, s in summaries.items():
                 read_lo, read_hi = plan.read_box(lo[t], hi[t], s["halo"])
-                for u, other in summaries.items():
-                    if other["kth"] >= s["reach"] and \
-                            plan.box_distance(read_lo, read_hi, lo[u], hi[u]) <= other["kth"]:
-                        rerun[t] = max(rerun.get(t, 0.0), 1.25 * other["kth"])
+                reaching = (kth >= s["reach"]) & (plan.box_distances(read_lo, read_hi, lo, hi) <= kth)
+                if reaching.any():
+                    rerun[t] = 1.25 * float(kth[reaching].max())
             if not rerun:
                 return summaries
             self.log(f"{len(rerun)} tile(s) rerun with the k-th-neighbour distance their neighbours measured")
@@ -360,8 +361,8 @@ class Run:
         items = []
         for t in live:
             read_lo, read_hi = plan.read_box(lo[t], hi[t], summaries[t]["halo"])
-            near = [u for u in live if u != t and plan.box_distance(read_lo, read_hi, lo[u], hi[u]) == 0]
-            items.append((self.scratch, t, near))
+            meets = plan.box_distances(read_lo, read_hi, lo[live], hi[live]) == 0
+            items.append((self.scratch, t, [u for u, m in zip(live, meets) if m and u != t]))
         votes = self._map(orientation_votes, items, what="orient")
         weight = {}
         for (_, t, _), vote in zip(items, votes):
