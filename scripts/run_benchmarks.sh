@@ -43,7 +43,7 @@ PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_python.py "${flags[@
 echo "== bench_studio.py" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_studio.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_studio.log"
-echo "== bench_tiled.py (10M, 30M and 100M points: about 15 minutes, 15 GB of temporary files)" >&2
+echo "== bench_tiled.py (full run: 10M, 30M and 100M points, about 15 minutes and 15 GB of temporary files)" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_tiled.log"
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"

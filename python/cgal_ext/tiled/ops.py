@@ -44,7 +44,8 @@ class Operation:
     extra_defaults: Dict[str, Any] = {}
 
     def __init__(self, **options):
-        keywords = set(re.findall(r"(\w+): ", self.function.__doc__.splitlines()[0])) - {"points", "normals", "progress"}
+        signature = self.function.__doc__.splitlines()[0]
+        keywords = set(re.findall(r"(\w+): ", signature)) - {"points", "normals", "progress"}
         unknown = set(options) - keywords - set(self.extra_options)
         if unknown:
             raise ValueError(f"{self.name}: unknown option(s) {', '.join(sorted(unknown))}")

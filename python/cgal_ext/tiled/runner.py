@@ -86,68 +86,62 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
     """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
     spans the scan: then the tile read every point), and saves the own points' values under `scratch/tile_{tile}`.
     Returns the tile's summary."""
-    lo, hi = tiling.lo[tile], tiling.hi[tile]
-    k = operation.neighbors(estimate_normals)
-    attempts = []
     with threads(threads_per_task):
-        return _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch,
-                         diagonal, lo, hi, estimate_normals, k, attempts)
-
-
-def _run_tile(tile, halo, bucket_halo, reach, source, operation, tiling, chunk_starts, scratch, diagonal, lo, hi,
-              estimate_normals, k, attempts):
-    while True:
-        try:
-            rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
-                                               chunk_starts)
-        except Exception as error:
-            raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
-                             f"{error}") from None
-        order = plan.spatial_order(points) if len(points) else np.empty(0, dtype=np.int64)
-        rows, points = rows[order], points[order]
-        normals = normals[order] if normals is not None else None
-        own = plan.own_mask(points, lo, hi)
-        if not own.any():
-            return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
-                    "reach": reach}
-        border = plan.border_distance(points, lo - halo, hi + halo)
-        neighborhoods = plan.Neighborhoods(points, k, border)
-        kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
-        tile_reach = max(reach, 1.25 * kth)
-        certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
-        needed = operation.required_halo(neighborhoods, own)
-        if (certified.all() and halo >= needed) or halo > diagonal:
-            break
-        attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
-        halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
-    if estimate_normals:
-        normals = operation.oriented_normals(points)
-    values = operation.compute(points, normals)
-    folder = scratch / f"tile_{tile}"
-    partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
-    partial.mkdir()
-    own_rows = np.flatnonzero(own)
-    own_rows = own_rows[np.argsort(rows[own_rows])]  # the file's order, for the writers' searches
-    np.save(partial / "rows.npy", rows[own_rows])
-    for name, value in values.items():
-        np.save(partial / f"{name}.npy", np.asarray(value)[own_rows])
-    summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
-               "kth": kth, "reach": tile_reach}
-    if estimate_normals:
-        np.save(partial / "normals.npy", normals[own_rows])
-        # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
-        shared = ~own & neighborhoods.exact(operation.normal_neighbors())
-        shared = np.flatnonzero(shared)
-        shared = shared[np.argsort(rows[shared])]
-        np.save(partial / "halo_rows.npy", rows[shared])
-        np.save(partial / "halo_normals.npy", normals[shared])
-        top = int(np.argmax(np.where(own, points[:, 2], -np.inf)))
-        summary["top"] = (float(points[top, 2]), bool(normals[top, 2] >= 0))
-    if operation.color_field:
-        summary["largest"] = float(np.abs(values[operation.color_field][own_rows]).max())
-    shutil.rmtree(folder, ignore_errors=True)  # a rerun of the task (its worker died) replaces the old result
-    os.replace(partial, folder)
-    return summary
+        lo, hi = tiling.lo[tile], tiling.hi[tile]
+        k = operation.neighbors(estimate_normals)
+        attempts = []
+        while True:
+            try:
+                rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
+                                                   chunk_starts)
+            except Exception as error:
+                raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
+                                 f"{error}") from None
+            order = plan.spatial_order(points) if len(points) else np.empty(0, dtype=np.int64)
+            rows, points = rows[order], points[order]
+            normals = normals[order] if normals is not None else None
+            own = plan.own_mask(points, lo, hi)
+            if not own.any():
+                return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
+                        "reach": reach}
+            border = plan.border_distance(points, lo - halo, hi + halo)
+            neighborhoods = plan.Neighborhoods(points, k, border)
+            kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
+            tile_reach = max(reach, 1.25 * kth)
+            certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
+            needed = operation.required_halo(neighborhoods, own)
+            if (certified.all() and halo >= needed) or halo > diagonal:
+                break
+            attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
+            halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
+        if estimate_normals:
+            normals = operation.oriented_normals(points)
+        values = operation.compute(points, normals)
+        folder = scratch / f"tile_{tile}"
+        partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
+        partial.mkdir()
+        own_rows = np.flatnonzero(own)
+        own_rows = own_rows[np.argsort(rows[own_rows])]  # the file's order, for the writers' searches
+        np.save(partial / "rows.npy", rows[own_rows])
+        for name, value in values.items():
+            np.save(partial / f"{name}.npy", np.asarray(value)[own_rows])
+        summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
+                   "kth": kth, "reach": tile_reach}
+        if estimate_normals:
+            np.save(partial / "normals.npy", normals[own_rows])
+            # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
+            shared = ~own & neighborhoods.exact(operation.normal_neighbors())
+            shared = np.flatnonzero(shared)
+            shared = shared[np.argsort(rows[shared])]
+            np.save(partial / "halo_rows.npy", rows[shared])
+            np.save(partial / "halo_normals.npy", normals[shared])
+            top = int(np.argmax(np.where(own, points[:, 2], -np.inf)))
+            summary["top"] = (float(points[top, 2]), bool(normals[top, 2] >= 0))
+        if operation.color_field:
+            summary["largest"] = float(np.abs(values[operation.color_field][own_rows]).max())
+        shutil.rmtree(folder, ignore_errors=True)  # a rerun of the task (its worker died) replaces the old result
+        os.replace(partial, folder)
+        return summary
 
 
 def orientation_votes(scratch, tile, neighbours):
@@ -310,7 +304,7 @@ class Run:
                            largest_halo=max(s["halo"] for s in summaries.values()),
                            read_points=int(sum(s["read"] for s in summaries.values())),
                            color_limit=limit, tile_summaries=[summaries[t] for t in all_tiles],
-                           tile_boxes=[[None if not np.isfinite(v) else float(v) for v in (*tiling.lo[t], *tiling.hi[t])]
+                           tile_boxes=[[float(v) if np.isfinite(v) else None for v in (*tiling.lo[t], *tiling.hi[t])]
                                        for t in all_tiles])
         return self.report
 
