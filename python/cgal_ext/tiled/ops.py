@@ -51,6 +51,8 @@ class Operation:
             raise ValueError(f"{self.name}: unknown option(s) {', '.join(sorted(unknown))}")
         self.options = options
         self.settings = {**signature_defaults(self.function), **self.extra_defaults, **options}
+        if self.settings.get("order", "linear") not in RINGS:
+            raise ValueError(f"{self.name}: order must be one of {', '.join(RINGS)}, not '{self.settings['order']}'")
 
     def library_options(self):
         return {key: value for key, value in self.options.items() if key not in self.extra_options}
@@ -78,8 +80,15 @@ class Operation:
         """The neighbours of an estimated normal's fit (itself not counted)."""
         return signature_defaults(_core.estimate_oriented_normals)["k"] - 1  # the jet's k counts the point
 
+    def own_neighbors(self):
+        """The neighbours (itself not counted) of the operation's own values."""
+        return int(self.settings["k"])
+
     def certify(self, neighborhoods, own, reach, estimate_normals):
-        certified = self.certify_values(neighborhoods, own, reach)
+        if self.symmetric:
+            certified = plan.certify_symmetric(neighborhoods, self.own_neighbors(), own, reach, self.rings())
+        else:
+            certified = plan.certify_directed(neighborhoods, self.own_neighbors(), own)
         if estimate_normals:
             certified &= plan.certify_directed(neighborhoods, self.normal_neighbors(), own)
         return certified
@@ -89,7 +98,8 @@ class Operation:
         return 1.5 * (self.rings() + 1) * spacing
 
     def rings(self):
-        return 1
+        """Products with K the values need: the transfer function's degree, else one neighbourhood."""
+        return RINGS[self.settings["order"]] if "order" in self.settings else 1
 
     def required_halo(self, neighborhoods, own):
         """The halo an approximate operation needs beyond what `certify` checks (0: none)."""
@@ -110,18 +120,7 @@ class Details(Operation):
         if self.settings["color_by"] not in ("detail_normal", "detail_magnitude"):
             raise ValueError(f"details: color_by must be detail_normal or detail_magnitude, not "
                              f"'{self.settings['color_by']}'")
-        if self.settings["order"] not in RINGS:
-            raise ValueError(f"details: order must be one of {', '.join(RINGS)}, not '{self.settings['order']}'")
         self.color_field = self.settings["color_by"]
-
-    def own_neighbors(self):
-        return int(self.settings["k"])
-
-    def rings(self):
-        return RINGS[self.settings["order"]]
-
-    def certify_values(self, neighborhoods, own, reach):
-        return plan.certify_symmetric(neighborhoods, self.own_neighbors(), own, reach, self.rings())
 
     def compute(self, points, normals):
         details, magnitude = _core.compute_geometric_details(points, normals, **self.library_options())
@@ -137,12 +136,6 @@ class Curvature(Operation):
     sign_fields = ("mean_curvature",)
     color_field = "mean_curvature"
 
-    def own_neighbors(self):
-        return int(self.settings["k"])
-
-    def certify_values(self, neighborhoods, own, reach):
-        return plan.certify_directed(neighborhoods, self.own_neighbors(), own)
-
     def compute(self, points, normals):
         return {"mean_curvature": _core.estimate_mean_curvature(points, normals, **self.library_options())}
 
@@ -157,11 +150,8 @@ class Normals(Operation):
     def normal_neighbors(self):
         return self.own_neighbors()
 
-    def neighbors(self, estimate_normals):
-        return self.own_neighbors()
-
     def certify(self, neighborhoods, own, reach, estimate_normals):
-        return plan.certify_directed(neighborhoods, self.own_neighbors(), own)
+        return plan.certify_directed(neighborhoods, self.own_neighbors(), own)  # the values are the normals
 
     def estimates_normals(self, has_normals):
         return True  # the scan's own normals, if any, are replaced
@@ -197,9 +187,6 @@ class Enhance(Operation):
             raise ValueError(f"enhance: margin must be a positive number of neighbourhood radii, not "
                              f"{self.settings['margin']}")
 
-    def own_neighbors(self):
-        return int(self.settings["k"])
-
     def halo(self, spacing):
         return float(self.settings["margin"]) * spacing
 
@@ -209,9 +196,6 @@ class Enhance(Operation):
     def required_halo(self, neighborhoods, own):
         radius = np.median(neighborhoods.kth_distance(self.own_neighbors())[own])
         return float(self.settings["margin"]) * radius
-
-    def certify_values(self, neighborhoods, own, reach):
-        return plan.certify_symmetric(neighborhoods, self.own_neighbors(), own, reach, RINGS[self.settings["order"]])
 
     def compute(self, points, normals):
         moved = _core.enhance_geometric_details(points, normals, **self.library_options())

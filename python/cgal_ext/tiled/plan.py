@@ -115,7 +115,6 @@ class Neighborhoods:
     """The k nearest neighbours of every point read (itself first), and whether they are the whole scan's."""
 
     def __init__(self, points, k, border):
-        self.k = k
         count = min(k + 1, len(points))
         tree = cKDTree(points, leafsize=32, balanced_tree=False, compact_nodes=False)
         distances, indices = tree.query(points, count, workers=_core.get_num_threads())

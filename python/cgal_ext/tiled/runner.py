@@ -73,7 +73,7 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
             end = min(source.count, begin + CHUNK_ROWS)
             points = source.coordinates(begin, end)
             inside = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
-            normals = source.normals(begin, end) if source.has_normals else None
+            normals = source.normals(begin, end)
             parts.append(_bucket(begin + inside, points[inside], None if normals is None else normals[inside]))
     width = 7 if source.has_normals else 4
     table = np.concatenate(parts) if parts else np.empty((0, width))

@@ -233,9 +233,8 @@ class ZarrSink:
 
 
 def open_sink(path, count, fields, chunk_rows):
+    """A PlySink for OUT.ply, otherwise a ZarrSink (`run` has checked the name)."""
     path = Path(path)
     if path.suffix.lower() == ".ply":
         return PlySink(path, count, fields)
-    if path.suffix.lower() == ".zarr":
-        return ZarrSink(path, count, fields, chunk_rows)
-    raise TiledError(f"{path}: the output's name must end in .ply or .zarr")
+    return ZarrSink(path, count, fields, chunk_rows)
