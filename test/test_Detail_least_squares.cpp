@@ -288,7 +288,7 @@ TEST(DetailLeastSquares, CholmodRunningOutOfMemoryIsANumericalFailureNamingTheSt
 }
 #endif
 
-#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+#ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
 // The factorisation serialises CHOLMOD's OpenMP regions (which compete with OpenBLAS's threads for the cores)
 // for the calling thread only, and restores what that thread had.
 TEST(DetailLeastSquares, FactorisationSerialisesTheOpenMPRegionsOfItsOwnThreadOnly)
@@ -306,5 +306,23 @@ TEST(DetailLeastSquares, FactorisationSerialisesTheOpenMPRegionsOfItsOwnThreadOn
     EXPECT_EQ(elsewhere, before);
   }
   EXPECT_EQ(max_active_levels(), before);
+}
+
+// The solves run OpenBLAS on the calling thread (its threads would spin for the cores of the caller's next
+// parallel loop) and give OpenBLAS its thread count back.
+TEST(DetailLeastSquares, SolvesRunBlasOnTheCallingThreadAndRestoreItsThreadCount)
+{
+  const auto threads = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  const auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  if(!threads || !set_threads) GTEST_SKIP() << "CHOLMOD's BLAS is not OpenBLAS";
+  const int before = threads();
+  set_threads(2);
+  if(threads() != 2) GTEST_SKIP() << "this OpenBLAS is built for one thread";
+  {
+    const Serial_blas serial;
+    EXPECT_EQ(threads(), 1);
+  }
+  EXPECT_EQ(threads(), 2);
+  set_threads(before);
 }
 #endif

@@ -16,7 +16,7 @@
 #include <Eigen/CholmodSupport>
 #if __has_include(<dlfcn.h>)
 #include <dlfcn.h>
-#define CGAL_EXT_SERIAL_OPENMP_REGIONS
+#define CGAL_EXT_SCOPED_RUNTIME_SETTINGS
 #endif
 #endif
 
@@ -81,45 +81,49 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
   return B;
 }
 
-#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+#ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
+/// While it lives, an integer setting of a runtime library holds `value`, and its old value comes back after.
+/// The library's getter and setter are looked up, not linked: without the library loaded this does nothing.
+class Scoped_runtime_setting
+{
+public:
+  Scoped_runtime_setting(const char* getter, const char* setter, int value)
+  {
+    const auto get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, getter));
+    const auto set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, setter));
+    if(!get || !set || (m_saved = get()) == value) return;
+    set(value);
+    m_set = set;
+  }
+  ~Scoped_runtime_setting()
+  {
+    if(m_set) m_set(m_saved);
+  }
+  Scoped_runtime_setting(const Scoped_runtime_setting&) = delete;
+  Scoped_runtime_setting& operator=(const Scoped_runtime_setting&) = delete;
+
+private:
+  void (*m_set)(int) = nullptr;
+  int m_saved = 0;
+};
+
 /// While it lives, the OpenMP regions the calling thread opens run on that thread alone (the OpenMP runtime's
 /// `max-active-levels` of this thread set to 0; other threads are untouched). CHOLMOD 3 runs parts of its
 /// supernodal factorisation in OpenMP regions of a fixed four threads, which on a machine with few cores fight
 /// OpenBLAS's threads, idle but spinning, for the cores: a 28,270-unknown factorisation took 0.50-0.81 s on
-/// two cores, 0.32-0.52 s with the regions serial (doc/design.md, "Editing's factorisation"). The runtime is
-/// looked up, not linked: without one loaded (a CHOLMOD built without OpenMP) this does nothing.
-class Serial_openmp_regions
+/// two cores, 0.32-0.52 s with the regions serial (doc/design.md, "Editing's factorisation").
+struct Serial_openmp_regions : Scoped_runtime_setting
 {
-  using Get = int (*)();
-  using Set = void (*)(int);
-  struct Runtime
-  {
-    Get get = reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
-    Set set = reinterpret_cast<Set>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
-  };
-  static const Runtime& runtime()
-  {
-    static const Runtime found;
-    return found;
-  }
+  Serial_openmp_regions() : Scoped_runtime_setting("omp_get_max_active_levels", "omp_set_max_active_levels", 0) {}
+};
 
-public:
-  Serial_openmp_regions()
-  {
-    if(runtime().get && runtime().set) {
-      m_saved = runtime().get();
-      runtime().set(0);
-    }
-  }
-  ~Serial_openmp_regions()
-  {
-    if(runtime().get && runtime().set) runtime().set(m_saved);
-  }
-  Serial_openmp_regions(const Serial_openmp_regions&) = delete;
-  Serial_openmp_regions& operator=(const Serial_openmp_regions&) = delete;
-
-private:
-  int m_saved = 1;
+/// While it lives, OpenBLAS (CHOLMOD's BLAS, when it is OpenBLAS) runs its calls on the calling thread. A solve
+/// with the factor is a sequence of small triangular blocks: OpenBLAS's threads gain nothing on them, and once
+/// woken they spin for the cores the caller's next parallel loop needs (doc/design.md, "Editing's
+/// factorisation").
+struct Serial_blas : Scoped_runtime_setting
+{
+  Serial_blas() : Scoped_runtime_setting("openblas_get_num_threads", "openblas_set_num_threads", 1) {}
 };
 #endif
 
@@ -291,6 +295,9 @@ private:
     Eigen::MatrixXd x;
 #ifdef CGAL_EXT_USE_CHOLMOD
     if(m_main) {
+#ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
+      const Serial_blas serial_blas;
+#endif
       x = m_main->solve(scaled);
       check_cholmod("solving with the factor");
       if(m_main->info() != Eigen::Success)
@@ -523,7 +530,7 @@ try {
   common.nmethods = amd_only ? 1 : 2;
   common.method[0].ordering = amd_only ? CHOLMOD_AMD : CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;
-#ifdef CGAL_EXT_SERIAL_OPENMP_REGIONS
+#ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
   const Serial_openmp_regions serial_openmp;
 #endif
   // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
