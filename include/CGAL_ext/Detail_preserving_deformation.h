@@ -467,6 +467,7 @@ private:
   std::vector<double> m_d1, m_strength; // per sample point and group
   std::vector<Eigen::Matrix3d> m_propagated, m_frames; // m_propagated: the details' R_i
   std::vector<Eigen::Matrix3d> m_sample_map; // per sample point, the linear part of its motion (a rotation unless affine)
+  std::vector<internal::Linear_map_prior> m_linear_map_priors; // affine turns: per region sample point
   bool m_has_rigid_rotations = false; // as-rigid-as-possible: m_propagated holds the last drag's rotations
   std::vector<Transform> m_solved_transforms;   // as-rigid-as-possible: the handles' transforms of the last drag
   Eigen::Vector3d m_handles_centre;             // centroid of the handles' sample points
@@ -708,6 +709,13 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   if(!progress.report(0.6)) return false;
 
   build_strength_field();
+  m_linear_map_priors.clear();
+  if(m_settings.diffusion_turn == Sample_turn::affine) {
+    m_linear_map_priors.resize(m_system.roi.size());
+    for_range<ConcurrencyTag>(0, m_system.roi.size(), [&](std::size_t r) {
+      m_linear_map_priors[r] = Linear_map_prior(m_samples, m_system.graph, std::size_t(m_system.roi[r]));
+    });
+  }
   if(m_settings.diffusion_turn == Sample_turn::frames) { // the fitted turns need no frames
     m_frame_builder.setup(m_samples, m_sample_normals, m_system.graph);
     m_frames.resize(count);
@@ -880,12 +888,17 @@ void Detail_preserving_deformation<ConcurrencyTag>::update_sample_motions()
       return;
     }
     if(m_settings.diffusion_turn != Sample_turn::frames) {
-      // As rigid as possible, the last local step fitted these very rotations to the deformed sample points.
-      const Eigen::Matrix3d fitted = rigid_rotations ? m_propagated[s] : fitted_rotation(m_samples, m_deformed_samples, m_system.graph, s);
-      // The fitted rotation is the identity exactly where the neighbourhood did not move: keep it so.
-      m_sample_map[s] = m_settings.diffusion_turn == Sample_turn::affine && !fitted.isIdentity(0)
-                          ? fitted_linear_map(m_samples, m_deformed_samples, m_system.graph, s, fitted)
-                          : fitted;
+      const bool affine = m_settings.diffusion_turn == Sample_turn::affine;
+      double covariance[9]; // of the edges: the rotation's fit and the linear map's
+      const bool moved = (affine || !rigid_rotations) &&
+                         edge_covariance(m_samples, m_deformed_samples, m_system.graph, s, nullptr, covariance);
+      // As rigid as possible, the last local step fitted these very rotations to the deformed sample points. The
+      // fitted rotation is the identity exactly where the neighbourhood did not move: keep it so.
+      const Eigen::Matrix3d fitted =
+        rigid_rotations ? m_propagated[s]
+        : moved         ? best_rotation(Eigen::Matrix3d(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(covariance)))
+                        : Eigen::Matrix3d::Identity();
+      m_sample_map[s] = affine && !fitted.isIdentity(0) ? m_linear_map_priors[r].fitted_linear_map(covariance, fitted) : fitted;
       return;
     }
     bool moved = !m_propagated[s].isIdentity(0) || m_deformed_samples.row(Eigen::Index(s)) != m_samples.row(Eigen::Index(s));

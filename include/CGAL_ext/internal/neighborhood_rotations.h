@@ -103,22 +103,44 @@ Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed
 /// `min sum_j |A e_j - e'_j|^2 + mu |A - rotation|^2`, so `A = (sum_j e'_j e_j^T + mu R)(sum_j e_j e_j^T + mu I)^-1`,
 /// with `mu` a tenth of `sum_j |e_j|^2`: a flat neighbourhood leaves its normal direction to `R`, and a
 /// neighbourhood whose sample points the solve moved unevenly passes on less of that unevenness (doc/editing.md,
-/// "Sample point turns"). A neighbourhood moved rigidly gives that rotation. (A template for the reason
-/// `best_rotation` is one.)
+/// "Sample point turns"). A neighbourhood moved rigidly gives that rotation.
+/// `Linear_map_prior` is the part fixed by the rest positions, set up once per edit; a drag adds the deformed
+/// edges as `edge_covariance`'s unweighted `covariance` (`sum_j e_j e'_j^T`, row-major).
+struct Linear_map_prior
+{
+  Eigen::Matrix3d inverse_spread = Eigen::Matrix3d::Identity(); ///< `(sum_j e_j e_j^T + mu I)^-1`
+  double mu = 0; ///< 0 where `s` has no edges or all of length zero: `A` is then `rotation`
+
+  template <typename Positions>
+  Linear_map_prior(const Positions& rest, const Neighbor_graph& graph, std::size_t s)
+  {
+    const Eigen::RowVector3d p = rest.row(Eigen::Index(s));
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+    for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
+      const Eigen::RowVector3d e = rest.row(*j) - p;
+      spread += e.transpose() * e;
+    }
+    mu = 0.1 * spread.trace();
+    if(mu > 0) inverse_spread = (spread + mu * Eigen::Matrix3d::Identity()).inverse();
+    else mu = 0;
+  }
+  Linear_map_prior() = default;
+
+  Eigen::Matrix3d fitted_linear_map(const double covariance[9], const Eigen::Matrix3d& rotation) const
+  {
+    if(mu == 0) return rotation;
+    return (Eigen::Map<const Eigen::Matrix3d>(covariance) + mu * rotation) * inverse_spread; // column-major: the transpose
+  }
+};
+
+/// `Linear_map_prior(rest, graph, s).fitted_linear_map(...)` in one call.
 template <typename Positions>
 Eigen::Matrix3d fitted_linear_map(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
                                   const Eigen::Matrix3d& rotation)
 {
-  const Eigen::RowVector3d p = rest.row(Eigen::Index(s)), q = deformed.row(Eigen::Index(s));
-  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), image = Eigen::Matrix3d::Zero();
-  for(const int* j = graph.begin(s); j != graph.end(s); ++j) {
-    const Eigen::RowVector3d e = rest.row(*j) - p;
-    spread += e.transpose() * e;
-    image += (deformed.row(*j) - q).transpose() * e;
-  }
-  const double mu = 0.1 * spread.trace();
-  if(!(mu > 0)) return rotation; // no edges, or all of length zero
-  return (image + mu * rotation) * (spread + mu * Eigen::Matrix3d::Identity()).inverse();
+  double covariance[9];
+  edge_covariance(rest, deformed, graph, s, nullptr, covariance);
+  return Linear_map_prior(rest, graph, s).fitted_linear_map(covariance, rotation);
 }
 
 /// The local step of as-rigid-as-possible editing: `fitted_rotation` of each of the sample points `rows`
