@@ -978,11 +978,11 @@ public:
         for(int r = 0; r < 3; ++r) group_out[12 * g + 4 * r + 3] = float(t(r));
       }
       float* collar_out = group_out + 12 * groups;
-      for(std::size_t c = 0; c < collar; ++c) {
+      tbb::parallel_for(std::size_t(0), collar, [&](std::size_t c) { // each a blend of the point's stencil
         Eigen::Vector3d step, normal_step;
         d.collar_handle_step(c, step, normal_step);
         for(int r = 0; r < 3; ++r) collar_out[6 * c + r] = float(step(r)), collar_out[6 * c + 3 + r] = float(normal_step(r));
-      }
+      });
       return 0;
     });
     return frame;
@@ -998,6 +998,9 @@ public:
                     "restore_seconds"_a = s.restore_seconds, "restore_iterations"_a = s.restore_iterations,
                     "restore_residual"_a = s.restore_residual, "rigid_iterations"_a = s.rigid_iterations,
                     "displacement_ratio"_a = s.displacement_ratio, "factor_seconds"_a = s.least_squares.factor_seconds,
+                    "operator_nonzeros"_a = s.least_squares.operator_nonzeros,
+                    "normal_nonzeros"_a = s.least_squares.normal_nonzeros,
+                    "solve_seconds"_a = s.least_squares.solve_seconds, "solve_iterations"_a = s.least_squares.iterations,
                     "relative_residual"_a = s.least_squares.relative_residual);
   }
 
