@@ -12,7 +12,8 @@ import cgal_ext
 from conftest import read_ply, run_program, xyz
 from studio_support import Server, chromium, idle, make_tentacle, pointer_path, screen_box, wait_for
 
-SHOTS = pathlib.Path(os.environ.get("CGAL_EXT_STUDIO_SHOTS", "studio_screenshots"))
+SHOTS = pathlib.Path(os.environ.get("CGAL_EXT_STUDIO_SHOTS") or
+                     pathlib.Path(os.environ.get("CGAL_EXT_CMAKE_BUILD_DIR", "build")) / "studio_screenshots")
 
 
 @pytest.fixture(scope="module")

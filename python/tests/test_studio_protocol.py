@@ -5,10 +5,11 @@ import asyncio
 import json
 import os
 import struct
+import time
 
 import numpy as np
 import pytest
-from aiohttp import ClientOSError, ClientSession, WSMsgType, WSServerHandshakeError
+from aiohttp import ClientOSError, ClientSession, WSCloseCode, WSMsgType, WSServerHandshakeError
 
 import cgal_ext
 from conftest import bumpy_sphere
@@ -69,6 +70,8 @@ class Client:
                 count = int(np.prod(a["shape"]))
                 header[a["name"]] = np.frombuffer(message.data, a["dtype"], count, start).reshape(a["shape"])
             return header
+        if message.type == WSMsgType.CLOSE:  # the code the server sent (close_code is our reply's)
+            return {"type": "closed", "code": message.data}
         return {"type": "closed", "code": self.ws.close_code}
 
     async def until(self, *types):
@@ -268,4 +271,23 @@ def test_soak_2000_drags_keep_memory_flat(server):
                 resident.append(server.resident_bytes())
         await client.close()
         assert resident[1] <= 1.05 * resident[0], resident
+    run(scenario())
+
+
+def test_ctrl_c_with_a_tab_open_stops_at_once_and_tells_the_tab(tmp_path):
+    # aiohttp waits for open WebSockets for its grace period of a minute: the studio closes the tab's first.
+    points, normals = bumpy_sphere(2000)
+    cgal_ext.write_ply(tmp_path / "sphere.ply", points, normals)
+    studio = Server(tmp_path / "sphere.ply")
+
+    async def scenario():
+        client = await Client.open(studio)
+        await client.until("geometry")
+        start = time.monotonic()
+        status, err = await asyncio.get_running_loop().run_in_executor(None, studio.stop)
+        assert status == 0 and "stopped" in err and "Traceback" not in err
+        assert time.monotonic() - start < 5
+        closed = await client.until("closed")
+        assert closed["code"] == WSCloseCode.GOING_AWAY
+        await client.close()
     run(scenario())

@@ -14,7 +14,7 @@ import struct
 import traceback
 
 import numpy as np
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 import cgal_ext
 
@@ -71,6 +71,7 @@ class Studio:
         self.socket = None
         self.port = None
         self.lock = asyncio.Lock()
+        self.stopping = False
 
     # ---- HTTP -------------------------------------------------------------------------------------------------
 
@@ -137,6 +138,8 @@ class Studio:
                         await self.error(ws, str(error))
                         continue
                     await self.handle(ws, dict(header, indices=indices))
+            if self.stopping:  # serve() ended the loop: tell the tab why (aiohttp would close with 1000)
+                await ws.close(code=WSCloseCode.GOING_AWAY, message=b"the studio was stopped")
         finally:
             if self.socket is ws:
                 self.socket = None
@@ -179,6 +182,8 @@ class Studio:
                 await self.error(ws, str(error))
             except (TypeError, KeyError, ValueError) as error:
                 await self.error(ws, "%s: malformed command (%s)" % (kind, error))
+            except ConnectionResetError:
+                pass  # the tab closed (or the studio stopped) while the command ran: no one to tell
             except Exception as error:  # a bug: reported to the page and on the console, the server stays up
                 traceback.print_exc()
                 await self.error(ws, "%s failed: %s: %s" % (kind, type(error).__name__, error))
@@ -338,4 +343,8 @@ async def serve(studio, port=0, ready=None):
     try:
         await asyncio.Event().wait()
     finally:
+        # An open tab's WebSocket would hold the shutdown for aiohttp's whole grace period: close it first.
+        studio.stopping = True
+        if studio.socket is not None:
+            await studio.socket.close(code=WSCloseCode.GOING_AWAY, message=b"the studio was stopped")
         await runner.cleanup()
