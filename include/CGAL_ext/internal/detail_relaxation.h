@@ -50,23 +50,29 @@ public:
   {
     m_rows = std::move(rows);
     const std::size_t n = m_rows.size();
+    m_free_index.assign(std::size_t(points.rows()), -1);
+    std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
+    for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
     Neighbor_graph nearest = fixed_degree_graph(n, k);
+    m_twin.assign(n, -1);
     if(n > 0) {
       const Position_tree tree(points, ConcurrencyTag());
       for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
         const int row = m_rows[r];
         int* out = nearest.indices.data() + r * k;
         std::size_t m = 0;
+        int pinned_twin = -1, relaxed_twin = row;
         // k + 1 to skip the point itself (with exact duplicates it need not come first).
         tree.nearest(tree[std::size_t(row)], k + 1, [&](int j, double) {
           if(j != row && m < k) out[m++] = j;
+          if(j == row || points.row(j) != points.row(row)) return;
+          if(relaxed_index[std::size_t(j)] < 0) pinned_twin = pinned_twin < 0 ? j : std::min(pinned_twin, j);
+          else relaxed_twin = std::min(relaxed_twin, j);
         });
+        m_twin[r] = pinned_twin >= 0 ? pinned_twin : relaxed_twin != row ? relaxed_twin : -1;
       });
     }
     // Symmetrise: j joins row i's neighbours when i is among j's nearest and j is relaxed too.
-    m_free_index.assign(std::size_t(points.rows()), -1);
-    std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
-    for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
     std::vector<int> degree(n, int(k));
     for(std::size_t r = 0; r < n; ++r)
       for(const int* j = nearest.begin(r); j != nearest.end(r); ++j)
@@ -201,6 +207,12 @@ public:
     for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
       positions.row(m_rows[std::size_t(m_free[f])]) = m_x.row(Eigen::Index(f));
     });
+    // Coincident points stay together: their equations differ only by the neighbour search's tie-breaks, which
+    // would pull them apart (a crack in a scan with duplicated points). Each takes the place of the point it
+    // follows, whose own place is final: a pinned one, or the first of the relaxed ones.
+    for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
+      if(m_twin[r] >= 0) positions.row(m_rows[r]) = positions.row(m_twin[r]);
+    });
     return outcome;
   }
 
@@ -228,6 +240,7 @@ private:
   std::vector<int> m_rows;
   Neighbor_graph m_neighbors;  // per relaxed row, its symmetrised neighbours (sorted, up to m_end)
   std::vector<int> m_end;      // per relaxed row, the end of its neighbours in m_neighbors.indices
+  std::vector<int> m_twin;     // per relaxed row, the coincident point it follows (among its k + 1 nearest), or -1
   Matrix_n3 m_details;         // per relaxed row, d_i at rest
   Matrix_n3 m_target;          // per relaxed row: R_i d_i (per call)
   // Per call, the unknowns: their relaxed rows, their neighbours among them, the conjugate gradients' vectors.
