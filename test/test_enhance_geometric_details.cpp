@@ -143,6 +143,15 @@ TEST(EnhanceGeometricDetails, ASmallRegionOfALargeModelNeedsOnlyItsSurroundings)
     previous = worst;
   }
   EXPECT_LT(previous, 1e-5 * rms);
+  // The smallest margin allowed still holds the points outside the region that anchor its border.
+  Detail_enhancement_settings one_radius;
+  one_radius.flow_margin = 1;
+  std::vector<Point> narrow = sheet.points;
+  const auto r3 = enhance_geometric_details(all, 10, disk, 2.0, one_radius, np(narrow));
+  ASSERT_TRUE(r3);
+  EXPECT_TRUE(r3.default_anchors);
+  EXPECT_GE(double(r3.anchor_count), 0.9 * double(r0.anchor_count))
+    << r3.anchor_count << " border anchors at a margin of one radius, " << r0.anchor_count << " on the whole model";
   for(std::size_t i = 0; i < local.size(); ++i) {
     if(std::hypot(sheet.points[i].x(), sheet.points[i].y()) >= 15) {
       ASSERT_EQ(local[i], sheet.points[i]);
@@ -196,8 +205,10 @@ TEST(EnhanceGeometricDetails, BadInputIsAClearError)
   bad_flow.flow.fidelity = 0;
   EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, bad_flow); }).find("fidelity"), std::string::npos);
   Detail_enhancement_settings bad_margin;
-  bad_margin.flow_margin = -1;
-  EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, bad_margin); }).find("flow_margin"), std::string::npos);
+  for(double margin : {-1.0, 0.5, std::numeric_limits<double>::quiet_NaN()}) {
+    bad_margin.flow_margin = margin;
+    EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, bad_margin); }).find("flow_margin"), std::string::npos) << margin;
+  }
   EXPECT_NE(message([&] { enhance_geometric_details(points, 10, 2.0, Detail_filter{},
                                                     CGAL::parameters::normal_map(boost::make_function_property_map<Point>([&](const Point&) { return Vector(0, 0, 0); }))); }).find("normal"), std::string::npos);
   EXPECT_EQ(points, sphere.points);

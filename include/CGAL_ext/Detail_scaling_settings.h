@@ -8,6 +8,7 @@
 #include <CGAL_ext/Least_squares_settings.h>
 
 #include <cmath>
+#include <string>
 #include <cstddef>
 #include <vector>
 
@@ -70,7 +71,8 @@ struct Detail_enhancement_settings : Detail_scaling_settings
   /// point), not on the whole model; 0 computes them on the whole model. The balanced flow's influence fades
   /// about e-fold every 5 radii: at 80, a 100k-point region of 1M samples of the armadillo moved within 1.2e-7
   /// of its displacement's RMS of where the whole model's computation puts it (doc/detail_scaling.md, "A region
-  /// of a large model").
+  /// of a large model"). Below 1 (but not 0) it is refused: it would keep too few points outside the region to
+  /// anchor its border.
   double flow_margin = 80;
 
   Detail_enhancement_settings(const Detail_filter& filter = {}) : Detail_scaling_settings(filter) {}
@@ -81,8 +83,10 @@ struct Detail_enhancement_settings : Detail_scaling_settings
   {
     Detail_scaling_settings::validate();
     flow.validate();
-    if(!(std::isfinite(flow_margin) && flow_margin >= 0))
-      throw Invalid_input("enhancement: flow_margin must be a finite number >= 0");
+    if(!(std::isfinite(flow_margin) && (flow_margin == 0 || flow_margin >= 1)))
+      throw Invalid_input("enhancement: flow_margin must be 0 (the whole model) or a finite number of neighbourhood "
+                          "radii >= 1 (a smaller margin keeps too few points outside the region to anchor its border), "
+                          "not " + std::to_string(flow_margin));
   }
 };
 
