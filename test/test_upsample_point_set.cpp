@@ -226,8 +226,8 @@ TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOw
   CGAL_ext::upsample_point_set(sphere.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_sphere), sphere.np());
 
   // A random sampling of a plane (density 1) with a hole of radius 4: the hole is twice as wide as the
-  // sampling's own gaps, so it is filled, to about the covering the sampling has elsewhere (measured: 4.14 ->
-  // 1.87 in the hole, up to 1.54 in discs of its size elsewhere; 1.52 against 1.57 with another seed).
+  // sampling's own gaps, so it is filled, to within a quarter of the covering the sampling has in discs of the
+  // hole's size elsewhere (the test prints both).
   const double radius = 4;
   const Oriented_points plane = random_plane_with_hole(80, radius, 2);
   Inserted on_plane;
@@ -252,7 +252,7 @@ TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOw
   EXPECT_LT(on_plane.size() - in_hole, plane.points.size() / 50);
   EXPECT_GT(in_hole, 25u);
   EXPECT_LT(after, 0.5 * before);
-  EXPECT_LT(after, 1.5 * elsewhere);
+  EXPECT_LT(after, 1.25 * elsewhere);
 }
 
 TEST(UpsamplePointSet, TwoDensitiesGetAlmostNothingAndAStretchOnlyItsOwnGaps)
