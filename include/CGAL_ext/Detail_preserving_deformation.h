@@ -725,6 +725,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   }
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, m_samples,
                                            std::min<std::size_t>(m_settings.diffusion_samples, count), &m_sample_of);
+  m_stencil.use_wide_vectors = !m_settings.portable_diffusion;
   // Points carried by fixed sample points only never move: each drag skips them. Handle points are always
   // blended (the collar takes their blend's step to their transform).
   m_active_points.clear();

@@ -189,6 +189,11 @@ struct Detail_preserving_deformation_settings
   /// the region's points about the handle, fading out over twice the diffusion's reach (doc/editing.md, "Exact
   /// handles without a seam"). Off, the kNN edges across a handle's border stretch in a step: off only to see it.
   bool handle_collar = true;
+  /// Whether the diffusion keeps to portable arithmetic instead of the processor's 4-wide vectors with fused
+  /// multiply-add (AVX2 and FMA), where the build and the processor have them: then every processor gives the
+  /// same doubles; the two paths agree to rounding (doc/editing.md, "How an edit runs", step 5). The environment variable
+  /// `CGAL_EXT_PORTABLE_DIFFUSION=1` turns it on for every deformation of a process (the program's too).
+  bool portable_diffusion = false;
 
   Detail_preserving_deformation_settings(const Detail_filter& f = {}) : filter(f) {}
 

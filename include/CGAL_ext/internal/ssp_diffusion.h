@@ -15,6 +15,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 // The diffusion's 4-wide path (Diffusion_stencil::apply): compiled where GCC or Clang can target AVX2 on
@@ -168,7 +170,8 @@ public:
   /// rounding (the tests compare the two).
   bool use_wide_vectors = true;
 
-  /// Whether this build and this processor have the 4-wide path.
+  /// Whether this build and this processor have the 4-wide path, and the environment variable
+  /// `CGAL_EXT_PORTABLE_DIFFUSION` does not ask for the portable one.
   static bool wide_vectors_available();
 
 private:
@@ -320,6 +323,8 @@ inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, 
 inline bool Diffusion_stencil::wide_vectors_available()
 {
   static const bool available = [] {
+    const char* portable = std::getenv("CGAL_EXT_PORTABLE_DIFFUSION");
+    if(portable && *portable && std::string(portable) != "0") return false;
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   }();
