@@ -14,8 +14,10 @@
 #include <Eigen/SparseCholesky>
 #ifdef CGAL_EXT_USE_CHOLMOD
 #include <Eigen/CholmodSupport>
-#if __has_include(<dlfcn.h>)
+#if __has_include(<dlfcn.h>) && __has_include(<sys/resource.h>) && __has_include(<unistd.h>)
 #include <dlfcn.h>
+#include <sys/resource.h>
+#include <unistd.h>
 #define CGAL_EXT_SCOPED_RUNTIME_SETTINGS
 #endif
 #endif
@@ -23,6 +25,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <memory>
 #include <new>
 #include <sstream>
@@ -125,6 +128,28 @@ struct Serial_blas : Scoped_runtime_setting
 {
   Serial_blas() : Scoped_runtime_setting("openblas_get_num_threads", "openblas_set_num_threads", 1) {}
 };
+
+/// Whether `bytes` more fit under the process's address-space limit (`ulimit -v`, as batch systems set it): true
+/// without one, or where the process's size cannot be read.
+inline bool fits_address_space_limit(double bytes)
+{
+  rlimit limit;
+  if(getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return true;
+  std::ifstream statm("/proc/self/statm");
+  double pages = 0;
+  if(!(statm >> pages)) return true;
+  return pages * double(sysconf(_SC_PAGESIZE)) + bytes <= double(limit.rlim_cur);
+}
+
+/// The address space OpenBLAS may still map for its work buffers: one per thread it runs, of the size fixed
+/// when it was built (128 MiB in Debian's; a build with smaller ones is only refused sooner). OpenBLAS retries
+/// a failed allocation of them forever (blas_memory_alloc), so a factorisation that reaches it under a tight
+/// address-space limit would hang instead of failing (doc/design.md, "Editing's factorisation").
+inline double blas_buffer_bytes()
+{
+  const auto threads = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return threads ? double(threads()) * double(std::size_t(128) << 20) : 0.0;
+}
 #endif
 
 /*
@@ -536,6 +561,11 @@ try {
   // Eigen's compute() would go on to factorise after a failed analysis (a null factor) and reports no status.
   m_main->analyzePattern(normal);
   check_cholmod("analysing the normal matrix");
+#ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
+  // Refused before it starts where the factor (its nonzeros and a quarter more for the supernodes' padding and
+  // the workspace) and OpenBLAS's buffers would not fit: past that point a shortage hangs in OpenBLAS.
+  if(!fits_address_space_limit(1.25 * 8 * common.lnz + blas_buffer_bytes())) out_of_memory("factoring the normal matrix");
+#endif
   const bool amd_order = amd_only || common.selected == 1;
   // N + shift I, not N (N has a unit diagonal here): with the cubic order and no anchors, the region's smoothest
   // modes are almost free and N is singular to rounding, so LL^T of N itself can meet a non-positive pivot (and
