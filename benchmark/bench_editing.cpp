@@ -687,7 +687,8 @@ int run(int argc, char** argv)
       "diffusion: frames and every point's position and normal; per drag: new handle transform, deform(), diffuse()\n\n",
       options.reps, quick ? 5 : 20);
 
-  report.addf("## Table 1\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) |\n"
+  report.addf("## Table 1\n\nRows `ARAP`: as rigid as possible, whose global step solves one equation per graph edge, not the "
+              "detail equations: the detail order plays no part in them.\n\n| model | order | points | SSPs | ROI SSPs | preprocess s | editing SSPs s | diffusion s | per drag ms (min-max) |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
   {
     // The paper's own global edit at its size: a 44,383-point tentacle, all but its base in the region, the tip

@@ -259,9 +259,9 @@ public:
     diffusion's. Jacobi-preconditioned conjugate gradients, up to `settings().detail_iterations` of them or
     to `settings().detail_tolerance` (`statistics()` reports both). Handle points (exact handles), points that
     did not move and the fixed part pin the solve and keep their positions bit for bit; a rigid motion stays
-    exact to rounding. Normals keep the diffusion's. At 1.66M points it takes 0.25-0.41 s (the first call after
-    preprocessing also finds the points' neighbours, 1.1-1.2 s), so call it once a drag ends, not per drag; the
-    next `diffuse()` starts from the blend again (doc/editing.md, "Restoring the details").
+    exact to rounding. Normals keep the diffusion's. It costs many diffusions (the first call after
+    preprocessing also finds the points' neighbours), so call it once a drag ends, not per drag; the next
+    `diffuse()` starts from the blend again (doc/editing.md, "Restoring the details", gives its times).
     \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.
   */
   void restore_details();
@@ -815,9 +815,8 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
     // most `rigid_step_degrees` and `rigid_step_fraction` of the region's size (each group's rotation slerped about the handles' common
     // centre, which moves on a line), along which the solution follows the deformation the user would drag
     // through. Each step starts from the rotations of the one before (the first drag from the propagated
-    // ones): on the 70-degree cactus, 3 % of the diagonal from CGAL's mesh ARAP after 10 iterations,
-    // against 21 % in one step of 30 iterations and 24 % when each step first turns the rotations by the
-    // strength field's blend.
+    // ones): on the cactus that lands far closer to CGAL's mesh ARAP than one step of more iterations, or each
+    // step first turning the rotations by the strength field's blend (doc/editing.md, "As rigid as possible").
     const std::size_t steps = rigid_step_count(
       m_solved_transforms, m_transforms, m_handles_centre, m_region_size,
       Rigid_step_limits{m_settings.rigid_step_degrees, m_settings.rigid_step_fraction, m_settings.max_rigid_steps});
@@ -835,7 +834,7 @@ bool Detail_preserving_deformation<ConcurrencyTag>::deform()
         m_has_rigid_rotations = true;
       } else if(m_system.roi.size() == std::size_t(m_samples.rows())) {
         // Nothing is fixed: the strength field is 1 everywhere and its blend of the handles' turns is exact for
-        // a rigid motion, so each step starts from it (with a fixed part it misleads: the cactus 24 %).
+        // a rigid motion, so each step starts from it (with a fixed part it misleads, as on the cactus).
         std::vector<Eigen::Quaterniond> turns(groups);
         for(std::size_t g = 0; g < groups; ++g)
           turns[g] = along[g].rotation * (step == 1 ? m_solved_transforms[g].rotation : previous[g]).conjugate();

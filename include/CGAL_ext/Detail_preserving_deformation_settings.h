@@ -143,16 +143,14 @@ struct Detail_preserving_deformation_settings
   /// With `as_rigid_as_possible`: the weight of SRE-ARAP's smooth-rotation term (CGAL's `SRE_ARAP`), which
   /// pulls each sample point's rotation toward its graph neighbours', relative to its neighbourhood's squared
   /// edge lengths (or, with `rigid_rotation_smoothing_scale`, to the surface's area, as CGAL's), >= 0 (0: plain
-  /// ARAP). About 1 brings the result near CGAL's SRE_ARAP's: on the 70-degree
-  /// Botsch–Sorkine cactus, 300 iterations per step land 2.2 % of the diagonal from SRE_ARAP's converged
-  /// result instead of 6.8 %. It pays with 10 or more `rigid_iterations` (it uses the previous iteration's
-  /// rotations): with 3 it lands farther from SRE_ARAP than plain ARAP on most scans (doc/editing.md, "As rigid
-  /// as possible").
+  /// ARAP). About 1 brings the result near CGAL's SRE_ARAP's on the Botsch–Sorkine cactus. It pays with 10 or
+  /// more `rigid_iterations` (it uses the previous iteration's rotations): with 3 it lands farther from SRE_ARAP
+  /// than plain ARAP on most scans (doc/editing.md, "As rigid as possible", gives the distances).
   double rigid_rotation_smoothing = 0;
   /// With `as_rigid_as_possible`: what `rigid_rotation_smoothing` is relative to. `surface_area` with
   /// `Rigid_edge_weights::cotangent` and `rigid_rotation_smoothing` 0.02 is CGAL's SRE_ARAP energy on the sample
-  /// points: converged on the 70-degree Botsch–Sorkine cactus (1,000 iterations per step) it lands within 2 % of
-  /// the diagonal from SRE_ARAP's converged result (doc/editing.md, "As rigid as possible").
+  /// points: converged on the Botsch–Sorkine cactus it lands close to SRE_ARAP's converged result
+  /// (doc/editing.md, "As rigid as possible", gives the distance).
   Rotation_smoothing_scale rigid_rotation_smoothing_scale = Rotation_smoothing_scale::edge_lengths;
   /// With `as_rigid_as_possible`: the weights of the graph's edges.
   Rigid_edge_weights rigid_edge_weights = Rigid_edge_weights::uniform;
@@ -166,17 +164,16 @@ struct Detail_preserving_deformation_settings
   /// larger ones.
   unsigned int max_rigid_steps = 1000;
   /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1. More of them make the blend smoother
-  /// and keep the fine details better at the cost of the diffusion's time: 6 changes the region's details 8-34 %
-  /// less than 4 for 20-30 % more time; 8 a further 4-17 % less for as much more (doc/editing.md, "Seamless
-  /// diffusion").
+  /// and keep the fine details better at the cost of the diffusion's time (doc/editing.md, "Seamless
+  /// diffusion", measures both).
   unsigned int diffusion_samples = 6;
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
   /// How each region sample point's turn (and, affine, its stretch) is measured for the diffusion.
   Sample_turn diffusion_turn = Sample_turn::affine;
   /// `Detail_preserving_deformation::restore_details()`, which puts back the fine details the diffusion's blend
   /// smooths out, solves for them by conjugate gradients (doc/editing.md, "Restoring the details"): at most
-  /// this many iterations (0: it leaves the diffused points). It stops earlier at `detail_tolerance`, which 6-19
-  /// iterations reach on every model measured, whatever the number of points.
+  /// this many iterations (0: it leaves the diffused points). It stops earlier at `detail_tolerance`, which a
+  /// few tens of iterations at most reach on every model measured, whatever the number of points.
   unsigned int detail_iterations = 100;
   /// The residual, relative to the details' size, at which `restore_details()` stops (>= 0).
   double detail_tolerance = 1e-2;

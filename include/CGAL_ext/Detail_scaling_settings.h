@@ -69,10 +69,9 @@ struct Detail_enhancement_settings : Detail_scaling_settings
   /// A partial region's normals, Laplacian and base surface are computed on the points within this many
   /// neighbourhood radii of it (the radius: the median distance of a region point to its k-th nearest region
   /// point), not on the whole model; 0 computes them on the whole model. The balanced flow's influence fades
-  /// about e-fold every 5 radii: at 80, a 100k-point region of 1M samples of the armadillo moved within 1.2e-7
-  /// of its displacement's RMS of where the whole model's computation puts it (doc/detail_scaling.md, "A region
-  /// of a large model"). Below 1 (but not 0) it is refused: it would keep too few points outside the region to
-  /// anchor its border.
+  /// fast with the distance, so the default margin gives what the whole model's computation gives, to far below
+  /// the displacement's size (doc/detail_scaling.md, "A region of a large model", measures it). Below 1 (but not
+  /// 0) it is refused: it would keep too few points outside the region to anchor its border.
   double flow_margin = 80;
 
   Detail_enhancement_settings(const Detail_filter& filter = {}) : Detail_scaling_settings(filter) {}

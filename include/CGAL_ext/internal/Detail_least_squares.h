@@ -113,8 +113,8 @@ private:
 /// While it lives, the OpenMP regions the calling thread opens run on that thread alone (the OpenMP runtime's
 /// `max-active-levels` of this thread set to 0; other threads are untouched). CHOLMOD 3 runs parts of its
 /// supernodal factorisation in OpenMP regions of a fixed four threads, which on a machine with few cores fight
-/// OpenBLAS's threads, idle but spinning, for the cores: a 28,270-unknown factorisation took 0.50-0.81 s on
-/// two cores, 0.32-0.52 s with the regions serial (doc/design.md, "Editing's factorisation").
+/// OpenBLAS's threads, idle but spinning, for the cores: serial regions factor faster there (doc/design.md,
+/// "Editing's factorisation").
 struct Serial_openmp_regions : Scoped_runtime_setting
 {
   Serial_openmp_regions() : Scoped_runtime_setting("omp_get_max_active_levels", "omp_set_max_active_levels", 0) {}
@@ -547,11 +547,10 @@ try {
   cholmod_common& common = m_main->cholmod();
   common.print = 0; // a rounding-negative pivot is handled below, not printed
   // Unless AMD alone orders it, the matrix comes in the geometric nested-dissection order (kept as given:
-  // NATURAL); CHOLMOD also tries AMD and keeps the cheaper. Neither wins everywhere: the dissection needs 17 %
-  // fewer flops than AMD on a 40k-point quadric region of the bunny, AMD 2-4 times fewer on an edit's sample
-  // points and 1.5 times fewer on a 100k-point region around the tip of the armadillo's arm (1.8e11 flops
-  // against 2.7e11; the halves of a curved region cut across its longest extent meet along a long curve). One
-  // AMD analysis costs about 5 % of such a factorisation (doc/detail_scaling.md, "The solver").
+  // NATURAL); CHOLMOD also tries AMD and keeps the cheaper. Neither wins everywhere: the dissection needs fewer
+  // flops on a compact region of a scan, AMD on an edit's sample points and on a curved region (the halves of a
+  // curved region cut across its longest extent meet along a long curve). One AMD analysis costs little beside
+  // such a factorisation (doc/detail_scaling.md, "The solver", measures these).
   common.nmethods = amd_only ? 1 : 2;
   common.method[0].ordering = amd_only ? CHOLMOD_AMD : CHOLMOD_NATURAL;
   common.method[1].ordering = CHOLMOD_AMD;

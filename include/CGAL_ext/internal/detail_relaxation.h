@@ -31,7 +31,8 @@ namespace internal {
 /// put it (the blend is right at the sample points' scale) and restores the details below. Scaled by each
 /// row's degree the system is symmetric positive definite (the anchor makes it so even for a part that no
 /// pinned point touches) with a condition number of about 2 / a, so Jacobi-preconditioned conjugate gradients
-/// reach a residual of 1 % in 6-20 iterations whatever the number of points. A rigid motion (`y = R p + t`) solves it already and stays exact to rounding.
+/// reach a residual of 1 % in a few iterations whatever the number of points (doc/editing.md, "Restoring the
+/// details"). A rigid motion (`y = R p + t`) solves it already and stays exact to rounding.
 class Detail_relaxation
 {
 public:

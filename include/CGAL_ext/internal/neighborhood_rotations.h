@@ -28,8 +28,8 @@ namespace internal {
 /// would be a reflection (Sorkine and Alexa 2007). A flat neighbourhood (rank 2) still gives one rotation.
 /// The right singular vectors come from the closed-form eigenvectors of `C^T C` (C the covariance), the left
 /// ones of the two largest singular values from `C v` (Gram-Schmidt), the third from their cross product with
-/// the handedness of V: half the time of Eigen's JacobiSVD (0.39 against 0.81 us), within 5e-12 of it on
-/// random and flat neighbourhoods (doc/editing.md, "As rigid as possible"). A nearly collinear neighbourhood (its
+/// the handedness of V: about half the time of Eigen's JacobiSVD, and as exact on random and flat
+/// neighbourhoods (doc/editing.md, "As rigid as possible", measures both). A nearly collinear neighbourhood (its
 /// middle singular value below a hundredth of the largest), where the closed-form eigenvectors of the two small
 /// singular values lose their accuracy and the rotation about the line its optimum, takes the SVD. (A template,
 /// so that only the files that call it instantiate the solvers.)
