@@ -85,18 +85,41 @@ Sparse_row_matrix detail_operator_rows(const Sparse_row_matrix& K, const Detail_
 }
 
 #ifdef CGAL_EXT_SCOPED_RUNTIME_SETTINGS
-/// While it lives, an integer setting of a runtime library holds `value`, and its old value comes back after.
-/// The library's getter and setter are looked up, not linked: without the library loaded this does nothing.
+/// An integer setting of a runtime library: its getter and setter, looked up once, not linked (null without the
+/// library loaded).
+struct Runtime_setting
+{
+  int (*get)() = nullptr;
+  void (*set)(int) = nullptr;
+
+  Runtime_setting(const char* getter, const char* setter)
+    : get(reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, getter))),
+      set(reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, setter)))
+  {}
+};
+
+inline const Runtime_setting& openmp_max_active_levels()
+{
+  static const Runtime_setting setting("omp_get_max_active_levels", "omp_set_max_active_levels");
+  return setting;
+}
+
+inline const Runtime_setting& openblas_threads()
+{
+  static const Runtime_setting setting("openblas_get_num_threads", "openblas_set_num_threads");
+  return setting;
+}
+
+/// While it lives, a runtime setting holds `value`, and its old value comes back after; without the library
+/// loaded this does nothing.
 class Scoped_runtime_setting
 {
 public:
-  Scoped_runtime_setting(const char* getter, const char* setter, int value)
+  Scoped_runtime_setting(const Runtime_setting& setting, int value)
   {
-    const auto get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, getter));
-    const auto set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, setter));
-    if(!get || !set || (m_saved = get()) == value) return;
-    set(value);
-    m_set = set;
+    if(!setting.get || !setting.set || (m_saved = setting.get()) == value) return;
+    setting.set(value);
+    m_set = setting.set;
   }
   ~Scoped_runtime_setting()
   {
@@ -117,7 +140,7 @@ private:
 /// "Editing's factorisation").
 struct Serial_openmp_regions : Scoped_runtime_setting
 {
-  Serial_openmp_regions() : Scoped_runtime_setting("omp_get_max_active_levels", "omp_set_max_active_levels", 0) {}
+  Serial_openmp_regions() : Scoped_runtime_setting(openmp_max_active_levels(), 0) {}
 };
 
 /// While it lives, OpenBLAS (CHOLMOD's BLAS, when it is OpenBLAS) runs its calls on the calling thread. A solve
@@ -126,7 +149,7 @@ struct Serial_openmp_regions : Scoped_runtime_setting
 /// factorisation").
 struct Serial_blas : Scoped_runtime_setting
 {
-  Serial_blas() : Scoped_runtime_setting("openblas_get_num_threads", "openblas_set_num_threads", 1) {}
+  Serial_blas() : Scoped_runtime_setting(openblas_threads(), 1) {}
 };
 
 /// Whether `bytes` more fit under the process's address-space limit (`ulimit -v`, as batch systems set it): true
@@ -141,14 +164,14 @@ inline bool fits_address_space_limit(double bytes)
   return pages * double(sysconf(_SC_PAGESIZE)) + bytes <= double(limit.rlim_cur);
 }
 
-/// The address space OpenBLAS may still map for its work buffers: one per thread it runs, of the size fixed
-/// when it was built (128 MiB in Debian's; a build with smaller ones is only refused sooner). OpenBLAS retries
-/// a failed allocation of them forever (blas_memory_alloc), so a factorisation that reaches it under a tight
+/// The address space OpenBLAS may still map for its work buffers: one per thread it runs, each of the size
+/// Debian's OpenBLAS is built with (a build with smaller buffers is only refused sooner). OpenBLAS retries a
+/// failed allocation of them forever (blas_memory_alloc), so a factorisation that reaches it under a tight
 /// address-space limit would hang instead of failing (doc/design.md, "Editing's factorisation").
 inline double blas_buffer_bytes()
 {
-  const auto threads = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
-  return threads ? double(threads()) * double(std::size_t(128) << 20) : 0.0;
+  constexpr double debian_buffer_bytes = double(std::size_t(128) << 20);
+  return openblas_threads().get ? double(openblas_threads().get()) * debian_buffer_bytes : 0.0;
 }
 #endif
 
