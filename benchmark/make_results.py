@@ -2,9 +2,12 @@
 """Gathers the benchmark programs' CSV files into one RESULTS.md, one results.csv and the scaling plot.
 
 Usage: benchmark/make_results.py OUT_DIR BUILD_DIR
+       benchmark/make_results.py --merge OUT_DIR     (results.csv only, after one stage was run again)
 OUT_DIR holds the *_results.csv files of bench_editing, bench_upsampling, bench_simplification, bench_curvature,
 bench_scaling, bench_details and measure_edit_memory.sh; BUILD_DIR is the CMake build they came from (for the
 compiler and its flags). Writes OUT_DIR/RESULTS.md, OUT_DIR/results.csv and OUT_DIR/scaling.png.
+results.csv holds every stage's figures, one per line (source, section, row, column, value): the manual and the
+README quote them by that key (scripts/check_quoted_figures.py).
 """
 import csv
 import datetime
@@ -14,10 +17,6 @@ import re
 import subprocess
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 
 # bench_editing writes one CSV with a section per table; these are each section's columns after the first.
 EDITING_COLUMNS = {
@@ -261,6 +260,11 @@ def scaling_section(out, editing, memory, plot_file):
     table(out, ["sampling", "points", "SSPs", "ROI SSPs", "preprocess s", "per drag ms (min-max)", "peak memory (whole edit)",
                 "per point", "<= 1 KiB"], rows)
     if sizes:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
         fig, ax = plt.subplots(figsize=(5.5, 3.8), dpi=100)
         ax.loglog(sizes, preprocess, "o-", label="preprocess (SSPs, factorisation)")
         ax.loglog(sizes, drag, "s-", label="per drag (deform + diffuse)")
@@ -321,17 +325,42 @@ def memory_section(out, details, simplification, curvature):
     table(out, ["program", "stage", "points", "peak so far", "per point"], rows)
 
 
-def write_long_csv(path, sources):
+# The stages whose CSV files results.csv merges, beside bench_editing's sections.
+STAGE_FILES = [("bench_simplification", "simplification_results.csv"), ("bench_upsampling", "upsampling_results.csv"),
+               ("bench_curvature", "curvature_results.csv"), ("bench_curvature_accuracy", "curvature_accuracy.csv"),
+               ("bench_normals", "normals_results.csv"), ("measure_edit_memory", "memory_results.csv"),
+               ("measure_raw_scan", "raw_scan_results.csv"), ("bench_scaling", "scaling_results.csv"),
+               ("bench_details", "details_results.csv"), ("bench_python", "python_results.csv"),
+               ("bench_studio", "studio_results.csv"), ("bench_tiled", "tiled_results.csv")]
+
+
+def long_rows(out_dir):
+    """results.csv's rows: [source, section, row, column, value] for every figure of every stage's CSV."""
+    sources = [("bench_editing", section, rows) for section, rows in read_editing(os.path.join(out_dir, "editing_results.csv")).items()]
+    sources += [(name, "", read_csv(os.path.join(out_dir, file))) for name, file in STAGE_FILES]
+    # The paper's own Table 1, which the manual quotes beside ours.
+    paper = []
+    for model, (points, ssps, roi, times) in PAPER_TABLE1.items():
+        for order, (editing, diffusion) in zip(["linear", "quadric", "cubic"], times):
+            if editing is not None:
+                paper.append({"model": model, "order": order, "points": str(points), "ssps": str(ssps), "roi_ssps": str(roi),
+                              "editing_ssps_s": str(editing), "diffusion_s": str(diffusion)})
+    sources.append(("paper_table1", "", paper))
+    return [[source, section, str(i), column, value]
+            for source, section, rows in sources for i, r in enumerate(rows) for column, value in r.items()]
+
+
+def write_long_csv(path, rows):
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["source", "section", "row", "column", "value"])
-        for source, section, rows in sources:
-            for i, r in enumerate(rows):
-                for column, value in r.items():
-                    w.writerow([source, section, i, column, value])
+        w.writerows(rows)
 
 
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--merge":
+        write_long_csv(os.path.join(sys.argv[2], "results.csv"), long_rows(sys.argv[2]))
+        return
     if len(sys.argv) != 3:
         sys.exit(__doc__)
     out_dir, build_dir = sys.argv[1], sys.argv[2]
@@ -362,16 +391,7 @@ def main():
     memory_section(out, read_csv(os.path.join(out_dir, "details_results.csv")), simplification, curvature)
     with open(os.path.join(out_dir, "RESULTS.md"), "w") as f:
         f.write("\n".join(out))
-    sources = [("bench_editing", section, rows) for section, rows in editing.items()]
-    for name, rows in [("bench_simplification", simplification), ("bench_upsampling", upsampling),
-                       ("bench_curvature", curvature), ("measure_edit_memory", memory),
-                       ("bench_scaling", read_csv(os.path.join(out_dir, "scaling_results.csv"))),
-                       ("bench_details", read_csv(os.path.join(out_dir, "details_results.csv"))),
-                       ("bench_python", read_csv(os.path.join(out_dir, "python_results.csv"))),
-                       ("bench_studio", read_csv(os.path.join(out_dir, "studio_results.csv"))),
-                       ("bench_tiled", read_csv(os.path.join(out_dir, "tiled_results.csv")))]:
-        sources.append((name, "", rows))
-    write_long_csv(os.path.join(out_dir, "results.csv"), sources)
+    write_long_csv(os.path.join(out_dir, "results.csv"), long_rows(out_dir))
     print(f"wrote {out_dir}/RESULTS.md, {out_dir}/results.csv and {out_dir}/scaling.png")
 
 
