@@ -1,9 +1,11 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The JSON edit parser of `point-detail edit --edit FILE`, on a 200-point sphere.
+// The JSON edit parser of `point-detail edit --edit FILE`, on a 200-point sphere, fed by a mutator that changes
+// the parsed tree (fuzz/structure_mutators.h).
 #include "cli_support.h"
 #include "edit_spec.h"
 #include "fuzz_support.h"
+#include "structure_mutators.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
@@ -16,4 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch(const CGAL_ext::Invalid_input&) {
   }
   return 0;
+}
+
+extern "C" std::size_t LLVMFuzzerCustomMutator(std::uint8_t* data, std::size_t size, std::size_t max_size, unsigned seed)
+{
+  return fuzz::custom_mutate(data, size, max_size, seed, fuzz::mutate_edit_json);
 }

@@ -4,6 +4,7 @@
 #ifndef POINT_DETAIL_FUZZ_SUPPORT_H
 #define POINT_DETAIL_FUZZ_SUPPORT_H
 
+#include "cli_support.h"
 #include "point_io.h"
 
 #include <CGAL/number_type_config.h>
@@ -40,6 +41,17 @@ inline const std::vector<point_detail::Point>& sphere_points()
     return out;
   }();
   return points;
+}
+
+/// Reads a point file as point-detail does; the reader promises points (and as many normals, if any) or an error.
+inline void read_points_and_check(const std::filesystem::path& path)
+{
+  try {
+    const point_detail::Point_cloud cloud = point_detail::read_point_cloud(path);
+    if(cloud.points.empty()) __builtin_trap();
+    if(!cloud.normals.empty() && cloud.normals.size() != cloud.points.size()) __builtin_trap();
+  } catch(const point_detail::Cli_error&) {
+  }
 }
 
 } // namespace fuzz

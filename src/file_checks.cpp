@@ -4,12 +4,16 @@
 
 #include "cli_support.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -146,6 +150,11 @@ std::uint64_t ply_scalar_size(const std::string& type)
   return 0;
 }
 
+bool signed_integer(const std::string& type)
+{
+  return type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
+}
+
 /// Reads and checks a PLY header, and returns its vertex count and the fewest bytes of data that can hold all
 /// its elements (binary: their records, with empty lists; ASCII: two characters per value). CGAL 5.5's reader
 /// does not check the header: a property before any element made it read before its element array (found by
@@ -163,8 +172,7 @@ Announced ply_announced(std::istream& in, const std::string& name)
       fail("'" + token + "' is not a count");
     return std::uint64_t(std::stoull(token));
   };
-  struct Element { std::string name; std::uint64_t count = 0, values = 0, bytes = 0; };
-  std::vector<Element> elements;
+  std::vector<Ply_element>& elements = a.elements;
   std::map<std::string, std::string> vertex_types; // CGAL's reader needs x y z (and nx ny nz) of one float type
   std::vector<std::string> vertex_names;           // in the header's order
   auto same_float_type = [&](const char* a, const char* b, const char* c) {
@@ -190,24 +198,34 @@ Announced ply_announced(std::istream& in, const std::string& name)
     if(w[0] == "format") {
       if(w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
         fail("the format is ascii, binary_little_endian or binary_big_endian, and a version");
+      // CGAL's reader and this check would read a second format line differently (found by fuzz/fuzz_ply).
+      if(!format.empty() || !elements.empty()) fail("one format line, before the elements");
       format = w[1];
     } else if(w[0] == "element") {
       if(w.size() != 3) fail("an element line is 'element NAME COUNT'");
-      for(const Element& e : elements)
+      for(const Ply_element& e : elements)
         if(e.name == w[1]) fail("element '" + w[1] + "' appears twice"); // CGAL would size by one, read the other
-      elements.push_back({w[1], whole(w[2])});
+      elements.push_back({w[1], whole(w[2]), 0, 0, {}, {}});
     } else if(w[0] == "property") {
       if(elements.empty()) fail("a property before any element");
-      Element& e = elements.back();
+      Ply_element& e = elements.back();
+      // CGAL's reader looks a property up by name and casts it to the type it asked for: a twin of another type
+      // (a list "blue" and an int "blue") made it call through a null pointer (found by fuzz/fuzz_ply).
+      if((w.size() == 5 || w.size() == 3) && !e.names.insert(w.back()).second) fail("property '" + w.back() + "' appears twice");
       if(w.size() == 5 && w[1] == "list") {
         const std::uint64_t count_bytes = ply_scalar_size(w[2]);
         if(count_bytes == 0 || ply_scalar_size(w[3]) == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
+        if(w[2] == "float" || w[2] == "float32" || w[2] == "double" || w[2] == "float64")
+          fail("a list's count type '" + w[2] + "' is not an integer type");
         e.bytes += count_bytes;
+        e.properties.push_back({w[2], w[3], count_bytes, ply_scalar_size(w[3]), signed_integer(w[2])});
+        a.lists = true;
       } else if(w.size() == 3) {
         const std::uint64_t bytes = ply_scalar_size(w[1]);
         if(bytes == 0) fail("unknown property type '" + w[1] + "'");
         e.bytes += bytes;
-        if(e.name == "vertex" && !vertex_types.emplace(w[2], w[1]).second) fail("property '" + w[2] + "' appears twice");
+        e.properties.push_back({"", w[1], 0, bytes, false});
+        if(e.name == "vertex") vertex_types.emplace(w[2], w[1]);
         if(e.name == "vertex") vertex_names.push_back(w[2]);
       } else
         fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
@@ -223,7 +241,8 @@ Announced ply_announced(std::istream& in, const std::string& name)
                          (vertex_names == positions || (vertex_names == oriented && same_float_type("x", "nx", "nz")));
       a.plain_normals = a.plain_vertices && vertex_names.size() == 6;
       a.plain_value_bytes = a.plain_vertices ? ply_scalar_size(vertex_types["x"]) : 0;
-      for(const Element& e : elements) {
+      a.format = format;
+      for(const Ply_element& e : elements) {
         // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
         if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");
         const std::uint64_t per_item = format == "ascii" ? 2 * e.values : e.bytes;
@@ -239,6 +258,138 @@ Announced ply_announced(std::istream& in, const std::string& name)
   throw Cli_error("cannot read " + name + ": malformed ply header (no end_header line)");
 }
 
+/// A list's count as its type reads it, from its n bytes (CGAL's reader casts it to std::size_t: a negative count
+/// is a huge one).
+std::int64_t ply_list_count(const unsigned char* bytes, std::size_t n, bool is_signed, bool big_endian)
+{
+  std::uint64_t u = 0;
+  for(std::size_t i = 0; i < n; ++i) u |= std::uint64_t(bytes[big_endian ? n - 1 - i : i]) << (8 * i);
+  if(is_signed && n < 8 && (u >> (8 * n - 1)) != 0) return std::int64_t(u) - (std::int64_t(1) << (8 * n));
+  return std::int64_t(u);
+}
+
+/// Whether `token` reads as one whole value of PLY `type` with the stream extraction CGAL's ASCII reader uses
+/// (integers through short / unsigned short at least; no hexadecimal, "nan" or "inf"; nothing out of range).
+bool ascii_ply_value(const std::string& token, const std::string& type)
+{
+  char* end = nullptr;
+  if(type == "float" || type == "float32" || type == "double" || type == "float64") {
+    if(token.find_first_not_of("0123456789+-.eE") != std::string::npos) return false;
+    const double v = std::strtod(token.c_str(), &end);
+    const double largest = type == "float" || type == "float32" ? double(std::numeric_limits<float>::max())
+                                                                : std::numeric_limits<double>::max();
+    return end != token.c_str() && *end == '\0' && std::abs(v) <= largest;
+  }
+  const bool is_signed = signed_integer(type);
+  const std::size_t digits = token.empty() || token[0] == '+' || (is_signed && token[0] == '-') ? 1 : 0;
+  if(token.size() <= digits || token.size() > 12 || token.find_first_not_of("0123456789", digits) != std::string::npos)
+    return false;
+  const long long v = std::strtoll(token.c_str(), nullptr, 10);
+  const std::size_t bytes = std::max<std::size_t>(2, std::size_t(ply_scalar_size(type))); // chars are read as shorts
+  const long long highest = is_signed ? (1ll << (8 * bytes - 1)) - 1 : (1ll << (8 * bytes)) - 1;
+  return v <= highest && v >= (is_signed ? -highest - 1 : 0);
+}
+
+/// Sequential reads and skips over a stream through a large buffer: a binary PLY walk visits every record, and
+/// an istream call per field would cost more than the reading it guards.
+class Buffered_bytes
+{
+public:
+  explicit Buffered_bytes(std::istream& in) : m_in(in), m_buffer(std::size_t(1) << 20) {}
+
+  bool read(unsigned char* out, std::size_t n)
+  {
+    for(; n > 0; --n) {
+      if(m_at == m_end && !refill()) return false;
+      *out++ = static_cast<unsigned char>(m_buffer[m_at++]);
+    }
+    return true;
+  }
+
+  /// Skips n bytes; false if the stream ends first.
+  bool skip(std::uint64_t n)
+  {
+    while(n > 0) {
+      if(m_at == m_end && !refill()) return false;
+      const std::size_t step = std::size_t(std::min<std::uint64_t>(n, m_end - m_at));
+      m_at += step;
+      n -= step;
+    }
+    return true;
+  }
+
+private:
+  bool refill()
+  {
+    m_in.read(m_buffer.data(), std::streamsize(m_buffer.size()));
+    m_at = 0;
+    m_end = std::size_t(m_in.gcount());
+    return m_end > 0;
+  }
+
+  std::istream& m_in;
+  std::vector<char> m_buffer;
+  std::size_t m_at = 0, m_end = 0;
+};
+
+/// Walks the elements of a PLY file up to its last list property and checks that every list's count fits in what
+/// the file holds. CGAL's reader resizes a list to its count and reads that many values even past the end of the
+/// file (a count of 2^31 in a small file kept it looping), and once an ASCII value fails to read, it takes the
+/// next list counts from uninitialised memory (out of memory); both found by fuzz/fuzz_ply. So an ASCII file with
+/// lists must read cleanly, value by value, up to its last list.
+void check_ply_lists(std::istream& in, const Announced& a, std::uint64_t file_bytes, const std::string& name)
+{
+  auto fail = [&](const Ply_element& e, std::uint64_t item, const std::string& what) {
+    throw Cli_error("cannot read " + name + ": element '" + e.name + "' item " + std::to_string(item) + ": " + what);
+  };
+  auto is_list = [](const Ply_property& p) { return p.count_bytes > 0; };
+  std::size_t last = 0; // one past the last element with a list
+  for(std::size_t i = 0; i < a.elements.size(); ++i)
+    if(std::any_of(a.elements[i].properties.begin(), a.elements[i].properties.end(), is_list)) last = i + 1;
+  in.clear();
+  in.seekg(std::streamoff(a.header_bytes));
+  const bool ascii = a.format == "ascii", big_endian = a.format == "binary_big_endian";
+  std::uint64_t at = a.header_bytes; // binary: the position of the next byte
+  Buffered_bytes bytes(in);
+  std::string token;
+  for(std::size_t i = 0; i < last; ++i) {
+    const Ply_element& e = a.elements[i];
+    if(!ascii && std::none_of(e.properties.begin(), e.properties.end(), is_list)) {
+      at += e.count * e.bytes; // the header check made sure the file holds it
+      bytes.skip(e.count * e.bytes);
+      continue;
+    }
+    for(std::uint64_t item = 0; item < e.count; ++item)
+      for(const Ply_property& p : e.properties) {
+        if(ascii) {
+          // Each value whole and in range; the file's end stops a list of any count at once.
+          auto next = [&](const std::string& type) {
+            if(!(in >> token)) fail(e, item, "the file ends here");
+            if(!ascii_ply_value(token, type)) fail(e, item, "'" + token + "' is not a " + type);
+          };
+          next(is_list(p) ? p.count_type : p.value_type);
+          if(!is_list(p)) continue;
+          const long long count = std::strtoll(token.c_str(), nullptr, 10);
+          if(count < 0) fail(e, item, "a list of " + token + " values");
+          for(long long v = 0; v < count; ++v) next(p.value_type);
+        } else if(!is_list(p)) {
+          if(!bytes.skip(p.value_bytes)) fail(e, item, "the file ends here");
+          at += p.value_bytes;
+        } else {
+          unsigned char count_bytes[8];
+          if(!bytes.read(count_bytes, std::size_t(p.count_bytes))) fail(e, item, "the file ends here");
+          const std::int64_t count = ply_list_count(count_bytes, std::size_t(p.count_bytes), p.signed_count, big_endian);
+          at += p.count_bytes;
+          const std::uint64_t left = file_bytes > at ? file_bytes - at : 0;
+          if(count < 0 || std::uint64_t(count) > left / p.value_bytes)
+            fail(e, item, "a list of " + std::to_string(count) + " values, more than the file holds");
+          bytes.skip(std::uint64_t(count) * p.value_bytes);
+          at += std::uint64_t(count) * p.value_bytes;
+        }
+      }
+  }
+}
+
 } // namespace
 
 Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
@@ -252,6 +403,7 @@ Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
     throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
                     std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
                     " bytes, the file holds " + std::to_string(size - a.header_bytes) + " after its header)");
+  if(!ec && a.lists) check_ply_lists(in, a, size, path.string());
   return a;
 }
 

@@ -10,6 +10,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <set>
+#include <string>
 #include <vector>
 
 namespace point_detail {
@@ -29,6 +31,23 @@ struct Off_file
 Off_file read_off(const std::filesystem::path& path, std::uint64_t bytes_per_point);
 
 /// What a PLY header announces, read without trusting it.
+/// A property of a PLY element: a scalar of `value_type`, or a list of them after a count of `count_type`.
+struct Ply_property
+{
+  std::string count_type; ///< empty for a scalar
+  std::string value_type;
+  std::uint64_t count_bytes = 0, value_bytes = 0; ///< their sizes (count_bytes 0 for a scalar)
+  bool signed_count = false;
+};
+
+struct Ply_element
+{
+  std::string name;
+  std::uint64_t count = 0, values = 0, bytes = 0; ///< items; properties; bytes per item (lists empty)
+  std::set<std::string> names;
+  std::vector<Ply_property> properties;
+};
+
 struct Announced
 {
   std::uint64_t vertices = 0;
@@ -40,6 +59,9 @@ struct Announced
   bool plain_normals = false;       ///< the plain vertices carry nx ny nz
   std::uint64_t plain_value_bytes = 0; ///< 4 (float) or 8 (double)
   std::uint64_t header_bytes = 0;  ///< where the data starts
+  std::string format;
+  std::vector<Ply_element> elements;
+  bool lists = false;              ///< some element has a list property
 };
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can

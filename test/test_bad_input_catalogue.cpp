@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -477,6 +478,31 @@ const std::vector<Row>& catalogue()
        const std::string in = w.write("bad.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty quadruple x\n"
                                                  "end_header\n" + std::string(100, '\x7f'));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "line 4: unknown property type 'quadruple'");
+     }},
+    {"cli_ply_property_twice_as_list", [] {
+       Workspace w;
+       const std::string in = w.write("twin.ply", ascii_ply_header(3).substr(0, ascii_ply_header(3).size() - 11) +
+                                                  "property uchar blue\nproperty list uchar int blue\nend_header\n" +
+                                                  "0 0 0 1 0\n1 0 0 1 0\n0 1 0 1 0\n");
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "property 'blue' appears twice");
+     }},
+    {"cli_ply_list_longer_than_the_file", [] {
+       Workspace w;
+       std::string face(1, char(200)); // a triangle announced with 200 indices, followed by 3
+       for(std::int32_t v : {0, 1, 2}) face.append(reinterpret_cast<const char*>(&v), sizeof v);
+       const std::string in = w.write("long.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 400\nproperty double x\n"
+                                                  "property double y\nproperty double z\nelement face 1\n"
+                                                  "property list uchar int vertex_indices\nend_header\n" +
+                                                  binary_xyz(sphere_coordinates(400)) + face);
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"),
+                        "element 'face' item 0: a list of 200 values, more than the file holds");
+     }},
+    {"cli_ply_ascii_value_that_does_not_read", [] {
+       Workspace w;
+       const std::string in = w.write("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                                                 "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                                 "end_header\n0 0 0\n1 0 0\n0 1 0.5.1\n3 0 1 2\n");
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "element 'vertex' item 2: '0.5.1' is not a double");
      }},
     {"cli_off_bad_counts", [] {
        Workspace w;

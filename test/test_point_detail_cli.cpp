@@ -20,7 +20,10 @@
 #include <stb/stb_image.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -191,8 +194,35 @@ TEST_F(Cli, NormalsComeFromMeshFacesOrAreEstimated)
     std::ofstream xyz(path("grid.xyz"));
     xyz.precision(17);
     for(const Point& p : g.points) xyz << p << "\n";
+    // The same mesh as PLY, ASCII and big-endian binary, faces as the usual 'list uchar int vertex_indices':
+    // the walk over its lists (which refuses counts the file cannot hold) lets a valid file through.
+    std::ofstream ascii(path("grid_ascii.ply")), binary(path("grid_binary.ply"), std::ios::binary);
+    for(auto [out, format] : {std::pair{&ascii, "ascii"}, std::pair{&binary, "binary_big_endian"}})
+      *out << "ply\nformat " << format << " 1.0\nelement vertex " << g.points.size()
+           << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << 2 * 29 * 29
+           << "\nproperty list uchar int vertex_indices\nend_header\n";
+    auto big_endian = [&](auto value) {
+      char bytes[sizeof value];
+      std::memcpy(bytes, &value, sizeof value);
+      std::reverse(bytes, bytes + sizeof value);
+      binary.write(bytes, sizeof value);
+    };
+    ascii.precision(17);
+    for(const Point& p : g.points) {
+      ascii << p << "\n";
+      for(double c : {p.x(), p.y(), p.z()}) big_endian(c);
+    }
+    for(int j = 0; j < 29; ++j)
+      for(int i = 0; i < 29; ++i)
+        for(const std::array<int, 3>& t : {std::array<int, 3>{j * 30 + i, j * 30 + i + 1, j * 30 + i + 31},
+                                           std::array<int, 3>{j * 30 + i, j * 30 + i + 31, j * 30 + i + 30}}) {
+          ascii << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+          binary.put(3);
+          for(int v : t) big_endian(std::int32_t(v));
+        }
   }
-  for(const auto& [file, source] : {std::pair{"grid.off", "mesh"}, std::pair{"grid.xyz", "estimated"}}) {
+  for(const auto& [file, source] : {std::pair{"grid.off", "mesh"}, std::pair{"grid.xyz", "estimated"},
+                                    std::pair{"grid_ascii.ply", "mesh"}, std::pair{"grid_binary.ply", "mesh"}}) {
     const Program_run r = run(std::string("details -i ") + path(file) + " -o " + path("out.ply") + " --report " + path("r.json"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["normal_source"], source);
