@@ -30,7 +30,6 @@ struct Off_file
 /// at `bytes_per_point`. Throws Cli_error naming the file and the problem.
 Off_file read_off(const std::filesystem::path& path, std::uint64_t bytes_per_point);
 
-/// What a PLY header announces, read without trusting it.
 /// A property of a PLY element: a scalar of `value_type`, or a list of them after a count of `count_type`.
 struct Ply_property
 {
@@ -48,6 +47,7 @@ struct Ply_element
   std::vector<Ply_property> properties;
 };
 
+/// What a PLY header announces, read without trusting it.
 struct Announced
 {
   std::uint64_t vertices = 0;
