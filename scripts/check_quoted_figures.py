@@ -18,12 +18,14 @@ was not updated), or when benchmark/results.csv is not the merge of the stages' 
 text derives from figures ("1.4 times", "2x"), a size ("416k", "1.66M"), code and links.
 
 Usage: scripts/check_quoted_figures.py [--bind | --update] [REPOSITORY]
-  --bind    names a source for each figure the list lacks (and drops the entries of figures no longer quoted):
+  --bind    names a source for each figure the list lacks (and drops the entries of figures no longer quoted;
+            the others keep theirs):
             the key whose value matches, preferring the result row that holds most of the line's other figures;
             prints the figures it could not place or placed by a guess, for a person to check
   --update  rewrites every bound figure from the current results (after a benchmark run), keeping its digits
 """
 import csv
+import difflib
 import glob
 import importlib.util
 import os
@@ -36,7 +38,7 @@ CHAIN = r"(?:\*\*)?(?:\s*(?:-|–|/|,|and|to|→)\s*(?:\*\*)?[\d,.]+(?:e[-+]?\d+
 EXEMPT = re.compile(CHAIN + r"(?:\s*(?:times\b|x\b|×)|[kM]\b)")  # a ratio ("2.5 times", "3x") or a size ("416k", "1.66M")
 BLOCK = re.compile(r"(<!-- figures from benchmark/(?:: ([^>]*?))? -->)(.*?)(<!-- end of figures from benchmark/ -->)", re.S)
 CODE_OR_LINK = re.compile(r"`[^`]*`|\]\([^)]*\)")
-SCALES = [1, 1000, 100, 0.001, 1e6, 1 / 1024, 1024, 1e-6]
+SCALES = [1, 1000, 100, 1 / 1024]  # as quoted, in ms, in per cent, in GiB of MiB
 SOURCES = "doc/figure_sources.csv"
 
 
@@ -225,10 +227,15 @@ def bind(root, values):
     bound, doubtful = {}, []
     sources = declared(root)
     for (page, block), found in quoted(root).items():
+        # Figures the list already names keep their source (a person may have chosen it); only the others are bound.
         previous = old.get((page, block), [])
-        keep = len(previous) == len(found) and all(p["quoted"] == t for p, (_, t, _) in zip(previous, found))
-        if keep:
-            bound[(page, block)] = previous
+        kept = {}
+        matcher = difflib.SequenceMatcher(a=[p["quoted"] for p in previous], b=[t for _, t, _ in found], autojunk=False)
+        for tag, i1, i2, j1, j2 in matcher.get_opcodes():
+            if tag == "equal":
+                kept.update({j1 + k: previous[i1 + k] for k in range(i2 - i1)})
+        if len(kept) == len(found):
+            bound[(page, block)] = [kept[j] for j in range(len(found))]
             continue
         entries = []
         lines = {}
@@ -245,7 +252,10 @@ def bind(root, values):
             for table in {row_of(row_of(k)) for k, _ in plausible(text, unit)}:
                 tables[table] = tables.get(table, 0) + 1
 
-        for line, text, unit in found:
+        for j, (line, text, unit) in enumerate(found):
+            if j in kept:
+                entries.append(kept[j])
+                continue
             candidates = plausible(text, unit)
             # The result row that holds most of this line's figures.
             support = {}
@@ -323,7 +333,8 @@ def check(root, values):
     sources = read_sources(root)
     allowed = declared(root)
     count = unmeasured = 0
-    for (page, block), found in quoted(root).items():
+    quoted_blocks = quoted(root)
+    for (page, block), found in quoted_blocks.items():
         entries = sources.get((page, block), [])
         for i, (line, text, _) in enumerate(found):
             count += 1
@@ -345,9 +356,8 @@ def check(root, values):
                         problems.append(f"{where}: the result at {key} is {render(values[key], e['scale'], text)}")
         if len(entries) > len(found):
             problems.append(f"{page}, figure block {block}: {SOURCES} lists {len(entries)} figures, the block quotes {len(found)}")
-    for (page, block) in sources:
-        if not any(k == (page, block) for k in quoted(root)):
-            problems.append(f"{page}: {SOURCES} lists figure block {block}, which the page does not have")
+    for (page, block) in sources.keys() - quoted_blocks.keys():
+        problems.append(f"{page}: {SOURCES} lists figure block {block}, which the page does not have")
     if problems:
         print("check_quoted_figures.py: figures that do not match their results:", file=sys.stderr)
         for p in problems:

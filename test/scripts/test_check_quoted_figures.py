@@ -72,3 +72,15 @@ def test_a_figure_added_without_a_source_fails(copy):
     replace_in(copy / "README.md", "| 2.04 s |", "| 2.04 s (2.17 s the run before) |")
     result = run(copy)
     assert result.returncode == 1 and "2.17" in result.stderr and "names no source" in result.stderr
+
+
+def test_bind_keeps_the_sources_already_named(copy):
+    before = [r for r in csv.DictReader(open(copy / "doc" / "figure_sources.csv")) if r["page"] == "README.md"]
+    replace_in(copy / "README.md", "| 2.04 s |", "| 2.04 s (1.25 s with one thread) |")
+    assert run(copy).returncode == 1
+    assert run(copy, "--bind").returncode == 0
+    assert run(copy).returncode == 0
+    after = [r for r in csv.DictReader(open(copy / "doc" / "figure_sources.csv")) if r["page"] == "README.md"]
+    added = next(i for i, r in enumerate(after) if r["quoted"] == "1.25" and i > 0 and after[i - 1]["quoted"] == "2.04")
+    assert [(r["quoted"], r["key"], r["scale"]) for r in after[:added] + after[added + 1:]] == \
+        [(r["quoted"], r["key"], r["scale"]) for r in before]
