@@ -68,6 +68,9 @@ namespace CGAL_ext {
   `diffuse(points, np)`. It is not copyable (it owns its factorisation).
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/editing.md">Detail-preserving editing</a> (`doc/editing.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag>
 class Detail_preserving_deformation

@@ -31,6 +31,9 @@ namespace CGAL_ext {
   \return false if the callback cancelled, true otherwise.
   \throws Invalid_input for the conditions of `compute_geometric_details` or a fidelity that is not > 0.
   \throws Numerical_failure if the balance equation does not converge.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/detail_scaling.md">Detail scaling and enhancement</a> (`doc/detail_scaling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

@@ -114,6 +114,9 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   \return false if the callback cancelled the computation, true otherwise.
   \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range, `lambda <= 0`,
           `mu <= lambda` (quadric and cubic orders) or a zero or non-finite normal.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/geometric_details.md">Geometric details</a> (`doc/geometric_details.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename DetailMap,
           typename MagnitudeMap, typename NamedParameters = CGAL::parameters::Default_named_parameters>

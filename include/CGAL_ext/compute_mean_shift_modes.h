@@ -51,6 +51,9 @@ namespace CGAL_ext {
   \return the scales and iteration counts; `completed` is false if the callback cancelled.
   \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range, invalid settings, a zero
           or non-finite normal, or points that all coincide.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/simplification.md">Mean shift and simplification sample points</a> (`doc/simplification.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename ModeMap,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

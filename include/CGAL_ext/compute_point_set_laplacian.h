@@ -38,6 +38,9 @@ namespace CGAL_ext {
 
   \return false if the callback cancelled the computation, true otherwise.
   \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range or non-finite weights.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/geometric_details.md">Geometric details</a> (`doc/geometric_details.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

@@ -101,6 +101,9 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   \return the sample points; `completed` is false if the callback cancelled.
   \throws Invalid_input for an empty range, non-finite coordinates, invalid settings, a zero or non-finite
           normal, or (with the mode criterion) points that all coincide.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/simplification.md">Mean shift and simplification sample points</a> (`doc/simplification.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SampleIndexMap,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>
@@ -118,6 +121,9 @@ auto compute_simplification_sample_points(const PointRange& points, const Simpli
   of an edit): points whose labels differ never share a sample point.
 
   \tparam SelectionLabelMap a model of `ReadablePropertyMap` whose value type converts to `int`.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/simplification.md">Mean shift and simplification sample points</a> (`doc/simplification.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SelectionLabelMap,
           typename SampleIndexMap, typename NamedParameters = CGAL::parameters::Default_named_parameters>

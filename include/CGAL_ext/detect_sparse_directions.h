@@ -32,6 +32,9 @@ namespace CGAL_ext {
   \param np `point_map`, `geom_traits`
   \return the median of the local spacings.
   \throws Invalid_input for fewer than 2 points or non-finite coordinates.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/upsampling.md">Up-sampling after deformation</a> (`doc/upsampling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SpacingMap,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>
@@ -70,6 +73,9 @@ double compute_local_spacing(const PointRange& points, SpacingMap spacing_map,
   \return the spacing used and the counts of sparse and hole-boundary points.
   \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, a bad
           `k` or invalid settings.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/upsampling.md">Up-sampling after deformation</a> (`doc/upsampling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename SparseDirectionMap,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

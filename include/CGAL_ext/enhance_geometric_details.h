@@ -109,6 +109,9 @@ Detail_manipulation_result enhance_geometric_details_impl(PointRange& points, un
 
   \return the region and solver statistics; converts to `false` if the callback cancelled.
   \throws Invalid_input, Numerical_failure as `scale_geometric_details`.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/detail_scaling.md">Detail scaling and enhancement</a> (`doc/detail_scaling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename IndexRange,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

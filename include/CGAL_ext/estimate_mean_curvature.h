@@ -42,6 +42,9 @@ namespace CGAL_ext {
 
   \return false if the callback cancelled, true otherwise.
   \throws Invalid_input for an empty range, non-finite coordinates, `k` out of range, or a zero or non-finite normal.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/curvature.md">Mean curvature</a> (`doc/curvature.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename CurvatureMap,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>

@@ -43,6 +43,9 @@ namespace CGAL_ext {
 
   \return false if the callback cancelled, true otherwise.
   \throws Invalid_input for fewer than 6 points, non-finite coordinates, or `k` out of range.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/curvature.md">Mean curvature (its section Normals)</a> (`doc/curvature.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename NamedParameters>
 bool estimate_oriented_normals(const PointRange& points, unsigned int k, const NamedParameters& np)

@@ -48,6 +48,9 @@ namespace CGAL_ext {
   \return the number of normals re-fitted.
   \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, an
           index out of range or `k` out of range.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/detail_scaling.md">Detail scaling and enhancement</a> (`doc/detail_scaling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename IndexRange,
           typename NamedParameters>

@@ -127,6 +127,9 @@ Detail_manipulation_result scale_geometric_details_impl(PointRange& points, unsi
           the region that nothing pins, a whole-model region without anchors, a non-finite `s`, or the
           conditions of `compute_geometric_details`.
   \throws Numerical_failure when the factorisation or the iteration fails.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/detail_scaling.md">Detail scaling and enhancement</a> (`doc/detail_scaling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename IndexRange,
           typename AnchorRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>

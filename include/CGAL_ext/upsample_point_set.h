@@ -142,6 +142,9 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
           written) when the callback cancelled.
   \throws Invalid_input for an empty range, non-finite coordinates, missing, zero or non-finite normals, fewer
           points than neighbours, or invalid settings.
+
+  \sa The user manual's page, with pictures, the program's and Python's calls and the measurements:
+  <a href="../../../doc/upsampling.md">Up-sampling after deformation</a> (`doc/upsampling.md`).
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange, typename OutputIterator,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>
