@@ -37,8 +37,9 @@ release_tests_and_quick_benchmark() {
   [ "$tests" -eq 0 ] && [ "$benchmark" -eq 0 ]
 }
 timed_stage "release tests + quick benchmark" release_tests_and_quick_benchmark
-# The quoted figures against their results, and the check itself against the changes it must catch.
-quoted_figures() { python3 scripts/check_quoted_figures.py && python3 -m pytest -q -p no:cacheprovider test/scripts; }
+# The quoted figures against their results, and the check itself against the changes it must catch (with
+# Debian's Python, which setup.sh gives pytest, whatever python3 comes first on the PATH).
+quoted_figures() { python3 scripts/check_quoted_figures.py && /usr/bin/python3 -m pytest -q -p no:cacheprovider test/scripts; }
 timed_stage "quoted figures" quoted_figures
 timed_stage "include layers" python3 scripts/include_layers.py --check
 timed_stage "API reference" bash scripts/build_api_docs.sh
