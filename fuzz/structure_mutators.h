@@ -90,28 +90,37 @@ inline std::vector<std::string> words(const std::string& line)
   return out;
 }
 
+/// Text as lines of words, and back (one space between words).
+inline std::vector<std::vector<std::string>> split_lines(const std::string& text)
+{
+  std::istringstream in(text);
+  std::vector<std::vector<std::string>> lines;
+  for(std::string line; std::getline(in, line);) lines.push_back(words(line));
+  return lines;
+}
+
+inline std::string join_lines(const std::vector<std::vector<std::string>>& lines)
+{
+  std::string out;
+  for(const auto& line : lines) {
+    for(std::size_t i = 0; i < line.size(); ++i) out += (i ? " " : "") + line[i];
+    out += '\n';
+  }
+  return out;
+}
+
 inline bool parse_ply(const std::string& text, Ply_file& ply)
 {
   const std::size_t end = text.find("end_header");
   if(text.compare(0, 3, "ply") != 0 || end == std::string::npos) return false;
   std::size_t body = text.find('\n', end);
   body = body == std::string::npos ? text.size() : body + 1;
-  std::istringstream in(text.substr(0, body));
-  ply.header.clear();
-  for(std::string line; std::getline(in, line);) ply.header.push_back(words(line));
+  ply.header = split_lines(text.substr(0, body));
   ply.body = text.substr(body);
   return true;
 }
 
-inline std::string write_ply(const Ply_file& ply)
-{
-  std::string out;
-  for(const auto& line : ply.header) {
-    for(std::size_t i = 0; i < line.size(); ++i) out += (i ? " " : "") + line[i];
-    out += '\n';
-  }
-  return out + ply.body;
-}
+inline std::string write_ply(const Ply_file& ply) { return join_lines(ply.header) + ply.body; }
 
 inline const char* ply_type(Random& random)
 {
@@ -177,14 +186,14 @@ inline void append_value(std::string& body, const std::string& format, const std
 /// A body that matches the header (each element's count, at most 64 rows of it, each property in turn).
 inline std::string ply_body_for(const Ply_file& ply, Random& random)
 {
+  auto rows_of = [](const std::vector<std::string>& element_line) {
+    return element_line.size() >= 3 ? std::size_t(std::min(64ll, std::max(0ll, std::atoll(element_line[2].c_str())))) : 0;
+  };
   std::string format = "ascii", body;
   std::size_t rows = 0, vertex_count = 1;
   for(const auto& line : ply.header) {
     if(line.size() >= 2 && line[0] == "format") format = line[1];
-    if(line.size() >= 3 && line[0] == "element") {
-      rows = std::size_t(std::min(64ll, std::max(0ll, std::atoll(line[2].c_str()))));
-      if(line[1] == "vertex") vertex_count = std::max<std::size_t>(rows, 1);
-    }
+    if(line.size() >= 2 && line[0] == "element" && line[1] == "vertex") vertex_count = std::max<std::size_t>(rows_of(line), 1);
   }
   // Second pass: rows of each element, properties in header order.
   std::vector<std::vector<std::string>> properties;
@@ -206,7 +215,7 @@ inline std::string ply_body_for(const Ply_file& ply, Random& random)
     if(line.size() >= 1 && (line[0] == "element" || line[0] == "end_header")) {
       flush(rows);
       properties.clear();
-      rows = line.size() >= 3 ? std::size_t(std::min(64ll, std::max(0ll, std::atoll(line[2].c_str())))) : 0;
+      rows = rows_of(line);
     } else if(line.size() >= 1 && line[0] == "property")
       properties.push_back(line);
   }
@@ -345,14 +354,10 @@ inline std::string fresh_off(Random& random)
 inline std::string mutate_off(const std::string& input, std::size_t max_size, Random& random)
 {
   if(input.find("OFF") == std::string::npos || one_in(random, 32)) return fresh_off(random);
-  std::vector<std::vector<std::string>> lines;
-  {
-    std::istringstream in(input);
-    for(std::string line; std::getline(in, line);) lines.push_back(words(line));
-  }
+  std::vector<std::vector<std::string>> lines = split_lines(input);
   if(lines.empty()) return fresh_off(random);
   // The counts are the first line of numbers (the keyword's own line may hold them too).
-  std::size_t counts = lines.size() > 1 ? 1 : 0;
+  const std::size_t counts = lines.size() > 1 ? 1 : 0;
   const std::size_t at = below(random, lines.size());
   auto& line = lines[at];
   switch(random() % 9) {
@@ -403,12 +408,7 @@ inline std::string mutate_off(const std::string& input, std::size_t max_size, Ra
     return all;
   }
   }
-  std::string out;
-  for(const auto& l : lines) {
-    for(std::size_t i = 0; i < l.size(); ++i) out += (i ? " " : "") + l[i];
-    out += '\n';
-  }
-  return out;
+  return join_lines(lines);
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -416,7 +416,7 @@ inline std::string mutate_off(const std::string& input, std::size_t max_size, Ra
 
 inline nlohmann::json interesting_json(Random& random)
 {
-  static const char* const words[] = {"linear", "quadric", "cubic", "none", "propagate", "arap", "uniform",
+  static const char* const names[] = {"linear", "quadric", "cubic", "none", "propagate", "arap", "uniform",
                                       "cotangent", "edge_lengths", "surface_area", "geodesic", "euclidean",
                                       "nearest", "fitted", "own", "affine", "frames", "inf", "",
                                       "sphere:0,0,1,0.3", "sphere:0,0,0,-1", "box:-1,-1,0,1,1,1", "box:1,1,1,0,0,0",
@@ -432,11 +432,11 @@ inline nlohmann::json interesting_json(Random& random)
   switch(random() % 7) {
   case 0: return pick(random, numbers);
   case 1: return (long long)(random() % 400) - 100;
-  case 2: return pick(random, words);
+  case 2: return pick(random, names);
   case 3: return nlohmann::json::array({double(random() % 3) - 1, 0.0, 1.0});
   case 4: return nlohmann::json::object({{pick(random, keys), pick(random, numbers)}});
   case 5: return one_in(random, 2) ? nlohmann::json(nullptr) : nlohmann::json(one_in(random, 2));
-  default: return nlohmann::json::array({pick(random, words)});
+  default: return nlohmann::json::array({pick(random, names)});
   }
 }
 

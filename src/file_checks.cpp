@@ -13,7 +13,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <set>
 #include <sstream>
 #include <string>
 
@@ -141,18 +140,24 @@ Off_file read_off(const fs::path& path, std::uint64_t bytes_per_point)
 
 namespace {
 
-std::uint64_t ply_scalar_size(const std::string& type)
+Ply_scalar ply_scalar(const std::string& type)
 {
-  if(type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-  if(type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if(type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32") return 4;
-  if(type == "double" || type == "float64") return 8;
-  return 0;
+  Ply_scalar s{type};
+  if(type == "char" || type == "uchar" || type == "int8" || type == "uint8") s.bytes = 1;
+  else if(type == "short" || type == "ushort" || type == "int16" || type == "uint16") s.bytes = 2;
+  else if(type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32") s.bytes = 4;
+  else if(type == "double" || type == "float64") s.bytes = 8;
+  s.is_signed = type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
+  s.is_real = type == "float" || type == "float32" || type == "double" || type == "float64";
+  return s;
 }
 
-bool signed_integer(const std::string& type)
+/// The fewest bytes of one item of a binary element (its lists empty).
+std::uint64_t smallest_item_bytes(const Ply_element& e)
 {
-  return type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
+  std::uint64_t bytes = 0;
+  for(const Ply_property& p : e.properties) bytes += p.is_list() ? p.count.bytes : p.value.bytes;
+  return bytes;
 }
 
 /// Reads and checks a PLY header, and returns its vertex count and the fewest bytes of data that can hold all
@@ -177,8 +182,7 @@ Announced ply_announced(std::istream& in, const std::string& name)
   std::vector<std::string> vertex_names;           // in the header's order
   auto same_float_type = [&](const char* a, const char* b, const char* c) {
     const std::string& t = vertex_types[a];
-    const bool is_float = t == "float" || t == "float32" || t == "double" || t == "float64";
-    return is_float && vertex_types[b] == t && vertex_types[c] == t;
+    return ply_scalar(t).is_real && vertex_types[b] == t && vertex_types[c] == t;
   };
   while(std::getline(in, line)) {
     ++line_number;
@@ -205,31 +209,30 @@ Announced ply_announced(std::istream& in, const std::string& name)
       if(w.size() != 3) fail("an element line is 'element NAME COUNT'");
       for(const Ply_element& e : elements)
         if(e.name == w[1]) fail("element '" + w[1] + "' appears twice"); // CGAL would size by one, read the other
-      elements.push_back({w[1], whole(w[2]), 0, 0, {}, {}});
+      elements.push_back({w[1], whole(w[2]), {}});
     } else if(w[0] == "property") {
       if(elements.empty()) fail("a property before any element");
       Ply_element& e = elements.back();
-      // CGAL's reader looks a property up by name and casts it to the type it asked for: a twin of another type
-      // (a list "blue" and an int "blue") made it call through a null pointer (found by fuzz/fuzz_ply).
-      if((w.size() == 5 || w.size() == 3) && !e.names.insert(w.back()).second) fail("property '" + w.back() + "' appears twice");
+      Ply_property property;
       if(w.size() == 5 && w[1] == "list") {
-        const std::uint64_t count_bytes = ply_scalar_size(w[2]);
-        if(count_bytes == 0 || ply_scalar_size(w[3]) == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
-        if(w[2] == "float" || w[2] == "float32" || w[2] == "double" || w[2] == "float64")
-          fail("a list's count type '" + w[2] + "' is not an integer type");
-        e.bytes += count_bytes;
-        e.properties.push_back({w[2], w[3], count_bytes, ply_scalar_size(w[3]), signed_integer(w[2])});
-        a.lists = true;
+        property.name = w[4];
+        property.count = ply_scalar(w[2]);
+        property.value = ply_scalar(w[3]);
+        if(property.count.bytes == 0 || property.value.bytes == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
+        if(property.count.is_real) fail("a list's count type '" + w[2] + "' is not an integer type");
       } else if(w.size() == 3) {
-        const std::uint64_t bytes = ply_scalar_size(w[1]);
-        if(bytes == 0) fail("unknown property type '" + w[1] + "'");
-        e.bytes += bytes;
-        e.properties.push_back({"", w[1], 0, bytes, false});
+        property.name = w[2];
+        property.value = ply_scalar(w[1]);
+        if(property.value.bytes == 0) fail("unknown property type '" + w[1] + "'");
         if(e.name == "vertex") vertex_types.emplace(w[2], w[1]);
         if(e.name == "vertex") vertex_names.push_back(w[2]);
       } else
         fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
-      ++e.values;
+      // CGAL's reader looks a property up by name and casts it to the type it asked for: a twin of another type
+      // (a list "blue" and an int "blue") made it call through a null pointer (found by fuzz/fuzz_ply).
+      for(const Ply_property& other : e.properties)
+        if(other.name == property.name) fail("property '" + property.name + "' appears twice");
+      e.properties.push_back(property);
     } else if(w[0] == "end_header") {
       if(format.empty()) fail("no format line");
       if(!same_float_type("x", "y", "z")) fail("the vertices need x, y and z properties, all float or all double");
@@ -240,12 +243,12 @@ Announced ply_announced(std::istream& in, const std::string& name)
       a.plain_vertices = format == "binary_little_endian" && elements.size() == 1 && elements[0].name == "vertex" &&
                          (vertex_names == positions || (vertex_names == oriented && same_float_type("x", "nx", "nz")));
       a.plain_normals = a.plain_vertices && vertex_names.size() == 6;
-      a.plain_value_bytes = a.plain_vertices ? ply_scalar_size(vertex_types["x"]) : 0;
+      a.plain_value_bytes = a.plain_vertices ? ply_scalar(vertex_types["x"]).bytes : 0;
       a.format = format;
       for(const Ply_element& e : elements) {
         // An element without properties takes no bytes, and CGAL's reader would loop over its count for nothing.
-        if(e.values == 0 && e.count > 0) fail("element '" + e.name + "' has no property");
-        const std::uint64_t per_item = format == "ascii" ? 2 * e.values : e.bytes;
+        if(e.properties.empty() && e.count > 0) fail("element '" + e.name + "' has no property");
+        const std::uint64_t per_item = format == "ascii" ? 2 * e.properties.size() : smallest_item_bytes(e);
         if(per_item > 0 && e.count > (std::uint64_t(1) << 62) / per_item) fail("element '" + e.name + "' is too large");
         a.smallest_bytes += e.count * per_item;
         if(e.name == "vertex") a.vertices = e.count;
@@ -268,26 +271,24 @@ std::int64_t ply_list_count(const unsigned char* bytes, std::size_t n, bool is_s
   return std::int64_t(u);
 }
 
-/// Whether `token` reads as one whole value of PLY `type` with the stream extraction CGAL's ASCII reader uses
+/// Whether `token` reads as one whole value of `type` with the stream extraction CGAL's ASCII reader uses
 /// (integers through short / unsigned short at least; no hexadecimal, "nan" or "inf"; nothing out of range).
-bool ascii_ply_value(const std::string& token, const std::string& type)
+bool ascii_ply_value(const std::string& token, const Ply_scalar& type)
 {
-  char* end = nullptr;
-  if(type == "float" || type == "float32" || type == "double" || type == "float64") {
+  if(type.is_real) {
     if(token.find_first_not_of("0123456789+-.eE") != std::string::npos) return false;
+    char* end = nullptr;
     const double v = std::strtod(token.c_str(), &end);
-    const double largest = type == "float" || type == "float32" ? double(std::numeric_limits<float>::max())
-                                                                : std::numeric_limits<double>::max();
+    const double largest = type.bytes == 4 ? double(std::numeric_limits<float>::max()) : std::numeric_limits<double>::max();
     return end != token.c_str() && *end == '\0' && std::abs(v) <= largest;
   }
-  const bool is_signed = signed_integer(type);
-  const std::size_t digits = token.empty() || token[0] == '+' || (is_signed && token[0] == '-') ? 1 : 0;
+  const std::size_t digits = token.empty() || token[0] == '+' || (type.is_signed && token[0] == '-') ? 1 : 0;
   if(token.size() <= digits || token.size() > 12 || token.find_first_not_of("0123456789", digits) != std::string::npos)
     return false;
   const long long v = std::strtoll(token.c_str(), nullptr, 10);
-  const std::size_t bytes = std::max<std::size_t>(2, std::size_t(ply_scalar_size(type))); // chars are read as shorts
-  const long long highest = is_signed ? (1ll << (8 * bytes - 1)) - 1 : (1ll << (8 * bytes)) - 1;
-  return v <= highest && v >= (is_signed ? -highest - 1 : 0);
+  const std::size_t bytes = std::max<std::size_t>(2, std::size_t(type.bytes)); // chars are read as shorts
+  const long long highest = type.is_signed ? (1ll << (8 * bytes - 1)) - 1 : (1ll << (8 * bytes)) - 1;
+  return v <= highest && v >= (type.is_signed ? -highest - 1 : 0);
 }
 
 /// Sequential reads and skips over a stream through a large buffer: a binary PLY walk visits every record, and
@@ -342,10 +343,13 @@ void check_ply_lists(std::istream& in, const Announced& a, std::uint64_t file_by
   auto fail = [&](const Ply_element& e, std::uint64_t item, const std::string& what) {
     throw Cli_error("cannot read " + name + ": element '" + e.name + "' item " + std::to_string(item) + ": " + what);
   };
-  auto is_list = [](const Ply_property& p) { return p.count_bytes > 0; };
+  auto has_list = [](const Ply_element& e) {
+    return std::any_of(e.properties.begin(), e.properties.end(), [](const Ply_property& p) { return p.is_list(); });
+  };
   std::size_t last = 0; // one past the last element with a list
   for(std::size_t i = 0; i < a.elements.size(); ++i)
-    if(std::any_of(a.elements[i].properties.begin(), a.elements[i].properties.end(), is_list)) last = i + 1;
+    if(has_list(a.elements[i])) last = i + 1;
+  if(last == 0) return;
   in.clear();
   in.seekg(std::streamoff(a.header_bytes));
   const bool ascii = a.format == "ascii", big_endian = a.format == "binary_big_endian";
@@ -354,37 +358,37 @@ void check_ply_lists(std::istream& in, const Announced& a, std::uint64_t file_by
   std::string token;
   for(std::size_t i = 0; i < last; ++i) {
     const Ply_element& e = a.elements[i];
-    if(!ascii && std::none_of(e.properties.begin(), e.properties.end(), is_list)) {
-      at += e.count * e.bytes; // the header check made sure the file holds it
-      bytes.skip(e.count * e.bytes);
+    if(!ascii && !has_list(e)) {
+      at += e.count * smallest_item_bytes(e); // the header check made sure the file holds it
+      bytes.skip(e.count * smallest_item_bytes(e));
       continue;
     }
     for(std::uint64_t item = 0; item < e.count; ++item)
       for(const Ply_property& p : e.properties) {
         if(ascii) {
           // Each value whole and in range; the file's end stops a list of any count at once.
-          auto next = [&](const std::string& type) {
+          auto next = [&](const Ply_scalar& type) {
             if(!(in >> token)) fail(e, item, "the file ends here");
-            if(!ascii_ply_value(token, type)) fail(e, item, "'" + token + "' is not a " + type);
+            if(!ascii_ply_value(token, type)) fail(e, item, "'" + token + "' is not a " + type.type);
           };
-          next(is_list(p) ? p.count_type : p.value_type);
-          if(!is_list(p)) continue;
+          next(p.is_list() ? p.count : p.value);
+          if(!p.is_list()) continue;
           const long long count = std::strtoll(token.c_str(), nullptr, 10);
           if(count < 0) fail(e, item, "a list of " + token + " values");
-          for(long long v = 0; v < count; ++v) next(p.value_type);
-        } else if(!is_list(p)) {
-          if(!bytes.skip(p.value_bytes)) fail(e, item, "the file ends here");
-          at += p.value_bytes;
+          for(long long v = 0; v < count; ++v) next(p.value);
+        } else if(!p.is_list()) {
+          if(!bytes.skip(p.value.bytes)) fail(e, item, "the file ends here");
+          at += p.value.bytes;
         } else {
           unsigned char count_bytes[8];
-          if(!bytes.read(count_bytes, std::size_t(p.count_bytes))) fail(e, item, "the file ends here");
-          const std::int64_t count = ply_list_count(count_bytes, std::size_t(p.count_bytes), p.signed_count, big_endian);
-          at += p.count_bytes;
+          if(!bytes.read(count_bytes, std::size_t(p.count.bytes))) fail(e, item, "the file ends here");
+          const std::int64_t count = ply_list_count(count_bytes, std::size_t(p.count.bytes), p.count.is_signed, big_endian);
+          at += p.count.bytes;
           const std::uint64_t left = file_bytes > at ? file_bytes - at : 0;
-          if(count < 0 || std::uint64_t(count) > left / p.value_bytes)
+          if(count < 0 || std::uint64_t(count) > left / p.value.bytes)
             fail(e, item, "a list of " + std::to_string(count) + " values, more than the file holds");
-          bytes.skip(std::uint64_t(count) * p.value_bytes);
-          at += std::uint64_t(count) * p.value_bytes;
+          bytes.skip(std::uint64_t(count) * p.value.bytes);
+          at += std::uint64_t(count) * p.value.bytes;
         }
       }
   }
@@ -403,7 +407,7 @@ Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
     throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " +
                     std::to_string(a.vertices) + " points; its elements need at least " + std::to_string(a.smallest_bytes) +
                     " bytes, the file holds " + std::to_string(size - a.header_bytes) + " after its header)");
-  if(!ec && a.lists) check_ply_lists(in, a, size, path.string());
+  if(!ec) check_ply_lists(in, a, size, path.string());
   return a;
 }
 

@@ -10,7 +10,6 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -30,20 +29,27 @@ struct Off_file
 /// at `bytes_per_point`. Throws Cli_error naming the file and the problem.
 Off_file read_off(const std::filesystem::path& path, std::uint64_t bytes_per_point);
 
-/// A property of a PLY element: a scalar of `value_type`, or a list of them after a count of `count_type`.
+/// A scalar type of PLY ("float", "uchar", ...): its size in bytes (0 for an unknown type) and its kind.
+struct Ply_scalar
+{
+  std::string type;
+  std::uint64_t bytes = 0;
+  bool is_signed = false, is_real = false;
+};
+
+/// A property of a PLY element: a scalar of `value`'s type, or a list of them after a count of `count`'s type.
 struct Ply_property
 {
-  std::string count_type; ///< empty for a scalar
-  std::string value_type;
-  std::uint64_t count_bytes = 0, value_bytes = 0; ///< their sizes (count_bytes 0 for a scalar)
-  bool signed_count = false;
+  std::string name;
+  Ply_scalar count; ///< bytes 0 for a scalar
+  Ply_scalar value;
+  bool is_list() const { return count.bytes > 0; }
 };
 
 struct Ply_element
 {
   std::string name;
-  std::uint64_t count = 0, values = 0, bytes = 0; ///< items; properties; bytes per item (lists empty)
-  std::set<std::string> names;
+  std::uint64_t count = 0; ///< items
   std::vector<Ply_property> properties;
 };
 
@@ -61,7 +67,6 @@ struct Announced
   std::uint64_t header_bytes = 0;  ///< where the data starts
   std::string format;
   std::vector<Ply_element> elements;
-  bool lists = false;              ///< some element has a list property
 };
 
 /// Checks a PLY header before CGAL's reader allocates: the memory its points need, and whether the file can
