@@ -751,7 +751,7 @@ TEST(DetailPreservingDeformation, RotationsPropagateByTheStrengthField)
     ASSERT_TRUE(d->deform());
     for(std::size_t s = 0; s < d->number_of_sample_points(); ++s) {
       const double f = d->strength(s, 0);
-      const double angle = Eigen::AngleAxisd(d->propagated_rotation(s)).angle();
+      const double angle = Eigen::AngleAxisd(d->detail_rotation(s)).angle();
       if(d->is_handle_sample_point(s)) {
         EXPECT_EQ(f, 1.0);
         EXPECT_NEAR(angle, 1.0, 1e-9);
@@ -905,7 +905,7 @@ TEST(DetailPreservingDeformation, StrengthAndPropagatedRotationFollowTheirClosed
       }
       const double f = d.strength(s, 0);
       const double expected_angle = 2 * std::atan2(f * std::sin(angle / 2), 1 - f + f * std::cos(angle / 2));
-      worst_angle = std::max(worst_angle, std::abs(Eigen::AngleAxisd(d.propagated_rotation(s)).angle() - expected_angle));
+      worst_angle = std::max(worst_angle, std::abs(Eigen::AngleAxisd(d.detail_rotation(s)).angle() - expected_angle));
       ++checked;
     }
     std::printf("%s: %zu region sample points; strength off its closed form by at most %.2g (other leg %.2g), "
@@ -1037,7 +1037,7 @@ TEST(DetailPreservingDeformation, DiffusionCarriesRigidSampleMotionsExactly)
   stencil.setup<CGAL::Parallel_if_available_tag>(cloud.positions, samples, 5);
   const auto [R, shift] = turn_about(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(0.3, -1, 0.2), 2.0, Eigen::Vector3d(-1, 0.5, 0));
   CGAL_ext::internal::Matrix_n3 moved_samples = (samples * R.transpose()).rowwise() + shift.transpose();
-  for(auto origin : {CGAL_ext::internal::Offset_origin::nearest_sample, CGAL_ext::internal::Offset_origin::own_sample}) {
+  for(auto origin : {CGAL_ext::Diffusion_origin::nearest_sample, CGAL_ext::Diffusion_origin::own_sample}) {
     CGAL_ext::internal::Matrix_n3 out_points(cloud.positions.rows(), 3), out_normals(cloud.positions.rows(), 3);
     stencil.apply<CGAL::Parallel_if_available_tag>(cloud.positions, normals, samples, moved_samples,
                                                    std::vector<Eigen::Matrix3d>(std::size_t(samples.rows()), R), origin,
@@ -1261,7 +1261,7 @@ TEST(DetailPreservingDeformation, DiffusionOfASmoothBendIsContinuous)
   double normal_error = 0, unit_error = 0;
   auto measure = [&] {
     in::Matrix_n3 out_points(points.rows(), 3), out_normals(points.rows(), 3);
-    stencil.apply<CGAL::Parallel_if_available_tag>(points, normals, samples, moved, turn, in::Offset_origin::own_sample,
+    stencil.apply<CGAL::Parallel_if_available_tag>(points, normals, samples, moved, turn, CGAL_ext::Diffusion_origin::own_sample,
                                                    out_points, out_normals);
     double error = 0, stretch = 0, squares = 0;
     std::size_t count = 0;
@@ -1444,7 +1444,7 @@ TEST(DetailPreservingDeformation, AffineSampleMapsCarryAStretch)
       if(affine) map[s] = in::fitted_linear_map(samples, moved, graph, s, map[s]);
     }
     in::Matrix_n3 out_points(points.rows(), 3), out_normals(points.rows(), 3);
-    stencil.apply<CGAL::Sequential_tag>(points, normals, samples, moved, map, in::Offset_origin::own_sample, out_points, out_normals);
+    stencil.apply<CGAL::Sequential_tag>(points, normals, samples, moved, map, CGAL_ext::Diffusion_origin::own_sample, out_points, out_normals);
     double squares = 0;
     std::size_t count = 0;
     largest[affine] = 0;

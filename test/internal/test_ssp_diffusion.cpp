@@ -15,6 +15,7 @@
 #include <vector>
 
 using namespace CGAL_ext::internal;
+using CGAL_ext::Diffusion_origin;
 
 namespace {
 
@@ -111,7 +112,7 @@ TEST(DiffusionStencil, ARigidMotionOfEverySamplePointMovesEveryPointRigidly)
   Diffusion_stencil stencil;
   stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, 4);
   for(bool wide : {false, true})
-  for(Offset_origin origin : {Offset_origin::nearest_sample, Offset_origin::own_sample}) {
+  for(Diffusion_origin origin : {Diffusion_origin::nearest_sample, Diffusion_origin::own_sample}) {
     stencil.use_wide_vectors = wide;
     Matrix_n3 out_points(points.rows(), 3), out_normals(points.rows(), 3);
     stencil.apply<CGAL::Parallel_if_available_tag>(points, normals, samples, moved, rotation, origin, out_points, out_normals);
@@ -135,7 +136,7 @@ TEST(DiffusionStencil, PointsWhoseSamplePointsStayKeepTheirBits)
   for(bool wide : {false, true}) {
     stencil.use_wide_vectors = wide;
     Matrix_n3 out_points(points.rows(), 3), out_normals(points.rows(), 3);
-    stencil.apply<CGAL::Sequential_tag>(points, normals, samples, moved, rotation, Offset_origin::own_sample, out_points, out_normals);
+    stencil.apply<CGAL::Sequential_tag>(points, normals, samples, moved, rotation, Diffusion_origin::own_sample, out_points, out_normals);
     int unmoved = 0;
     for(std::size_t i = 0; i < stencil.samples.size(); ++i) {
       if(std::find(stencil.samples.begin(i), stencil.samples.end(i), 0) != stencil.samples.end(i)) continue;
@@ -165,7 +166,7 @@ TEST(DiffusionStencil, TheWidePathComputesWhatThePortableOneDoes)
   for(int i = 0; i < int(n); i += 3) active.push_back(i);
   Diffusion_stencil stencil;
   stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, 6);
-  for(Offset_origin origin : {Offset_origin::nearest_sample, Offset_origin::own_sample}) {
+  for(Diffusion_origin origin : {Diffusion_origin::nearest_sample, Diffusion_origin::own_sample}) {
     Matrix_n3 out[2][2]; // [wide][points, normals]
     for(int wide = 0; wide < 2; ++wide) {
       stencil.use_wide_vectors = wide == 1;

@@ -224,6 +224,75 @@ bool has_given_normals(const PointRange& points)
                                                           const char*);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_POINT_ARRAYS_INSTANCES)
 
+/// Calls `write(i, a_row, b_row)` with the rows of `a` and `b` (`row_of[i]`) for every input index `i` of `inputs`
+/// (null: every one), in parallel and in increasing order: the writes go forward and the scattered reads are
+/// fetched ahead.
+template <typename ConcurrencyTag, typename Writer>
+void for_each_row_in_input_order(const std::vector<int>& row_of, const std::vector<int>* inputs, const Matrix_n3& a,
+                                 const Matrix_n3& b, const Writer& write)
+{
+  const std::size_t count = inputs ? inputs->size() : row_of.size();
+  const auto input = [&](std::size_t k) { return inputs ? std::size_t((*inputs)[k]) : k; };
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t k) {
+    constexpr std::size_t ahead = 16; // rows in flight: enough to hide a memory access behind the writes
+#if defined(__GNUC__)
+    if(k + ahead < count) {
+      const Eigen::Index later = row_of[input(k + ahead)];
+      __builtin_prefetch(a.row(later).data());
+      __builtin_prefetch(b.row(later).data());
+    }
+#endif
+    const std::size_t i = input(k);
+    const Eigen::Index row = row_of[i];
+    write(i, a.row(row).data(), b.row(row).data());
+  });
+}
+
+/// Writes row `row_of[i]` of `positions` to the i-th element of `points` through `np`'s point map and, when `np`
+/// names a normal map and the range has normals, that of `normals` through it.
+template <typename PointRange, typename NamedParameters>
+void write_points_and_normals(PointRange& points, const NamedParameters& np, const std::vector<int>& row_of,
+                              const Matrix_n3& positions, const Matrix_n3& normals)
+{
+  using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
+  const auto point_map = NP_helper::get_point_map(points, np);
+  using Point = typename boost::property_traits<std::remove_const_t<decltype(point_map)>>::value_type;
+  constexpr bool with_normals =
+    !CGAL::parameters::is_default_parameter<NamedParameters, CGAL::internal_np::normal_t>::value;
+  // A Point_set_3 names a normal map even when it has no normal property: write normals only where they exist.
+  const bool write_normals = with_normals && has_given_normals<NamedParameters>(points);
+  std::size_t i = 0;
+  for(auto& item : points) {
+    const Eigen::Index row = row_of[i++];
+    put(point_map, item, Point(positions(row, 0), positions(row, 1), positions(row, 2)));
+    if constexpr(with_normals) {
+      if(!write_normals) continue;
+      const auto normal_map = NP_helper::get_normal_map(points, np);
+      using Vector = typename boost::property_traits<decltype(normal_map)>::value_type;
+      put(normal_map, item, Vector(normals(row, 0), normals(row, 1), normals(row, 2)));
+    }
+  }
+}
+
+/// The row of the caller's i-th point (`row_of`, `Spatial_point_cloud::spatial_index`), refused when out of range.
+inline std::size_t checked_row(const std::vector<int>& row_of, std::size_t i, const char* who)
+{
+  if(i >= row_of.size())
+    throw Invalid_input(std::string(who) + ": point index " + std::to_string(i) + " is out of range (" +
+                        std::to_string(row_of.size()) + " points)");
+  return std::size_t(row_of[i]);
+}
+
+/// Refuses a range `points` given to `call` unless it has `n` elements.
+template <typename PointRange>
+void check_same_size(const PointRange& points, std::size_t n, const char* call, const char* who)
+{
+  const std::size_t given = static_cast<std::size_t>(std::distance(points.begin(), points.end()));
+  if(given != n)
+    throw Invalid_input(std::string(who) + ": " + call + " was given " + std::to_string(given) + " points, but the "
+                        "object holds " + std::to_string(n));
+}
+
 } // namespace internal
 } // namespace CGAL_ext
 

@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -251,6 +252,19 @@ private:
   Matrix_n3 m_x, m_residual, m_direction, m_product;
   Eigen::VectorXd m_diagonal;
 };
+
+/// The rows an edit's `Detail_relaxation` relaxes: the region's rows among `moving_rows` (`labels` per row), but
+/// `pinned_rows` (exact handles, which follow their transforms).
+inline std::vector<int> relaxed_rows(const std::vector<int>& moving_rows, const std::vector<int>& labels,
+                                     const std::vector<int>& pinned_rows)
+{
+  std::vector<char> pinned(labels.size(), 0);
+  for(int row : pinned_rows) pinned[std::size_t(row)] = 1;
+  std::vector<int> rows;
+  for(int row : moving_rows)
+    if(labels[std::size_t(row)] != fixed_label && !pinned[std::size_t(row)]) rows.push_back(row);
+  return rows;
+}
 
 } // namespace internal
 } // namespace CGAL_ext

@@ -126,6 +126,62 @@ bool cluster_into_sample_points(const Spatial_point_cloud& cloud, const Matrix_n
   return progress.report(1.0);
 }
 
+/// An edit's sample points as arrays: each one's position, normal, label (that of its members, which share one)
+/// and a member row (for messages), and per point row its sample point.
+struct Edit_sample_points
+{
+  Matrix_n3 positions, normals;
+  std::vector<int> labels, first_rows, of_row;
+  std::size_t requested_count = 0; ///< what the mode-spread rule asked for
+
+  std::size_t size() const { return labels.size(); }
+};
+
+/// `cluster_into_sample_points` of the cloud with the edit's `labels` (per row) kept apart, as arrays.
+template <typename ConcurrencyTag>
+bool cluster_edit_sample_points(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
+                                const Simplification_settings& settings, const std::vector<int>& labels,
+                                Progress& progress, Mean_shift_analysis& analysis, bool& analysed, Edit_sample_points& out)
+{
+  using Kernel = CGAL::Simple_cartesian<double>;
+  std::vector<int> order;
+  Simplification_sample_points<Kernel> clusters;
+  if(!cluster_into_sample_points<Kernel, ConcurrencyTag>(cloud, normals, settings, &labels, progress, analysis, analysed,
+                                                         order, clusters))
+    return false;
+  const std::size_t count = clusters.size();
+  out.requested_count = clusters.requested_count;
+  out.positions.resize(Eigen::Index(count), 3);
+  out.normals.resize(Eigen::Index(count), 3);
+  out.labels.resize(count);
+  out.first_rows.resize(count);
+  out.of_row.assign(cloud.size(), -1);
+  for(std::size_t s = 0; s < count; ++s) {
+    const auto& cluster = clusters.samples[s];
+    out.positions.row(Eigen::Index(s)) << cluster.centroid.x(), cluster.centroid.y(), cluster.centroid.z();
+    out.normals.row(Eigen::Index(s)) << cluster.normal.x(), cluster.normal.y(), cluster.normal.z();
+    const int first = order[cluster.first_member];
+    out.first_rows[s] = first;
+    out.labels[s] = labels[std::size_t(first)];
+    for(std::size_t m = 0; m < cluster.member_count; ++m) out.of_row[std::size_t(order[cluster.first_member + m])] = int(s);
+  }
+  return true;
+}
+
+/// The mean-shift modes that the clustering of `settings` uses, analysed into `analysis` unless `analysed` says it
+/// holds them already; nothing when the clustering uses none. Returns false when cancelled.
+template <typename ConcurrencyTag>
+bool analyse_modes_once(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Simplification_settings& settings,
+                        Progress& progress, Mean_shift_analysis& analysis, bool& analysed)
+{
+  bool needs_modes = false;
+  split_rule_for(settings, cloud.size(), needs_modes);
+  if(!needs_modes || analysed) return true;
+  const std::size_t k = std::min<std::size_t>(settings.mean_shift_neighbors, cloud.size() - 1);
+  analysed = analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings.mean_shift, progress, analysis);
+  return analysed;
+}
+
 } // namespace internal
 } // namespace CGAL_ext
 

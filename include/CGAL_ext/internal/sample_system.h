@@ -3,27 +3,25 @@
 #ifndef CGAL_EXT_INTERNAL_SAMPLE_SYSTEM_H
 #define CGAL_EXT_INTERNAL_SAMPLE_SYSTEM_H
 
-#include <CGAL_ext/Detail_filter.h>
-#include <CGAL_ext/Least_squares_settings.h>
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/internal/Detail_least_squares.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/detail_manipulation.h>
+#include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
 #include <CGAL_ext/internal/tangent_cotangent_weights.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
 #include <vector>
 
 namespace CGAL_ext {
 namespace internal {
-
-/// Labels of an edit's points and sample points: fixed, in the region of interest, or a handle of group
-/// `label - first_handle_label`.
-enum Edit_label : int { fixed_label = 0, roi_label = 1, first_handle_label = 2 };
 
 /// The sample points of an edit as a least-squares problem (Miao et al. 2007, Sect. 6.1): their Laplacian on
 /// their symmetrised kNN graph, the region's sample points (the unknowns) and its handles (the anchors), the
@@ -51,18 +49,31 @@ public:
   double smoothing_area = 0;
   Matrix_n3 details;               ///< `f(K) s` on the region's rows
 
-  /// Builds the graph (`k` neighbours) and Laplacian of `samples`, indexes the region and handles by `labels`,
-  /// checks that every part of the region is pinned (`point_of_sample` names a point of each sample point in
-  /// the messages) and factors the normal equations: of the details of `filter`, or with `rigid` of the graph's
-  /// edges, weighted by `cotangent_weights` (from the sample points' `normals`) or uniformly, and with
-  /// `area_scaled_smoothing` finds `smoothing_area`. A finite `handle_weight` makes the handles the paper's soft
-  /// constraints, infinity exact ones.
+  /// Builds the graph (`settings.sample_neighbors` neighbours) and Laplacian of `samples`, indexes the region and
+  /// handles by `labels`, checks that every part of the region is pinned (`point_of_sample` names a point of each
+  /// sample point in the messages) and factors the normal equations: of the details of `settings.filter`, or, as
+  /// rigid as possible, of the graph's edges, weighted by cotangent weights (from the sample points' `normals`) or
+  /// uniformly. A finite `settings.handle_weight` makes the handles the paper's soft constraints, infinity exact
+  /// ones.
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& samples, const Matrix_n3& normals, const std::vector<int>& labels,
-             const std::vector<int>& point_of_sample, std::size_t k, const Detail_filter& filter, bool rigid,
-             bool cotangent_weights, bool area_scaled_smoothing, Least_squares_settings least_squares,
-             double handle_weight, const char* who)
+             const std::vector<int>& point_of_sample, const Detail_preserving_deformation_settings& settings,
+             const char* who)
   {
+    const bool rigid = settings.rotations == Detail_rotation::as_rigid_as_possible;
+    const bool cotangent_weights = settings.rigid_edge_weights == Rigid_edge_weights::cotangent;
+    const bool area_scaled_smoothing = settings.rigid_rotation_smoothing > 0 &&
+                                       settings.rigid_rotation_smoothing_scale == Rotation_smoothing_scale::surface_area;
+    const Detail_filter& filter = settings.filter;
+    Least_squares_settings least_squares = settings.least_squares;
+    const double handle_weight = settings.handle_weight;
+    const std::size_t k = settings.sample_neighbors;
+    if(samples.rows() < 2)
+      throw Invalid_input(std::string(who) + ": the points form a single sample point; lower the cluster size");
+    if(k >= std::size_t(samples.rows()))
+      throw Invalid_input(std::string(who) + ": sample_neighbors (" + std::to_string(k) + ") must be less than the "
+                          "number of sample points (" + std::to_string(samples.rows()) + "); lower it, or make the "
+                          "clusters smaller");
     const std::size_t count = std::size_t(samples.rows());
     Progress silent;
     graph = symmetrize<ConcurrencyTag>(k_nearest_neighbor_graph<ConcurrencyTag>(samples, k, silent));
@@ -119,23 +130,59 @@ public:
     else
       m_solver.factor<ConcurrencyTag>(detail_operator_rows<ConcurrencyTag>(K, filter, roi), anchors,
                                       region_positions, least_squares, exact_handles);
+    m_anchor_displacement.resize(Eigen::Index(anchors.size()), 3);
+    m_detail_change.resize(Eigen::Index(roi.size()), 3);
   }
 
-  /// Solves for the region's displacements under these right-hand sides (per region row, per handle) and
-  /// writes the region's rows of `deformed` as `samples` plus them.
-  template <typename ConcurrencyTag>
-  void solve(const Matrix_n3& samples, const Matrix_n3& detail_change, const Matrix_n3& anchor_displacement,
-             Matrix_n3& deformed)
+  /// Sets the handles' targets for the next solves: each handle sample point moved by its group's transform.
+  void pull_anchors(const Matrix_n3& samples, const std::vector<Rigid_transform>& transforms)
   {
-    const Matrix_n3 u = m_solver.solve<ConcurrencyTag>(detail_change, anchor_displacement);
+    for(std::size_t a = 0; a < anchors.size(); ++a) {
+      const Rigid_transform& T = transforms[std::size_t(anchor_group[a])];
+      const Eigen::Vector3d s = samples.row(roi[std::size_t(anchors[a])]).transpose();
+      m_anchor_displacement.row(Eigen::Index(a)) = (T.rotation * s + T.translation - s).transpose();
+    }
+  }
+
+  /// Solves for the region's displacements with the right-hand side `edge_change` (per equation row) and the
+  /// handles' last `pull_anchors`, and writes the region's rows of `deformed` as `samples` plus them.
+  template <typename ConcurrencyTag>
+  void solve(const Matrix_n3& samples, const Matrix_n3& edge_change, Matrix_n3& deformed)
+  {
+    const Matrix_n3 u = m_solver.solve<ConcurrencyTag>(edge_change, m_anchor_displacement);
     for(std::size_t r = 0; r < roi.size(); ++r)
       deformed.row(roi[r]) = samples.row(roi[r]) + u.row(Eigen::Index(r));
+  }
+
+  /// `solve` with each region sample point's detail turned by `rotations[s]` (per sample point).
+  template <typename ConcurrencyTag>
+  void solve_turned_details(const Matrix_n3& samples, const std::vector<Eigen::Matrix3d>& rotations, Matrix_n3& deformed)
+  {
+    for_range<ConcurrencyTag>(0, roi.size(), [&](std::size_t r) {
+      const Eigen::Vector3d delta = details.row(Eigen::Index(r)).transpose();
+      m_detail_change.row(Eigen::Index(r)) = (rotations[std::size_t(roi[r])] * delta - delta).transpose();
+    });
+    solve<ConcurrencyTag>(samples, m_detail_change, deformed);
+  }
+
+  /// The largest displacement of a region sample point over the largest of a handle sample point (`labels` per
+  /// sample point; 0 when the handles did not move).
+  double displacement_ratio(const Matrix_n3& samples, const Matrix_n3& deformed, const std::vector<int>& labels) const
+  {
+    double largest = 0, largest_handle = 0;
+    for(std::size_t r = 0; r < roi.size(); ++r) {
+      const double d = (deformed.row(roi[r]) - samples.row(roi[r])).norm();
+      largest = std::max(largest, d);
+      if(is_handle_label(labels[std::size_t(roi[r])])) largest_handle = std::max(largest_handle, d);
+    }
+    return largest_handle > 0 ? largest / largest_handle : 0.0;
   }
 
   const Least_squares_statistics& statistics() const { return m_solver.statistics(); }
 
 private:
   Detail_least_squares m_solver;
+  Matrix_n3 m_anchor_displacement, m_detail_change; // per-drag right-hand sides
 };
 
 } // namespace internal

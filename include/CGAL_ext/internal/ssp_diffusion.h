@@ -3,8 +3,11 @@
 #ifndef CGAL_EXT_INTERNAL_SSP_DIFFUSION_H
 #define CGAL_EXT_INTERNAL_SSP_DIFFUSION_H
 
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/edit_selection.h>
+#include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/Core>
@@ -102,14 +105,6 @@ inline Eigen::Matrix3d Ssp_frames::frame(const Matrix_n3& positions, std::size_t
 }
 #endif
 
-/// How a point's offset is stored in the frames of its sample points (doc/editing.md, "The paper's encoding
-/// and ours").
-enum class Offset_origin
-{
-  nearest_sample, ///< the paper's: `p - s_0` (the nearest sample point) in every frame
-  own_sample      ///< `p - s_j` in the frame of sample point j
-};
-
 constexpr std::size_t diffusion_block = 256; // points per task of Diffusion_stencil::apply
 
 /// The per-point data of the diffusion, fixed at preprocessing: the `m` nearest sample points and their weights.
@@ -141,7 +136,7 @@ public:
   template <typename ConcurrencyTag>
   void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
              const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& map,
-             Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr);
+             Diffusion_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active = nullptr);
 
   /// The first half of apply(): each sample point's motion record, from its map and its move. O(sample points).
   template <typename ConcurrencyTag>
@@ -153,9 +148,18 @@ public:
   /// stencil's records applied to `(p, 1)`.
   const Eigen::Matrix4d& motion_record(std::size_t j) const { return m_records[j]; }
 
+  /// Copies row `i`'s sample points and weights.
+  void copy_row(std::size_t i, int* sample_points, double* out_weights) const
+  {
+    for(int e = samples.offsets[i], k = 0; e < samples.offsets[i + 1]; ++e, ++k) {
+      sample_points[k] = samples.indices[std::size_t(e)];
+      out_weights[k] = weights[std::size_t(e)];
+    }
+  }
+
   /// apply() for the one point `i` with the current records: its moved position and normal.
   void move_point(std::size_t i, const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
-                  const Matrix_n3& deformed_sample_positions, Offset_origin origin, Eigen::Vector3d& moved_point,
+                  const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, Eigen::Vector3d& moved_point,
                   Eigen::Vector3d& moved_normal) const
   {
     Eigen::Matrix3d turn;
@@ -182,7 +186,7 @@ private:
 
   // Point i's blended turn `sum_j w_j (A_j - I)` and displacement.
   void blend(std::size_t i, const Matrix_n3& points, const Matrix_n3& sample_positions,
-             const Matrix_n3& deformed_sample_positions, Offset_origin origin, Eigen::Matrix3d& turn,
+             const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, Eigen::Matrix3d& turn,
              Eigen::Vector3d& displacement) const
   {
     Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
@@ -190,7 +194,7 @@ private:
       blended.noalias() += weights[std::size_t(e)] * m_records[std::size_t(samples.indices[std::size_t(e)])];
     turn = blended.topLeftCorner<3, 3>();
     const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
-    if(origin == Offset_origin::nearest_sample) {
+    if(origin == Diffusion_origin::nearest_sample) {
       // The paper's: every frame decodes p - s_0 from s'_0.
       const Eigen::Index o = *samples.begin(i);
       displacement = blended(3, 3) * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
@@ -207,11 +211,11 @@ private:
   }
 
   void apply_block(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-                   const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Offset_origin origin,
+                   const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
                    Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active) const;
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
   void apply_block_wide(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-                        const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Offset_origin origin,
+                        const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
                         Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active) const;
 #endif
 };
@@ -253,7 +257,7 @@ void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_p
 template <typename ConcurrencyTag>
 void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
                               const Matrix_n3& deformed_sample_positions, const std::vector<Eigen::Matrix3d>& map,
-                              Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
+                              Diffusion_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
                               const std::vector<int>* active)
 {
   set_motions<ConcurrencyTag>(sample_positions, deformed_sample_positions, map);
@@ -295,7 +299,7 @@ void Diffusion_stencil::set_motions(const Matrix_n3& sample_positions, const Mat
 
 inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, const Matrix_n3& points,
                                            const Matrix_n3& normals, const Matrix_n3& sample_positions,
-                                           const Matrix_n3& deformed_sample_positions, Offset_origin origin,
+                                           const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
                                            Matrix_n3& out_points, Matrix_n3& out_normals,
                                            const std::vector<int>* active) const
 {
@@ -345,7 +349,7 @@ __attribute__((target("avx2,fma"))) inline __m256d cross_wide(__m256d u, __m256d
 __attribute__((target("avx2,fma"))) inline void
 Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
                                     const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
-                                    Offset_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
+                                    Diffusion_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
                                     const std::vector<int>* active) const
 {
   const __m256d zero = _mm256_setzero_pd();
@@ -364,7 +368,7 @@ Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const M
     }
     const double* p = points.data() + 3 * i;
     __m256d displacement;
-    if(origin == Offset_origin::nearest_sample) {
+    if(origin == Diffusion_origin::nearest_sample) {
       const std::size_t o = std::size_t(*samples.begin(i));
       const double* s = sample_positions.data() + 3 * o;
       const double* moved = deformed_sample_positions.data() + 3 * o;
@@ -428,9 +432,105 @@ inline bool Diffusion_stencil::wide_vectors_available() { return false; }
                                                            const std::vector<Eigen::Matrix3d>&); \
   EXTERN template void Diffusion_stencil::apply<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, \
                                                      const Matrix_n3&, const std::vector<Eigen::Matrix3d>&, \
-                                                     Offset_origin, Matrix_n3&, Matrix_n3&, \
+                                                     Diffusion_origin, Matrix_n3&, Matrix_n3&, \
                                                      const std::vector<int>*);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SSP_DIFFUSION_INSTANCES)
+
+/// The rows that a drag can move: those with a region sample point in their stencil and, with `exact_handles`, the
+/// handle points (`point_labels` per row, `sample_labels` per sample point). Points carried by fixed sample points
+/// only never move: each drag skips them.
+inline std::vector<int> moving_rows(const Diffusion_stencil& stencil, const std::vector<int>& sample_labels,
+                                    const std::vector<int>& point_labels, bool exact_handles)
+{
+  std::vector<int> rows;
+  for(std::size_t row = 0; row < stencil.samples.size(); ++row) {
+    bool moving = exact_handles && is_handle_label(point_labels[row]);
+    for(const int* s = stencil.samples.begin(row); s != stencil.samples.end(row) && !moving; ++s)
+      moving = sample_labels[std::size_t(*s)] != fixed_label;
+    if(moving) rows.push_back(int(row));
+  }
+  return rows;
+}
+
+/// The linear part of each region sample point's motion, by which it carries its points (`Sample_turn`): the
+/// best rotation or linear map of its neighbourhood's edges, or its deformed frame against its original one. A
+/// sample point whose neighbourhood did not move (and, with frames, that was not turned) keeps the identity
+/// exactly, so unchanged parts stay bit for bit; fixed sample points keep theirs (doc/editing.md, "Sample point
+/// turns"). `setup` runs once per selection, `update` once per drag.
+class Sample_turns
+{
+public:
+  std::vector<Eigen::Matrix3d> maps; ///< per sample point (a rotation unless `Sample_turn::affine`)
+
+  template <typename ConcurrencyTag>
+  void setup(Sample_turn kind, const Matrix_n3& samples, const Matrix_n3& normals, const Neighbor_graph& graph,
+             const std::vector<int>& roi)
+  {
+    m_kind = kind;
+    m_priors.clear();
+    if(kind == Sample_turn::affine) {
+      m_priors.resize(roi.size());
+      for_range<ConcurrencyTag>(0, roi.size(), [&](std::size_t r) {
+        m_priors[r] = Linear_map_prior(samples, graph, std::size_t(roi[r]));
+      });
+    }
+    if(kind == Sample_turn::frames) { // the fitted turns need no frames
+      m_frame_builder.setup(samples, normals, graph);
+      m_frames.resize(std::size_t(samples.rows()));
+      for_range<ConcurrencyTag>(0, m_frames.size(), [&](std::size_t s) {
+        m_frames[s] = m_frame_builder.frame(samples, s, normals.row(Eigen::Index(s)).transpose());
+      });
+    }
+    maps.assign(std::size_t(samples.rows()), Eigen::Matrix3d::Identity());
+  }
+
+  void reset() { std::fill(maps.begin(), maps.end(), Eigen::Matrix3d::Identity()); }
+
+  /// The maps of the region's sample points `roi` for their `deformed` positions. A handle sample point of an exact
+  /// handle (`exact_handles`, `labels` per sample point) turns by its group's rotation in `group_rotations`. With
+  /// `fitted_rotations`, `detail_rotations` are the rotations the as-rigid-as-possible step fitted to these very
+  /// positions: they are taken as they are; else they are the details' rotations, the frames' normal hints.
+  template <typename ConcurrencyTag>
+  void update(const Matrix_n3& samples, const Matrix_n3& normals, const Matrix_n3& deformed, const Neighbor_graph& graph,
+              const std::vector<int>& roi, const std::vector<int>& labels, bool exact_handles,
+              const std::vector<Eigen::Matrix3d>& group_rotations, const std::vector<Eigen::Matrix3d>& detail_rotations,
+              bool fitted_rotations)
+  {
+    for_range<ConcurrencyTag>(0, roi.size(), [&](std::size_t r) {
+      const std::size_t s = std::size_t(roi[r]);
+      if(exact_handles && is_handle_label(labels[s])) { // moved rigidly by its group, exactly
+        maps[s] = group_rotations[handle_group_of_label(labels[s])];
+        return;
+      }
+      if(m_kind != Sample_turn::frames) {
+        const bool affine = m_kind == Sample_turn::affine;
+        double covariance[9]; // of the edges: the rotation's fit and the linear map's
+        const bool moved = (affine || !fitted_rotations) && edge_covariance(samples, deformed, graph, s, nullptr, covariance);
+        // The fitted rotation is the identity exactly where the neighbourhood did not move: keep it so.
+        const Eigen::Matrix3d fitted =
+          fitted_rotations ? detail_rotations[s]
+          : moved          ? best_rotation(Eigen::Matrix3d(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(covariance)))
+                           : Eigen::Matrix3d::Identity();
+        maps[s] = affine && !fitted.isIdentity(0) ? m_priors[r].fitted_linear_map(covariance, fitted) : fitted;
+        return;
+      }
+      bool moved = !detail_rotations[s].isIdentity(0) || deformed.row(Eigen::Index(s)) != samples.row(Eigen::Index(s));
+      for(const int* j = graph.begin(s); j != graph.end(s) && !moved; ++j) moved = deformed.row(*j) != samples.row(*j);
+      if(!moved) {
+        maps[s].setIdentity();
+        return;
+      }
+      const Eigen::Vector3d hint = detail_rotations[s] * normals.row(Eigen::Index(s)).transpose();
+      maps[s] = m_frame_builder.frame(deformed, s, hint) * m_frames[s].transpose();
+    });
+  }
+
+private:
+  Sample_turn m_kind = Sample_turn::fitted;
+  std::vector<Linear_map_prior> m_priors; // affine: per region sample point
+  Ssp_frames m_frame_builder;             // frames: the rest frames and how to build the deformed ones
+  std::vector<Eigen::Matrix3d> m_frames;
+};
 
 } // namespace internal
 } // namespace CGAL_ext

@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/Core>
@@ -111,6 +112,64 @@ inline Eigen::Quaterniond propagated_rotation(const std::vector<Eigen::Quaternio
   blend(3) += 1.0 - pulled;
   return Eigen::Quaterniond(blend(3), blend(0), blend(1), blend(2)).normalized();
 }
+
+/// The strength field of an edit's handle groups on its sample points (Miao et al. 2007, Sect. 6.2): per sample
+/// point and group the distance `d1` to the group's handle and the strength `beta(d0 / (d0 + d1))`, `d0` the
+/// distance to the fixed part, along the sample points' graph (geodesic) or straight. Set up once per selection;
+/// each drag blends the groups' rotations by it.
+class Strength_field
+{
+public:
+  /// `labels`: per sample point (`Edit_label`); `groups`: the number of handle groups.
+  template <typename ConcurrencyTag>
+  void setup(const Matrix_n3& samples, const Neighbor_graph& graph, const std::vector<int>& labels, std::size_t groups,
+             bool geodesic)
+  {
+    const std::size_t count = std::size_t(samples.rows());
+    m_groups = groups;
+    std::vector<int> fixed;
+    std::vector<std::vector<int>> handles(groups);
+    for(std::size_t s = 0; s < count; ++s) {
+      if(labels[s] == fixed_label) fixed.push_back(int(s));
+      else if(is_handle_label(labels[s])) handles[handle_group_of_label(labels[s])].push_back(int(s));
+    }
+    auto distance_to = [&](const std::vector<int>& sources) {
+      return geodesic ? graph_distance_to(samples, graph, sources) : euclidean_distance_to<ConcurrencyTag>(samples, sources);
+    };
+    const Eigen::VectorXd d0 = distance_to(fixed);
+    m_d1.assign(count * groups, 0.0);
+    m_strength.assign(count * groups, 0.0);
+    for(std::size_t g = 0; g < groups; ++g) {
+      const Eigen::VectorXd d1 = distance_to(handles[g]);
+      for(std::size_t s = 0; s < count; ++s) {
+        m_d1[s * groups + g] = d1(Eigen::Index(s));
+        // Only the region's sample points turn; the fixed part has strength 0 by definition (d0 = 0).
+        m_strength[s * groups + g] = labels[s] == fixed_label ? 0.0 : strength(d0(Eigen::Index(s)), d1(Eigen::Index(s)));
+      }
+    }
+  }
+
+  /// The strength of group `g` at sample point `s`.
+  double at(std::size_t s, std::size_t g) const { return m_strength.at(s * m_groups + g); }
+
+  /// At each sample point `s` of `rows`, `rotations[s]` becomes the blend of the groups' `turns`
+  /// (`propagated_rotation`), or with `compose` that blend times `rotations[s]`.
+  template <typename ConcurrencyTag>
+  void propagate(const std::vector<Eigen::Quaterniond>& turns, const std::vector<int>& rows,
+                 std::vector<Eigen::Matrix3d>& rotations, bool compose = false) const
+  {
+    for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
+      const std::size_t s = std::size_t(rows[r]);
+      const Eigen::Matrix3d blend =
+        propagated_rotation(turns, &m_d1[s * m_groups], &m_strength[s * m_groups]).toRotationMatrix();
+      rotations[s] = compose ? Eigen::Matrix3d(blend * rotations[s]) : blend;
+    });
+  }
+
+private:
+  std::size_t m_groups = 0;
+  std::vector<double> m_d1, m_strength; // per sample point and group
+};
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
 #define CGAL_EXT_STRENGTH_FIELD_INSTANCES(EXTERN, Tag) \
