@@ -274,6 +274,26 @@ private:
   }
 #endif
 
+  // The steps of factor(), in order.
+  /// Moves the columns of the exact `anchors` out of `A` (into `m_A_exact`); returns the free unknowns' positions.
+  Matrix_n3 take_out_exact_anchors(Sparse_row_matrix& A, std::vector<int>& anchors, const Matrix_n3& positions);
+  /// The diagonal of N, the conjugate gradients' Jacobi preconditioner.
+  Eigen::VectorXd normal_diagonal() const;
+  /// The upper triangle of N (or of the preconditioner's `alpha B^T B + S^T S`), scaled to a unit diagonal
+  /// (`m_scale`).
+  template <typename ConcurrencyTag>
+  Sparse_row_matrix equilibrated_normal_matrix(const Sparse_row_matrix* preconditioner_rows);
+  /// The lower triangle of `upper`'s symmetric matrix permuted into `order` (kept in `m_new_of`).
+  Column_matrix in_elimination_order(const Sparse_row_matrix& upper, const std::vector<int>& order);
+  /// Orders and factors it: CHOLMOD, else Eigen's LDL^T. Returns whether CHOLMOD chose the AMD order.
+  bool factor_normal_matrix(Sparse_row_matrix upper, const Matrix_n3& positions);
+#ifdef CGAL_EXT_USE_CHOLMOD
+  /// CHOLMOD's supernodal LL^T of `normal` + shift; `m_main` reset when it meets a non-positive pivot.
+  bool factor_with_cholmod(const Column_matrix& normal, bool amd_only);
+#endif
+  /// `Least_squares_statistics::method`.
+  std::string factorisation_name(bool amd_order) const;
+
   /// The region's row of unknown `j` (they differ with exact anchors), for error messages.
   std::size_t region_row(std::size_t j) const { return m_free.empty() ? j : std::size_t(m_free[j]); }
 
@@ -447,8 +467,7 @@ try {
                              settings.solver != Linear_solver::cholesky))
     throw Invalid_input("detail least squares: a preconditioner needs the Cholesky solver, soft anchors and the "
                         "operator's columns");
-  using Clock = std::chrono::steady_clock;
-  const auto start = Clock::now();
+  const auto start = std::chrono::steady_clock::now();
   m_settings = settings;
   m_region_size = std::size_t(A.cols());
   m_statistics = Least_squares_statistics();
@@ -458,21 +477,7 @@ try {
   m_fallback.reset();
   m_factored = false;
   m_preconditioned = preconditioner_rows != nullptr;
-  m_exact.clear();
-  m_free.clear();
-  Matrix_n3 free_positions;
-  if(exact_anchors) {
-    m_exact = std::move(anchors);
-    anchors.clear();
-    std::vector<char> pinned(m_region_size, 0);
-    for(int a : m_exact) pinned[std::size_t(a)] = 1;
-    for(std::size_t j = 0; j < m_region_size; ++j)
-      if(!pinned[j]) m_free.push_back(int(j));
-    std::tie(A, m_A_exact) = split_columns(A, pinned);
-    free_positions.resize(Eigen::Index(m_free.size()), 3);
-    for(std::size_t f = 0; f < m_free.size(); ++f) free_positions.row(Eigen::Index(f)) = given_positions.row(m_free[f]);
-  }
-  const Matrix_n3& positions = exact_anchors ? free_positions : given_positions;
+  const Matrix_n3 free_positions = exact_anchors ? take_out_exact_anchors(A, anchors, given_positions) : Matrix_n3();
   m_A = std::move(A);
   m_At = m_A.transpose();
   m_anchors = std::move(anchors);
@@ -482,36 +487,66 @@ try {
     m_factored = true;
     return;
   }
-
-  const double alpha = settings.detail_weight;
-  const std::size_t n = std::size_t(m_A.cols());
-  if(settings.solver == Linear_solver::conjugate_gradient || m_preconditioned) {
-    // Diagonal of N for the preconditioner: alpha * column norms of A, plus 1 on the anchors.
-    m_diagonal = Eigen::VectorXd::Zero(Eigen::Index(n));
-    for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
-      m_diagonal(m_A.innerIndexPtr()[e]) += alpha * m_A.valuePtr()[e] * m_A.valuePtr()[e];
-    for(int a : m_anchors) m_diagonal(a) += 1.0;
-    for(Eigen::Index j = 0; j < m_diagonal.size(); ++j)
-      if(!(m_diagonal(j) > 0))
-        throw Numerical_failure("detail least squares: point " + std::to_string(region_row(std::size_t(j))) +
-                                " of the region appears in no equation; the normal matrix is singular");
-  }
+  if(iterative()) m_diagonal = normal_diagonal();
   if(settings.solver == Linear_solver::conjugate_gradient) {
     m_statistics.method = "conjugate gradients (Jacobi, matrix-free)";
     m_statistics.assembly_seconds = seconds_since(start);
     m_factored = true;
     return;
   }
+  Sparse_row_matrix upper = equilibrated_normal_matrix<ConcurrencyTag>(preconditioner_rows);
+  m_statistics.assembly_seconds = seconds_since(start);
+  const auto factor_start = std::chrono::steady_clock::now();
+  const bool amd_order = factor_normal_matrix(std::move(upper), exact_anchors ? free_positions : given_positions);
+  m_statistics.method = factorisation_name(amd_order);
+  m_statistics.factor_seconds = seconds_since(factor_start);
+  m_factored = true;
+} catch(const std::bad_alloc&) {
+  out_of_memory("assembling and factoring the normal matrix");
+}
 
+inline Matrix_n3 Detail_least_squares::take_out_exact_anchors(Sparse_row_matrix& A, std::vector<int>& anchors,
+                                                              const Matrix_n3& positions)
+{
+  m_exact = std::move(anchors);
+  anchors.clear();
+  m_free.clear();
+  std::vector<char> pinned(m_region_size, 0);
+  for(int a : m_exact) pinned[std::size_t(a)] = 1;
+  for(std::size_t j = 0; j < m_region_size; ++j)
+    if(!pinned[j]) m_free.push_back(int(j));
+  std::tie(A, m_A_exact) = split_columns(A, pinned);
+  Matrix_n3 free_positions(Eigen::Index(m_free.size()), 3);
+  for(std::size_t f = 0; f < m_free.size(); ++f) free_positions.row(Eigen::Index(f)) = positions.row(m_free[f]);
+  return free_positions;
+}
+
+inline Eigen::VectorXd Detail_least_squares::normal_diagonal() const
+{
+  // alpha * the column norms of A, plus 1 on the anchors.
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(m_A.cols());
+  for(Eigen::Index e = 0; e < m_A.nonZeros(); ++e)
+    diagonal(m_A.innerIndexPtr()[e]) += m_settings.detail_weight * m_A.valuePtr()[e] * m_A.valuePtr()[e];
+  for(int a : m_anchors) diagonal(a) += 1.0;
+  for(Eigen::Index j = 0; j < diagonal.size(); ++j)
+    if(!(diagonal(j) > 0))
+      throw Numerical_failure("detail least squares: point " + std::to_string(region_row(std::size_t(j))) +
+                              " of the region appears in no equation; the normal matrix is singular");
+  return diagonal;
+}
+
+template <typename ConcurrencyTag>
+Sparse_row_matrix Detail_least_squares::equilibrated_normal_matrix(const Sparse_row_matrix* preconditioner_rows)
+{
   // Upper triangle of A^T A (or B^T B), row-major: read as column-major it is the lower triangle the
   // factorisations want.
-  Sparse_row_matrix upper = m_preconditioned
+  Sparse_row_matrix upper = preconditioner_rows
                               ? sparse_product<ConcurrencyTag>(Sparse_row_matrix(preconditioner_rows->transpose()),
                                                                *preconditioner_rows, {}, -1, true)
                               : sparse_product<ConcurrencyTag>(m_At, m_A, {}, -1, true);
-  upper *= alpha;
+  upper *= m_settings.detail_weight;
+  const std::size_t n = std::size_t(m_A.cols());
   double* diagonal_value = upper.valuePtr();
-  m_scale.resize(Eigen::Index(n));
   std::vector<char> is_anchor(n, 0), lacks_diagonal(n, 0);
   for(int a : m_anchors) is_anchor[std::size_t(a)] = 1;
   bool any_lacking = false;
@@ -528,14 +563,32 @@ try {
                               " of the region appears in no equation; the normal matrix is singular");
   }
   if(any_lacking) upper = with_unit_diagonals(upper, lacks_diagonal);
+  // Jacobi equilibration: a unit diagonal.
+  m_scale.resize(Eigen::Index(n));
   for(std::size_t j = 0; j < n; ++j) m_scale(Eigen::Index(j)) = 1.0 / std::sqrt(upper.valuePtr()[upper.outerIndexPtr()[j]]);
   for(std::size_t j = 0; j < n; ++j)
     for(int e = upper.outerIndexPtr()[j]; e < upper.outerIndexPtr()[j + 1]; ++e)
       upper.valuePtr()[e] *= m_scale(Eigen::Index(j)) * m_scale(upper.innerIndexPtr()[e]);
   m_statistics.normal_nonzeros = 2 * std::size_t(upper.nonZeros()) - n;
-  m_statistics.assembly_seconds = seconds_since(start);
+  return upper;
+}
 
-  const auto factor_start = Clock::now();
+inline Detail_least_squares::Column_matrix Detail_least_squares::in_elimination_order(const Sparse_row_matrix& upper,
+                                                                                       const std::vector<int>& order)
+{
+  // The lower triangle of P N P^T (`order`: the old row of each new one), which the factorisations keep as given.
+  for(std::size_t i = 0; i < order.size(); ++i) m_new_of.indices()(order[i]) = int(i);
+  Column_matrix twisted{upper.rows(), upper.cols()};
+  twisted.template selfadjointView<Eigen::Lower>() =
+    Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
+                                    upper.innerIndexPtr(), upper.valuePtr())
+      .template selfadjointView<Eigen::Lower>()
+      .twistedBy(m_new_of);
+  return twisted;
+}
+
+inline bool Detail_least_squares::factor_normal_matrix(Sparse_row_matrix upper, const Matrix_n3& positions)
+{
 #ifdef CGAL_EXT_USE_CHOLMOD
   // The preconditioner's matrix (the linear order's, two rings) goes to AMD alone: on nine regions of five
   // models the geometric dissection needed 1.8-3.5 times its flops (doc/detail_scaling.md, "The solver").
@@ -543,29 +596,33 @@ try {
 #else
   const bool amd_only = false;
 #endif
-  // The lower triangle of P N P^T for an elimination order (the old row of each new one), which the
-  // factorisations keep as given.
-  const auto in_order = [&](const std::vector<int>& order) {
-    for(std::size_t i = 0; i < n; ++i) m_new_of.indices()(order[i]) = int(i);
-    Column_matrix twisted{Eigen::Index(n), Eigen::Index(n)};
-    twisted.template selfadjointView<Eigen::Lower>() =
-      Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
-                                      upper.innerIndexPtr(), upper.valuePtr())
-        .template selfadjointView<Eigen::Lower>()
-        .twistedBy(m_new_of);
-    return twisted;
-  };
-  m_new_of.indices().resize(Eigen::Index(n));
+  m_new_of.indices().resize(upper.rows());
   Column_matrix normal;
   if(amd_only) {
     m_new_of.setIdentity();
     normal = Eigen::Map<const Column_matrix>(upper.rows(), upper.cols(), upper.nonZeros(), upper.outerIndexPtr(),
                                              upper.innerIndexPtr(), upper.valuePtr());
   } else {
-    normal = in_order(geometric_nested_dissection(upper, positions));
+    normal = in_elimination_order(upper, geometric_nested_dissection(upper, positions));
     upper = Sparse_row_matrix();
   }
+  bool amd_order = false;
 #ifdef CGAL_EXT_USE_CHOLMOD
+  amd_order = factor_with_cholmod(normal, amd_only);
+#endif
+  if(!m_main) {
+    if(amd_only) normal = in_elimination_order(upper, geometric_nested_dissection(upper, positions)); // Eigen keeps the order
+    m_fallback = std::make_unique<Fallback_factor>(normal);
+    if(m_fallback->info() != Eigen::Success)
+      throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
+                              "some part of the region is not pinned by anchors or fixed points)");
+  }
+  return amd_order;
+}
+
+#ifdef CGAL_EXT_USE_CHOLMOD
+inline bool Detail_least_squares::factor_with_cholmod(const Column_matrix& normal, bool amd_only)
+{
   m_main = std::make_unique<Main_factor>();
   cholmod_common& common = m_main->cholmod();
   common.print = 0; // a rounding-negative pivot is handled below, not printed
@@ -597,37 +654,25 @@ try {
   m_main->setShift(singular_shift);
   m_main->factorize(normal);
   check_cholmod("factoring the normal matrix");
-  if(m_main->info() == Eigen::Success)
-    m_statistics.method = "CHOLMOD supernodal LL^T of N + 1e-12 I, refined against N";
-  else
-    m_main.reset();
+  if(m_main->info() != Eigen::Success) m_main.reset();
+  return amd_order;
+}
 #endif
-  if(!m_main) {
-    if(amd_only) normal = in_order(geometric_nested_dissection(upper, positions)); // Eigen's factor keeps the order
-    m_fallback = std::make_unique<Fallback_factor>(normal);
-    if(m_fallback->info() != Eigen::Success)
-      throw Numerical_failure("detail least squares: the normal matrix could not be factored (singular: "
-                              "some part of the region is not pinned by anchors or fixed points)");
-    m_statistics.method = "Eigen SimplicialLDLT";
-#ifdef CGAL_EXT_USE_CHOLMOD
-    m_statistics.method += " (CHOLMOD LL^T of N + 1e-12 I met a non-positive pivot)";
-#endif
-  }
-#ifdef CGAL_EXT_USE_CHOLMOD
+
+inline std::string Detail_least_squares::factorisation_name(bool amd_order) const
+{
   const std::string order_name = m_main && amd_order ? ", AMD order" : ", geometric nested dissection";
-#else
-  const std::string order_name = ", geometric nested dissection";
-#endif
-  m_statistics.method += order_name;
   if(m_preconditioned) // the factor is the preconditioner's, and nothing is refined against it
-    m_statistics.method = std::string("conjugate gradients on N, preconditioned by the ") +
-                          (m_main ? "CHOLMOD supernodal LL^T" : "Eigen SimplicialLDLT") +
-                          " of the linear order's normal matrix + 1e-12 I" + order_name +
-                          (settings.preconditioner_diagonal_weight > 0 ? ", plus Jacobi on N" : "");
-  m_statistics.factor_seconds = seconds_since(factor_start);
-  m_factored = true;
-} catch(const std::bad_alloc&) {
-  out_of_memory("assembling and factoring the normal matrix");
+    return std::string("conjugate gradients on N, preconditioned by the ") +
+           (m_main ? "CHOLMOD supernodal LL^T" : "Eigen SimplicialLDLT") +
+           " of the linear order's normal matrix + 1e-12 I" + order_name +
+           (m_settings.preconditioner_diagonal_weight > 0 ? ", plus Jacobi on N" : "");
+  if(m_main) return "CHOLMOD supernodal LL^T of N + 1e-12 I, refined against N" + order_name;
+#ifdef CGAL_EXT_USE_CHOLMOD
+  return "Eigen SimplicialLDLT (CHOLMOD LL^T of N + 1e-12 I met a non-positive pivot)" + order_name;
+#else
+  return "Eigen SimplicialLDLT" + order_name;
+#endif
 }
 
 template <typename ConcurrencyTag>
