@@ -745,7 +745,7 @@ Ndarray colors_by(const std::function<point_detail::Coloring(const std::vector<d
 
 py::bytes render_png(const Array_like& points, const Optional_array_like& normals, const Optional_array_like& values,
                      const Optional_array_like& colors, const std::string& view, int width, int height,
-                     double splat_scale)
+                     double splat_scale, const std::optional<std::string>& legend)
 {
   const Point_input input(points, normals);
   const std::size_t n = input.size();
@@ -761,6 +761,15 @@ py::bytes render_png(const Array_like& points, const Optional_array_like& normal
   point_detail::Coloring coloring;
   if(!values.is_none()) coloring = point_detail::colors_for(values_of(values, n, "values"));
   if(!colors.is_none()) coloring.colors = colors_of(colors, n, "colors");
+  if(legend) {
+    if(values.is_none()) throw py::value_error("legend names the values: give values too");
+    for(char c : *legend)
+      if(!point_detail::legend_can_write(c))
+        throw py::value_error(std::string("legend: the legend's font has no ") +
+                              (static_cast<unsigned char>(c) < 128 ? std::string("'") + c + "'" : "non-ASCII letter") +
+                              " (it writes letters, digits, spaces and .,-+/()_)");
+    coloring.quantity = *legend;
+  }
   if(n == 0) throw py::value_error("points is empty: nothing to draw");
   const point_detail::Point_cloud cloud = program_cloud(input);
   const std::string png = translating_program_errors(
@@ -1329,7 +1338,7 @@ PYBIND11_MODULE(_core, m)
   const point_detail::Render_settings render;
   m.def("render_png", &render_png, "points"_a, "normals"_a = py::none(), py::kw_only(), "values"_a = py::none(),
         "colors"_a = py::none(), "view"_a = "front", "width"_a = render.width, "height"_a = render.height,
-        "splat_scale"_a = render.splat_scale,
+        "splat_scale"_a = render.splat_scale, "legend"_a = py::none(),
         doc("A PNG picture of the points as the program draws it (splats with a depth buffer, shaded by the "
             "normals), e.g. for IPython.display.Image.",
             {points_doc, "normals : (n, 3) array_like, optional\n    Shade by them; None: flat shading.",
@@ -1338,7 +1347,9 @@ PYBIND11_MODULE(_core, m)
              "colors : (n, 3) array_like of int, optional\n    Colour by these colours (0..255) instead.",
              "view : str\n    front, back, left, right, top, bottom, iso, or \"AZIMUTH,ELEVATION\" in degrees.",
              "width, height : int\n    The picture's size in pixels.",
-             "splat_scale : float\n    Scales the splats' radius."},
+             "splat_scale : float\n    Scales the splats' radius.",
+             "legend : str, optional\n    What the values are and their unit, written over the legend's bar (e.g. "
+             "\"displacement, model units\"; letters, digits, spaces and .,-+/()_)."},
             "bytes\n    The PNG file's bytes.")
           .c_str());
   m.def("set_num_threads", &set_num_threads, "count"_a,

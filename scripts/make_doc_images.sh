@@ -19,12 +19,15 @@ meshes=data/meshes
 # The demo's tentacle (40,000 samples of a bumpy tube): details, scaling, enhancement, editing, up-sampling.
 pd demo -o "$work/demo"
 size() { echo --width "$1" --height "$2"; }
-pd render -i "$work/demo/details_quadric.ply" -o "$img/tentacle_quadric_details.png" --view iso $(size 480 480)
-pd render -i "$work/demo/scale_0.6.ply" -o "$img/tentacle_scale_0.6.png" --color-by displacement --view iso $(size 560 400)
-pd render -i "$work/demo/enhance_3.0.ply" -o "$img/tentacle_enhance_3.0.png" --color-by displacement --view iso $(size 560 400)
+pd render -i "$work/demo/details_quadric.ply" -o "$img/tentacle_quadric_details.png" --color-by detail_normal --view iso $(size 480 480)
+pd render -i "$work/demo/scale_0.6.ply" -o "$img/tentacle_scale_0.6.png" --color-by displacement \
+  --legend "displacement along the normal, model units" --view iso $(size 560 400)
+pd render -i "$work/demo/enhance_3.0.ply" -o "$img/tentacle_enhance_3.0.png" --color-by displacement \
+  --legend "displacement along the normal, model units" --view iso $(size 560 400)
 pd render -i "$work/demo/tentacle.ply" -o "$img/tentacle_edit_before.png" --color-by none --view iso $(size 400 400)
 for order in linear quadric cubic; do
-  pd render -i "$work/demo/edit_$order.ply" -o "$img/tentacle_edit_$order.png" --view iso $(size 400 400)
+  pd render -i "$work/demo/edit_$order.ply" -o "$img/tentacle_edit_$order.png" --color-by displacement \
+    --legend "distance moved, model units" --view iso $(size 400 400)
 done
 pd render -i "$work/demo/edit_stretch_upsampled.ply" -o "$img/tentacle_stretch_upsampled.png" --color-by inserted $(size 400 400)
 

@@ -100,8 +100,9 @@ Coloring sequential_colors(const std::vector<double>& values)
   return out;
 }
 
-void emphasize(Coloring& coloring, const std::vector<double>& flags)
+void emphasize(Coloring& coloring, const std::vector<double>& flags, const std::string& flagged)
 {
+  coloring.flagged = flagged;
   coloring.colors.resize(flags.size(), Color{200, 200, 200});
   coloring.emphasized.assign(flags.size(), 0);
   coloring.emphasized_count = 0;
@@ -117,7 +118,7 @@ Coloring flag_colors(const std::vector<double>& flags)
 {
   Coloring out;
   out.scale = Coloring::Scale::flag;
-  emphasize(out, flags);
+  emphasize(out, flags, "");
   return out;
 }
 
@@ -152,6 +153,25 @@ Coloring label_colors(const std::vector<std::size_t>& labels)
                    static_cast<unsigned char>(255 * c[2])});
   }
   return coloring;
+}
+
+std::string quantity_of(const std::string& property)
+{
+  // Coordinates carry no unit of their own: lengths are in the model's units.
+  static const std::pair<const char*, const char*> names[] = {
+    {"detail_normal", "detail along the normal, model units"},
+    {"detail_magnitude", "signed detail magnitude, model units"},
+    {"detail_x", "detail x, model units"},
+    {"detail_y", "detail y, model units"},
+    {"detail_z", "detail z, model units"},
+    {"displacement", "displacement, model units"},
+    {"mean_curvature", "mean curvature, 1 / model unit"},
+    {"inserted", "new points"},
+    {"in_roi", "region of interest"},
+  };
+  for(const auto& [name, quantity] : names)
+    if(property == name) return quantity;
+  return property;
 }
 
 } // namespace point_detail

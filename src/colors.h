@@ -6,6 +6,7 @@
 
 #include "point_io.h"
 
+#include <string>
 #include <vector>
 
 namespace point_detail {
@@ -19,7 +20,15 @@ struct Coloring
   Scale scale = Scale::none;
   double lo = 0, hi = 0;        ///< the colour range (diverging: -hi .. hi)
   std::size_t emphasized_count = 0;
+  /// What the colours show and in what unit, as the legend names it ("distance moved, model units"); the
+  /// flagged points' name for a flag map.
+  std::string quantity;
+  std::string flagged; ///< beside a colour bar, the word after the flagged points' count ("new")
 };
+
+/// The legend's name of a per-point property the program writes ("detail_normal": "detail along the normal,
+/// model units"); the property's own name for one it does not know.
+std::string quantity_of(const std::string& property);
 
 /// The colour of flagged points (new points of an up-sampling, a region): it stands out on grey and on both maps.
 constexpr Color flag_color{255, 0, 200};
@@ -37,8 +46,8 @@ Coloring sequential_colors(const std::vector<double>& values);
 Coloring flag_colors(const std::vector<double>& flags);
 /// The map a property calls for: flags for 0/1 values, diverging when both signs occur, else sequential.
 Coloring colors_for(const std::vector<double>& values);
-/// Marks the points whose `flags` value is 1 (new points) in `flag_color`, drawn over the others.
-void emphasize(Coloring& coloring, const std::vector<double>& flags);
+/// Marks the points whose `flags` value is 1 in `flag_color`, drawn over the others; `flagged` names them ("new").
+void emphasize(Coloring& coloring, const std::vector<double>& flags, const std::string& flagged);
 /// Distinct colours per label (clusters), the same colour for the same label.
 Coloring label_colors(const std::vector<std::size_t>& labels);
 

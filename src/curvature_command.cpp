@@ -46,7 +46,8 @@ struct Curvature_command
     r["k"] = k;
     r["fitting"] = fitting;
     r["curvature_percentiles"] = {{"p02", sorted[n / 50]}, {"p50", sorted[n / 2]}, {"p98", sorted[n - 1 - n / 50]}};
-    const Coloring coloring = diverging_colors(H);
+    Coloring coloring = diverging_colors(H);
+    coloring.quantity = quantity_of("mean_curvature");
     cloud.colors = coloring.colors;
     cloud.set_scalar("mean_curvature", std::move(H));
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });

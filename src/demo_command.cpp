@@ -74,7 +74,7 @@ struct Demo_command
       if(!result) throw Cancelled();
       write_file(outputs.add(dir / (std::string(stem) + ".ply")), ply_bytes(out));
       write_file(outputs.add(dir / (std::string(stem) + ".png")),
-                 render_png(out.points, out.normals, diverging_colors(*out.scalar("displacement")), render));
+                 render_png(out.points, out.normals, manipulate_coloring(out), render));
       rep.data()["roi_points"] = result.region_size;
       rep.data()["anchors"] = result.anchor_count;
       std::printf("demo: %-7s s = %.1f on %zu points (%zu anchors) in %.3f s -> %s.ply, %s.png\n", what.c_str(), factor,

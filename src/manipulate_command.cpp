@@ -84,7 +84,7 @@ struct Manipulate_command
     rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
-        return render_png(out.points, out.normals, diverging_colors(*out.scalar("displacement")), render);
+        return render_png(out.points, out.normals, manipulate_coloring(out), render);
       }));
     auto& r = rep.data();
     r["points"] = out.points.size();

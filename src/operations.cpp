@@ -45,6 +45,7 @@ Coloring add_details(Point_cloud& cloud, const Detail_options& options, Progress
   cloud.set_scalar("detail_magnitude", std::move(magnitude));
   cloud.set_scalar("detail_normal", std::move(along_normal));
   Coloring coloring = diverging_colors(*cloud.scalar(options.color_by));
+  coloring.quantity = quantity_of(options.color_by);
   cloud.colors = coloring.colors;
   auto& r = report.data();
   r["points"] = n;
@@ -233,10 +234,18 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
     r["restore_details"] = {{"iterations", st.restore_iterations}, {"residual", st.restore_residual}};
 }
 
+Coloring manipulate_coloring(const Point_cloud& out)
+{
+  Coloring coloring = diverging_colors(*out.scalar("displacement"));
+  coloring.quantity = "displacement along the normal, model units";
+  return coloring;
+}
+
 Coloring edit_coloring(const Point_cloud& out)
 {
   Coloring coloring = sequential_colors(*out.scalar("displacement"));
-  if(const std::vector<double>* inserted = out.scalar("inserted")) emphasize(coloring, *inserted);
+  coloring.quantity = "distance moved, model units";
+  if(const std::vector<double>* inserted = out.scalar("inserted")) emphasize(coloring, *inserted, "new");
   return coloring;
 }
 

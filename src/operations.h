@@ -49,6 +49,8 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
 
 /// An edit's picture: the distance each point moved, and the points an up-sampling added, flagged.
 Coloring edit_coloring(const Point_cloud& out);
+/// The colours of a scaled or enhanced cloud: its displacement along the normal, diverging.
+Coloring manipulate_coloring(const Point_cloud& out);
 
 } // namespace point_detail
 

@@ -15,6 +15,7 @@
 #include <stb/stb_image_write.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
@@ -63,7 +64,8 @@ std::vector<double> local_spacing(const std::vector<Point>& points)
 
 namespace {
 
-/// 3x5 glyphs of the characters numbers need, one row per 3 bits (top row first).
+/// 3x5 glyphs of the characters numbers and the legend's names need (letters drawn in capitals), one row per
+/// 3 bits (top row first).
 int glyph(char c)
 {
   switch(c) {
@@ -78,11 +80,55 @@ int glyph(char c)
   case '8': return 0b111101111101111;
   case '9': return 0b111101111001111;
   case '.': return 0b000000000000010;
+  case ',': return 0b000000000010100;
   case '-': return 0b000000111000000;
   case '+': return 0b000010111010000;
-  case 'e': return 0b010101111100011;
+  case 'e': return 0b010101111100011; // the exponent of a number
+  case '/': return 0b001001010100100;
+  case '(': return 0b001010010010001;
+  case ')': return 0b100010010010100;
+  case '_': return 0b000000000000111;
+  case 'A': return 0b010101111101101;
+  case 'B': return 0b110101110101110;
+  case 'C': return 0b011100100100011;
+  case 'D': return 0b110101101101110;
+  case 'E': return 0b111100110100111;
+  case 'F': return 0b111100110100100;
+  case 'G': return 0b011100101101011;
+  case 'H': return 0b101101111101101;
+  case 'I': return 0b111010010010111;
+  case 'J': return 0b001001001101010;
+  case 'K': return 0b101101110101101;
+  case 'L': return 0b100100100100111;
+  case 'M': return 0b101111111101101;
+  case 'N': return 0b110101101101101;
+  case 'O': return 0b010101101101010;
+  case 'P': return 0b110101110100100;
+  case 'Q': return 0b010101101111011;
+  case 'R': return 0b110101110101101;
+  case 'S': return 0b011100010001110;
+  case 'T': return 0b111010010010010;
+  case 'U': return 0b101101101101111;
+  case 'V': return 0b101101101101010;
+  case 'W': return 0b101101111111101;
+  case 'X': return 0b101101010101101;
+  case 'Y': return 0b101101010010010;
+  case 'Z': return 0b111001010100111;
   default: return 0;
   }
+}
+
+} // namespace
+
+bool legend_can_write(char c) { return c == ' ' || glyph(char(std::toupper(static_cast<unsigned char>(c)))) != 0; }
+
+namespace {
+
+/// A legend name in the glyphs' capitals.
+std::string capitals(std::string text)
+{
+  for(char& c : text) c = char(std::toupper(static_cast<unsigned char>(c)));
+  return text;
 }
 
 /// An RGB picture to draw the legend on.
@@ -120,12 +166,18 @@ std::string number(double v)
   return buffer;
 }
 
-/// The legend strip: the colour bar with its ends (and 0 for a diverging map), and a swatch of the flag colour
-/// with the count of flagged points (beside the bar, or alone).
+/// Height of the legend's bar (a line of text and a margin), and of its name with the gap below it.
+int legend_bar_height(int width) { return 5 * std::max(1, width / 400) + 2; }
+int legend_name_height(int width) { return legend_bar_height(width) + 2 * std::max(1, width / 400); }
+
+/// The legend strip: the quantity's name over the colour bar with its ends (and 0 for a diverging map), and a
+/// swatch of the flag colour with the count of flagged points (beside the bar, or alone).
 void draw_legend(Canvas canvas, int top, const Coloring& coloring)
 {
-  const int size = std::max(1, canvas.width / 400), bar_height = 5 * size + 2;
-  const int y = top + (canvas.height - top - bar_height) / 2;
+  const int size = std::max(1, canvas.width / 400), bar_height = legend_bar_height(canvas.width);
+  const int named = coloring.quantity.empty() ? 0 : legend_name_height(canvas.width);
+  const int y = top + named + (canvas.height - top - named - bar_height) / 2;
+  if(named) canvas.text(capitals(coloring.quantity), canvas.width / 2, y - named, size, 0.5);
   const bool bar = coloring.scale == Coloring::Scale::diverging || coloring.scale == Coloring::Scale::sequential;
   if(bar) {
     const int length = canvas.width / 2, x0 = (canvas.width - length) / 2;
@@ -140,7 +192,9 @@ void draw_legend(Canvas canvas, int top, const Coloring& coloring)
   if(coloring.emphasized_count > 0) {
     const int x0 = (bar ? canvas.width * 7 / 8 : canvas.width / 2) - 6 * size;
     canvas.fill(x0, y, bar_height, bar_height, flag_color);
-    canvas.text("+" + std::to_string(coloring.emphasized_count), x0 + bar_height + 3 * size, y + 1, size, 0);
+    const std::string count = "+" + std::to_string(coloring.emphasized_count);
+    canvas.text(bar && !coloring.flagged.empty() ? count + " " + capitals(coloring.flagged) : count,
+                x0 + bar_height + 3 * size, y + 1, size, 0);
   }
 }
 
@@ -153,7 +207,8 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
   const std::vector<Color>& colors = coloring.colors;
   constexpr int ss = 2; // supersampling factor
   const bool legend = (coloring.scale != Coloring::Scale::none || coloring.emphasized_count > 0) && settings.height >= 80;
-  const int legend_height = legend ? std::max(20, settings.height / 25) : 0;
+  const int legend_height =
+    legend ? std::max(20, settings.height / 25) + (coloring.quantity.empty() ? 0 : legend_name_height(settings.width)) : 0;
   const int W = settings.width * ss, H = (settings.height - legend_height) * ss; // the model's part of the picture
   const double pi = CGAL_PI;
   const double az = settings.view.azimuth * pi / 180, el = settings.view.elevation * pi / 180;

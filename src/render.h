@@ -29,8 +29,11 @@ struct Render_settings
   double splat_scale = 1.0; ///< scales the splat radius (0.75 times the distance to the 4th nearest sample)
 };
 
+/// Whether the legend's font can write `c` (letters, written in capitals, digits, space and .,-+/()_).
+bool legend_can_write(char c);
+
 /// A PNG picture of the points. `normals` may be empty (flat shading). A colour scale gets a legend strip at
-/// the bottom with its range; flagged points, a swatch with their count.
+/// the bottom with its range under the quantity's name; flagged points, a swatch with their count.
 std::string render_png(const std::vector<Point>& points, const std::vector<Vector>& normals, const Coloring& coloring,
                        const Render_settings& settings);
 

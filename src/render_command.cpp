@@ -9,7 +9,7 @@ namespace {
 
 struct Render_command
 {
-  std::string input, output, color_by, report, view = "front";
+  std::string input, output, color_by, legend, report, view = "front";
   Render_settings render;
 
   void run(const Common_options& common)
@@ -44,6 +44,7 @@ struct Render_command
         throw Cli_error(input + " has no property '" + by + "' (it has:" + (names.empty() ? " none" : names) + "; or use rgb, none)");
       }
       colors = colors_for(*values);
+      colors.quantity = legend.empty() ? quantity_of(by) : legend;
     }
     rep.data()["color_by"] = by;
     write_file(png_tmp, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, colors, render); }));
@@ -62,6 +63,14 @@ Subcommand add_render_command(CLI::App& app, const Common_options& common)
   render_app->add_option("-i,--input", render.input, "input points")->required();
   render_app->add_option("-o,--output", render.output, "output PNG")->required();
   render_app->add_option("--color-by", render.color_by, "rgb, none or a scalar property: 0/1 flags (inserted, in_roi) are highlighted, signed values get a diverging map, others a sequential one (default: rgb, else detail_normal, else detail_magnitude)");
+  render_app->add_option("--legend", render.legend,
+                          "what the colours show and their unit, over the legend's bar (default: the property's name "
+                          "for the program's own, e.g. detail_normal: \"detail along the normal, model units\")")
+    ->check([](const std::string& text) {
+      for(char c : text)
+        if(!legend_can_write(c)) return std::string("the legend's font writes letters, digits, spaces and .,-+/()_ only");
+      return std::string();
+    });
   render_app->add_option("--report", render.report, "write stage timings and counts as JSON");
   add_render_options(*render_app, render.render, render.view);
   return {render_app, [command, &common] { command->run(common); }};

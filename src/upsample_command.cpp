@@ -34,7 +34,9 @@ struct Upsample_command
     rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
-        return render_png(cloud.points, cloud.normals, flag_colors(*cloud.scalar("inserted")), render);
+        Coloring coloring = flag_colors(*cloud.scalar("inserted"));
+        coloring.quantity = quantity_of("inserted");
+        return render_png(cloud.points, cloud.normals, coloring, render);
       }));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();

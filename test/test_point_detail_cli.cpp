@@ -442,6 +442,32 @@ TEST_F(Cli, PicturesShowAFewNewPointsAndAChangeOfAFewPoints)
   (void)mapped; // the flag picture's splat edges blend pink into grey
 }
 
+// A colour bar says what it shows: the quantity's name over it, in the legend's capitals.
+TEST_F(Cli, TheLegendNamesWhatTheColoursShow)
+{
+  const std::string in = write_sphere_ply("in.ply", 2000);
+  ASSERT_EQ(run("details -i " + in + " -o " + path("d.ply")).exit_code, 0);
+  auto dark_legend_pixels = [&](const std::string& legend) {
+    const Program_run r = run("render -i " + path("d.ply") + " -o " + path("d.png") +
+                              " --color-by detail_normal --width 400 --height 400 --legend '" + legend + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const std::string png = contents(path("d.png"));
+    int width = 0, height = 0, channels = 0;
+    unsigned char* rgb = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()), int(png.size()), &width,
+                                               &height, &channels, 3);
+    std::size_t dark = 0;
+    for(int p = width * (height - 40); rgb && p < width * height; ++p) dark += rgb[3 * p] < 80 && rgb[3 * p + 2] < 80;
+    stbi_image_free(rgb);
+    return dark;
+  };
+  const std::size_t short_name = dark_legend_pixels("x"), long_name = dark_legend_pixels("detail along the normal, model units");
+  std::printf("dark legend pixels: named x %zu, named in full %zu\n", short_name, long_name);
+  EXPECT_GT(long_name, short_name + 100); // about 30 more glyphs of 5 to 11 pixels each
+  const Program_run bad = run("render -i " + path("d.ply") + " -o " + path("e.png") + " --legend 'δ, model units'");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("font writes letters"), std::string::npos) << bad.output;
+}
+
 TEST_F(Cli, ScaleWiringMovesTheRegionOnlyAsTheLibraryDoes)
 {
   const std::string in = write_sphere_ply("in.ply", 3000);

@@ -80,7 +80,8 @@ def main():
     cgal_ext.write_ply(os.path.join(out_dir, "details.ply"), points, normals, colours, input_path=scan,
                        detail_magnitude=magnitude, detail_normal=relief)
     with open(os.path.join(out_dir, "details.png"), "wb") as f:
-        f.write(cgal_ext.render_png(points, normals, values=relief, **VIEW))  # the same colours, with a legend
+        f.write(cgal_ext.render_png(points, normals, values=relief, legend="detail along the normal, model units",
+                                    **VIEW))  # the same colours, with a legend
 
     # 3. The selection, as boolean masks. The ear that points back: its tip is the scan's highest point, its base
     #    the points 0.28 to 0.32 from the tip (the ear is about 0.3 long; the model is 1 wide). The region of
@@ -117,7 +118,8 @@ def main():
     displacement = np.linalg.norm(moved - points, axis=1)
     cgal_ext.write_ply(edited_ply, moved, moved_normals, colours, input_path=scan, displacement=displacement)
     with open(os.path.join(out_dir, "edit.png"), "wb") as f:
-        f.write(cgal_ext.render_png(moved, moved_normals, values=displacement, **VIEW))
+        f.write(cgal_ext.render_png(moved, moved_normals, values=displacement, legend="distance moved, model units",
+                                    **VIEW))
 
     print("%s: %d points; details %.2f s, |delta| up to %.3g, delta . n in [%.3g, %.3g]"
           % (os.path.basename(scan), len(points), details_seconds, np.abs(magnitude).max(), relief.min(),

@@ -327,6 +327,13 @@ def test_render_png_is_a_picture_of_the_asked_size(sphere):
     assert (width, height) == (320, 240)
     plain = cgal_ext.render_png(points, width=320, height=240)
     assert plain != png
+    named = cgal_ext.render_png(points, normals, values=magnitude, width=320, height=240, view="iso",
+                                legend="signed detail magnitude, model units")
+    assert named != png
+    with pytest.raises(ValueError, match="font has no"):
+        cgal_ext.render_png(points, values=magnitude, legend="Δ, model units")
+    with pytest.raises(ValueError, match="give values too"):
+        cgal_ext.render_png(points, legend="nothing")
     with pytest.raises(ValueError, match="not both"):
         cgal_ext.render_png(points, values=magnitude, colors=np.zeros((len(points), 3), np.uint8))
     with pytest.raises(ValueError):
