@@ -426,7 +426,8 @@ inline nlohmann::json interesting_json(Random& random)
                                      "rigid_rotation_smoothing_scale", "rigid_edge_weights", "diffusion",
                                      "simplification", "select", "translation", "rotation", "quaternion", "matrix",
                                      "pivot", "axis", "degrees", "order", "lambda", "mu", "samples", "origin", "turn",
-                                     "max_cluster_size", "mode_threshold", "target_count", "detail_iterations"};
+                                     "max_cluster_size", "mode_threshold", "target_count", "detail_iterations",
+                                     "diffusion_samples", "diffusion_origin", "diffusion_turn"};
   static const double numbers[] = {0.0, -0.0, 1.0, -1.0, 0.5, 3.0, 200.0, 1e308, -1e308, 4.9e-324, 4294967296.0,
                                    9007199254740993.0, 1e19, 2.5};
   switch(random() % 7) {
@@ -453,7 +454,7 @@ inline nlohmann::json fresh_edit()
   return nlohmann::json::parse(R"({"roi": ["box:-1,-1,0,1,1,1"], "handles": [{"select": ["sphere:0,0,1,0.3"],
     "rotation": {"axis": [1, 0, 0], "degrees": 30}, "pivot": [0, 0, 0.5], "translation": [0.1, 0, 0]}],
     "filter": {"order": "cubic", "lambda": 0.8, "mu": 1.6}, "k": 10, "rotations": "arap",
-    "diffusion": {"samples": 4}, "simplification": {"max_cluster_size": 10}})");
+    "diffusion_samples": 4, "simplification": {"max_cluster_size": 10}})");
 }
 
 inline std::string mutate_edit_json(const std::string& input, std::size_t max_size, Random& random)

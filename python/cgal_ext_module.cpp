@@ -380,59 +380,24 @@ auto without_gil(Body&& body)
 
 // ---- settings -----------------------------------------------------------------------------------------------
 
-/// The Python spelling of each value of a setting's enumeration: parsed from keyword arguments, written back by
-/// `Deformation.settings`, and the defaults the signatures show.
+/// A setting's value from the name a keyword argument gives (the library's `Setting_names`, shared with the edit
+/// files and the program's options).
 template <typename Enum>
-struct Spelling
+Enum parse_setting(const std::string& name, const char* setting)
 {
-  const char* name;
-  Enum value;
-};
-
-template <typename Enum, std::size_t N>
-Enum parse_setting(const Spelling<Enum> (&table)[N], const std::string& name, const char* setting)
-{
-  std::string choices;
-  for(const Spelling<Enum>& s : table) {
-    if(name == s.name) return s.value;
-    choices += std::string(choices.empty() ? "\"" : ", \"") + s.name + "\"";
-  }
-  throw py::value_error(std::string(setting) + " must be one of " + choices + ", not \"" + name + "\"");
-}
-
-template <typename Enum, std::size_t N>
-const char* setting_name(const Spelling<Enum> (&table)[N], Enum value)
-{
-  for(const Spelling<Enum>& s : table)
-    if(s.value == value) return s.name;
-  return "?";
+  Enum value{};
+  if(!CGAL_ext::find_setting(name, value))
+    throw py::value_error(std::string(setting) + " must be one of " + CGAL_ext::setting_choices<Enum>() + ", not \"" +
+                          name + "\"");
+  return value;
 }
 
 using namespace CGAL_ext;
-const Spelling<Detail_order> order_spellings[] = {
-  {"linear", Detail_order::linear}, {"quadric", Detail_order::quadric}, {"cubic", Detail_order::cubic}};
-const Spelling<Laplacian_weighting> weight_spellings[] = {
-  {"uniform", Laplacian_weighting::uniform}, {"distance", Laplacian_weighting::distance_power}};
-const Spelling<Curvature_fitting> fitting_spellings[] = {
-  {"closed_form", Curvature_fitting::closed_form}, {"monge", Curvature_fitting::monge_jet_fitting}};
-const Spelling<Detail_rotation> rotation_spellings[] = {{"propagate", Detail_rotation::propagated},
-                                                        {"arap", Detail_rotation::as_rigid_as_possible},
-                                                        {"none", Detail_rotation::none}};
-const Spelling<Rotation_smoothing_scale> smoothing_scale_spellings[] = {
-  {"edge_lengths", Rotation_smoothing_scale::edge_lengths}, {"surface_area", Rotation_smoothing_scale::surface_area}};
-const Spelling<Rigid_edge_weights> edge_weight_spellings[] = {{"uniform", Rigid_edge_weights::uniform},
-                                                              {"cotangent", Rigid_edge_weights::cotangent}};
-const Spelling<Strength_distance> strength_spellings[] = {{"euclidean", Strength_distance::euclidean},
-                                                          {"geodesic", Strength_distance::geodesic}};
-const Spelling<Diffusion_origin> origin_spellings[] = {{"own", Diffusion_origin::own_sample},
-                                                       {"nearest", Diffusion_origin::nearest_sample}};
-const Spelling<Sample_turn> turn_spellings[] = {
-  {"affine", Sample_turn::affine}, {"fitted", Sample_turn::fitted}, {"frames", Sample_turn::frames}};
 
 Detail_settings detail_settings(const std::string& order, double lam, double mu, const std::string& weights)
 {
-  Detail_settings s(Detail_filter{parse_setting(order_spellings, order, "order"), lam, mu});
-  s.weights.weighting = parse_setting(weight_spellings, weights, "weights");
+  Detail_settings s(Detail_filter{parse_setting<Detail_order>(order, "order"), lam, mu});
+  s.weights.weighting = parse_setting<Laplacian_weighting>(weights, "weights");
   s.validate();
   return s;
 }
@@ -544,7 +509,7 @@ Ndarray manipulate(bool enhance, const Array_like& points, const Optional_array_
 Ndarray bound_estimate_mean_curvature(const Array_like& points, const Optional_array_like& normals, long long k,
                                 const std::string& fitting, const Optional_progress& progress)
 {
-  const Curvature_fitting method = parse_setting(fitting_spellings, fitting, "fitting");
+  const Curvature_fitting method = parse_setting<Curvature_fitting>(fitting, "fitting");
   const Point_input input(points, normals);
   const std::size_t n = input.size();
   py::array_t<double> curvature(static_cast<py::ssize_t>(n));
@@ -1017,17 +982,17 @@ public:
   static py::dict settings_dict(const Settings& s)
   {
     return py::dict(
-      "order"_a = setting_name(order_spellings, s.filter.order), "lam"_a = s.filter.lambda, "mu"_a = s.filter.mu,
+      "order"_a = setting_name(s.filter.order), "lam"_a = s.filter.lambda, "mu"_a = s.filter.mu,
       "k"_a = s.sample_neighbors, "handle_weight"_a = s.handle_weight,
-      "rotations"_a = setting_name(rotation_spellings, s.rotations), "rigid_iterations"_a = s.rigid_iterations,
+      "rotations"_a = setting_name(s.rotations), "rigid_iterations"_a = s.rigid_iterations,
       "rigid_rotation_smoothing"_a = s.rigid_rotation_smoothing,
-      "rigid_rotation_smoothing_scale"_a = setting_name(smoothing_scale_spellings, s.rigid_rotation_smoothing_scale),
-      "rigid_edge_weights"_a = setting_name(edge_weight_spellings, s.rigid_edge_weights),
-      "strength"_a = setting_name(strength_spellings, s.strength_distance), "target_count"_a = s.simplification.target_count,
+      "rigid_rotation_smoothing_scale"_a = setting_name(s.rigid_rotation_smoothing_scale),
+      "rigid_edge_weights"_a = setting_name(s.rigid_edge_weights),
+      "strength_distance"_a = setting_name(s.strength_distance), "target_count"_a = s.simplification.target_count,
       "max_cluster_size"_a = s.simplification.max_cluster_size ? py::object(py::int_(*s.simplification.max_cluster_size))
                                                                   : py::object(py::none()),
-      "diffusion_samples"_a = s.diffusion_samples, "diffusion_origin"_a = setting_name(origin_spellings, s.diffusion_origin),
-      "diffusion_turn"_a = setting_name(turn_spellings, s.diffusion_turn), "detail_iterations"_a = s.detail_iterations,
+      "diffusion_samples"_a = s.diffusion_samples, "diffusion_origin"_a = setting_name(s.diffusion_origin),
+      "diffusion_turn"_a = setting_name(s.diffusion_turn), "detail_iterations"_a = s.detail_iterations,
       "detail_tolerance"_a = s.detail_tolerance, "detail_anchor"_a = s.detail_anchor);
   }
 
@@ -1045,7 +1010,7 @@ public:
     if(!is_preprocessed()) return s + "not preprocessed>";
     return s + std::to_string(number_of_sample_points()) + " sample points (" +
            std::to_string(m_deformation->number_of_roi_sample_points()) + " in the region), rotations " +
-           setting_name(rotation_spellings, m_deformation->settings().rotations) + ">";
+           setting_name(m_deformation->settings().rotations) + ">";
   }
 
 private:
@@ -1194,8 +1159,8 @@ PYBIND11_MODULE(_core, m)
 
   const Detail_filter filter;
   const unsigned int laplacian_k = default_laplacian_neighbors;
-  const std::string default_order = setting_name(order_spellings, filter.order);
-  const std::string default_weights = setting_name(weight_spellings, Laplacian_weights().weighting);
+  const std::string default_order = setting_name(filter.order);
+  const std::string default_weights = setting_name(Laplacian_weights().weighting);
 
   m.def("compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(), py::kw_only(),
         "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
@@ -1242,7 +1207,7 @@ PYBIND11_MODULE(_core, m)
             "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it).")
           .c_str());
   m.def("estimate_mean_curvature", &bound_estimate_mean_curvature, "points"_a, "normals"_a = py::none(), py::kw_only(),
-        "k"_a = default_curvature_neighbors, "fitting"_a = setting_name(fitting_spellings, Curvature_fitting::closed_form),
+        "k"_a = default_curvature_neighbors, "fitting"_a = setting_name(Curvature_fitting::closed_form),
         "progress"_a = py::none(),
         doc("The signed mean curvature of every point: a sphere with outward normals has +1/r (doc/curvature.md).",
             {points_doc, normals_doc, "k : int\n    Neighbours of each local fit (itself not counted).",
@@ -1386,7 +1351,8 @@ PYBIND11_MODULE(_core, m)
                                "rigid_rotation_smoothing_scale : {\"edge_lengths\", \"surface_area\"}\n    How that weight "
                                "is scaled.",
                                "rigid_edge_weights : {\"uniform\", \"cotangent\"}\n    Edge weights of the \"arap\" energy.",
-                               "strength : {\"euclidean\", \"geodesic\"}\n    The distance of the strength field.",
+                               "strength_distance : {\"euclidean\", \"geodesic\"}\n    The distance of the strength "
+                               "field.",
                                "target_count : int\n    About how many sample points to make.",
                                "max_cluster_size : int, optional\n    The most points per sample point, instead.",
                                "diffusion_samples : int\n    Sample points blended per point by the diffusion.",
@@ -1395,27 +1361,31 @@ PYBIND11_MODULE(_core, m)
                                "its points.",
                                "detail_iterations : int\n    The most conjugate-gradient iterations of restore_details().",
                                "detail_tolerance : float\n    Its relative residual to stop at.",
-                               "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape."},
+                               "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape.",
+                               "strength : str, optional\n    The older spelling of strength_distance, still read."},
                               "", true)
                             .c_str())
     .def(py::init([](const Array_like& points, const Optional_array_like& normals, const std::string& order, double lam,
                      double mu, long long k, double handle_weight, const std::string& rotations, long long rigid_iterations,
                      double rigid_rotation_smoothing, const std::string& rigid_rotation_smoothing_scale,
-                     const std::string& rigid_edge_weights, const std::string& strength, long long target_count,
+                     const std::string& rigid_edge_weights, const std::string& strength_distance, long long target_count,
                      const Optional_int& max_cluster_size, long long diffusion_samples, const std::string& diffusion_origin,
                      const std::string& diffusion_turn, long long detail_iterations, double detail_tolerance,
-                     double detail_anchor) {
+                     double detail_anchor, const std::optional<std::string>& strength) {
            Deformation::Settings s;
-           s.filter = Detail_filter{parse_setting(order_spellings, order, "order"), lam, mu};
+           s.filter = Detail_filter{parse_setting<Detail_order>(order, "order"), lam, mu};
            s.sample_neighbors = as_count(k, "k");
            s.handle_weight = handle_weight;
-           s.rotations = parse_setting(rotation_spellings, rotations, "rotations");
+           s.rotations = parse_setting<Detail_rotation>(rotations, "rotations");
            s.rigid_iterations = as_count(rigid_iterations, "rigid_iterations");
            s.rigid_rotation_smoothing = rigid_rotation_smoothing;
            s.rigid_rotation_smoothing_scale =
-             parse_setting(smoothing_scale_spellings, rigid_rotation_smoothing_scale, "rigid_rotation_smoothing_scale");
-           s.rigid_edge_weights = parse_setting(edge_weight_spellings, rigid_edge_weights, "rigid_edge_weights");
-           s.strength_distance = parse_setting(strength_spellings, strength, "strength");
+             parse_setting<Rotation_smoothing_scale>(rigid_rotation_smoothing_scale, "rigid_rotation_smoothing_scale");
+           s.rigid_edge_weights = parse_setting<Rigid_edge_weights>(rigid_edge_weights, "rigid_edge_weights");
+           if(strength && strength_distance != setting_name(Deformation::Settings().strength_distance))
+             throw py::value_error("give strength_distance (strength is its older spelling), not both");
+           s.strength_distance = strength ? parse_setting<Strength_distance>(*strength, "strength")
+                                          : parse_setting<Strength_distance>(strength_distance, "strength_distance");
            if(target_count < 1) throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
            s.simplification.target_count = std::size_t(target_count);
            if(!max_cluster_size.is_none()) {
@@ -1424,27 +1394,27 @@ PYBIND11_MODULE(_core, m)
              s.simplification.max_cluster_size = std::size_t(size);
            }
            s.diffusion_samples = as_count(diffusion_samples, "diffusion_samples");
-           s.diffusion_origin = parse_setting(origin_spellings, diffusion_origin, "diffusion_origin");
-           s.diffusion_turn = parse_setting(turn_spellings, diffusion_turn, "diffusion_turn");
+           s.diffusion_origin = parse_setting<Diffusion_origin>(diffusion_origin, "diffusion_origin");
+           s.diffusion_turn = parse_setting<Sample_turn>(diffusion_turn, "diffusion_turn");
            s.detail_iterations = as_count(detail_iterations, "detail_iterations");
            s.detail_tolerance = detail_tolerance;
            s.detail_anchor = detail_anchor;
            s.validate();
            return std::make_unique<Deformation>(points, normals, s);
          }),
-         "points"_a, "normals"_a = py::none(), py::kw_only(), "order"_a = setting_name(order_spellings, defaults.filter.order),
+         "points"_a, "normals"_a = py::none(), py::kw_only(), "order"_a = setting_name(defaults.filter.order),
          "lam"_a = defaults.filter.lambda, "mu"_a = defaults.filter.mu, "k"_a = defaults.sample_neighbors,
-         "handle_weight"_a = defaults.handle_weight, "rotations"_a = setting_name(rotation_spellings, defaults.rotations),
+         "handle_weight"_a = defaults.handle_weight, "rotations"_a = setting_name(defaults.rotations),
          "rigid_iterations"_a = defaults.rigid_iterations, "rigid_rotation_smoothing"_a = defaults.rigid_rotation_smoothing,
-         "rigid_rotation_smoothing_scale"_a = setting_name(smoothing_scale_spellings, defaults.rigid_rotation_smoothing_scale),
-         "rigid_edge_weights"_a = setting_name(edge_weight_spellings, defaults.rigid_edge_weights),
-         "strength"_a = setting_name(strength_spellings, defaults.strength_distance),
+         "rigid_rotation_smoothing_scale"_a = setting_name(defaults.rigid_rotation_smoothing_scale),
+         "rigid_edge_weights"_a = setting_name(defaults.rigid_edge_weights),
+         "strength_distance"_a = setting_name(defaults.strength_distance),
          "target_count"_a = defaults.simplification.target_count, "max_cluster_size"_a = py::none(),
          "diffusion_samples"_a = defaults.diffusion_samples,
-         "diffusion_origin"_a = setting_name(origin_spellings, defaults.diffusion_origin),
-         "diffusion_turn"_a = setting_name(turn_spellings, defaults.diffusion_turn),
+         "diffusion_origin"_a = setting_name(defaults.diffusion_origin),
+         "diffusion_turn"_a = setting_name(defaults.diffusion_turn),
          "detail_iterations"_a = defaults.detail_iterations, "detail_tolerance"_a = defaults.detail_tolerance,
-         "detail_anchor"_a = defaults.detail_anchor)
+         "detail_anchor"_a = defaults.detail_anchor, "strength"_a = py::none())
     .def("insert_roi", &Deformation::insert_roi, "indices"_a,
          doc("Adds points to the region of interest (the part that deforms).",
              {"indices : array_like of int or bool\n    Point indices, or a boolean mask of all the points."}, "", true)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Prints which of the package's headers include which, layer by layer, and checks the rules the layering
 keeps: a header under include/CGAL_ext/internal/ includes only other internal headers and the value types
-(exceptions.h, Detail_filter.h and the *_settings.h headers), never an algorithm header; an algorithm header
+(exceptions.h, setting_names.h, Detail_filter.h and the *_settings.h headers), never an algorithm header; an algorithm header
 includes no other algorithm header (what two algorithms share lives in internal/); and no public header is
 longer than its line budget, so that an algorithm stays a thin layer over its internal parts.
 
@@ -33,7 +33,7 @@ def layer(header):
     name = os.path.basename(header)
     if header.startswith("internal/"):
         return "internal"
-    if name in ("exceptions.h", "Detail_filter.h") or name.endswith("_settings.h"):
+    if name in ("exceptions.h", "setting_names.h", "Detail_filter.h") or name.endswith("_settings.h"):
         return "value types"
     return "algorithms"
 

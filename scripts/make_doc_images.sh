@@ -44,7 +44,7 @@ pd render -i "$meshes/armadillo.off" -o "$img/armadillo_edit_before.png" --color
 pd edit -i "$meshes/armadillo.off" -o "$work/e.ply" --edit doc/edits/armadillo_raise_arm.json \
   --png "$img/armadillo_edit_arm.png" $(size 400 400)
 for strength in euclidean geodesic; do
-  pd edit -i "$meshes/armadillo.off" -o "$work/w.ply" --edit doc/edits/armadillo_raise_arm_wide.json --strength "$strength" \
+  pd edit -i "$meshes/armadillo.off" -o "$work/w.ply" --edit doc/edits/armadillo_raise_arm_wide.json --strength-distance "$strength" \
     --png "$img/armadillo_wide_$strength.png" $(size 800 800)
 done
 

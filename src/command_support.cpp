@@ -12,15 +12,16 @@ namespace point_detail {
 
 void add_detail_options(CLI::App& app, Detail_options& o)
 {
-  app.add_option("--order", o.order, "transfer function")->check(CLI::IsMember({"linear", "quadric", "cubic"}))->capture_default_str();
-  app.add_option("--lambda", o.lambda, "pass-band frequency (> 0)")->capture_default_str();
-  app.add_option("--mu", o.mu, "highest frequency (> lambda; quadric and cubic)")->capture_default_str();
+  add_setting_option(app, "--order", o.filter.order, std::string("transfer function (default ") +
+                                                      CGAL_ext::setting_name(o.filter.order) + ")");
+  app.add_option("--lambda", o.filter.lambda, "pass-band frequency (> 0)")->capture_default_str();
+  app.add_option("--mu", o.filter.mu, "highest frequency (> lambda; quadric and cubic)")->capture_default_str();
   add_neighbor_count_option(app, o.k, "Laplacian row", 1);
-  app.add_option("--neighbors", o.neighbors, "Laplacian neighbourhoods: knn (symmetrised k nearest) or mean-shift (the k "
-                                             "nearest whose mean-shift modes agree, so rows stop at creases)")
-    ->check(CLI::IsMember({"knn", "mean-shift"}))->capture_default_str();
-  app.add_option("--weights", o.weights, "Laplacian weights: uniform (1/valence) or distance (|p_i - p_j|^-1)")
-    ->check(CLI::IsMember({"uniform", "distance"}))->capture_default_str();
+  add_setting_option(app, "--neighbors", o.neighbors, "Laplacian neighbourhoods: knn (symmetrised k nearest, default) or "
+                                                      "mean_shift (the k nearest whose mean-shift modes agree, so rows "
+                                                      "stop at creases)");
+  add_setting_option(app, "--weights", o.weights, "Laplacian weights: uniform (1/valence, default) or distance "
+                                                  "(|p_i - p_j|^-1)");
 }
 
 CLI::Option* add_neighbor_count_option(CLI::App& app, unsigned int& k, const std::string& of, unsigned int minimum,

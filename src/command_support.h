@@ -38,25 +38,40 @@ struct Subcommand
   std::function<void()> run;
 };
 
+/// An option that takes the names of `Enum`'s values (`CGAL_ext::Setting_names`, older spellings too) into
+/// `value`; its help lists the names.
+template <typename Enum>
+CLI::Option* add_setting_option(CLI::App& app, const std::string& name, Enum& value, const std::string& description)
+{
+  std::string names;
+  for(const std::string& n : CGAL_ext::setting_names<Enum>()) names += (names.empty() ? "{" : ",") + n;
+  CLI::Validator spelled(
+    [](std::string& text) -> std::string {
+      Enum found{};
+      if(!CGAL_ext::find_setting(text, found))
+        return "must be " + CGAL_ext::setting_choices<Enum>() + ", not \"" + text + "\"";
+      text = std::to_string(static_cast<int>(found)); // what CLI11 converts to the enum
+      return std::string();
+    },
+    names + "}");
+  return app.add_option(name, value, description)->transform(spelled);
+}
+
 /// The detail options of `details`, `scale` and `enhance`.
 struct Detail_options
 {
-  std::string order = "quadric";
-  double lambda = CGAL_ext::Detail_filter().lambda, mu = CGAL_ext::Detail_filter().mu;
+  CGAL_ext::Detail_filter filter;
   unsigned int k = CGAL_ext::default_laplacian_neighbors;
-  std::string weights = "uniform", neighbors = "knn";
+  CGAL_ext::Laplacian_weighting weights = CGAL_ext::Laplacian_weights().weighting;
+  CGAL_ext::Laplacian_neighborhood neighbors = CGAL_ext::Detail_settings().neighborhood;
   std::string color_by = "detail_normal"; // the relief on any sampling (doc/geometric_details.md, "Colour maps")
 
   CGAL_ext::Detail_settings settings() const
   {
     CGAL_ext::Detail_settings s;
-    s.filter.order = detail_order(order, "--order");
-    s.filter.lambda = lambda;
-    s.filter.mu = mu;
-    s.weights.weighting = weights == "distance" ? CGAL_ext::Laplacian_weighting::distance_power
-                                                : CGAL_ext::Laplacian_weighting::uniform;
-    s.neighborhood = neighbors == "mean-shift" ? CGAL_ext::Laplacian_neighborhood::mean_shift
-                                               : CGAL_ext::Laplacian_neighborhood::k_nearest;
+    s.filter = filter;
+    s.weights.weighting = weights;
+    s.neighborhood = neighbors;
     return s;
   }
 };

@@ -14,7 +14,8 @@ namespace {
 /// `curvature`: signed mean curvature per point (positive where the surface bends away from its normal).
 struct Curvature_command
 {
-  std::string input, output, png, report, view = "front", fitting = "monge";
+  std::string input, output, png, report, view = "front";
+  CGAL_ext::Curvature_fitting fitting = CGAL_ext::Curvature_fitting::monge_jet_fitting;
   unsigned int k = CGAL_ext::default_curvature_neighbors;
   Render_settings render;
 
@@ -31,7 +32,7 @@ struct Curvature_command
     std::vector<double> H(n);
     const bool done = rep.time("curvature", [&] {
       return CGAL_ext::estimate_mean_curvature(
-        index_range(n), k, fitting == "closed-form" ? CGAL_ext::Curvature_fitting::closed_form : CGAL_ext::Curvature_fitting::monge_jet_fitting,
+        index_range(n), k, fitting,
         CGAL::make_property_map(H),
         CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
           .normal_map(CGAL::make_property_map(cloud.normals))
@@ -44,7 +45,7 @@ struct Curvature_command
     auto& r = rep.data();
     r["points"] = n;
     r["k"] = k;
-    r["fitting"] = fitting;
+    r["fitting"] = CGAL_ext::setting_name(fitting);
     r["curvature_percentiles"] = {{"p02", sorted[n / 50]}, {"p50", sorted[n / 2]}, {"p98", sorted[n - 1 - n / 50]}};
     Coloring coloring = diverging_colors(H);
     coloring.quantity = quantity_of("mean_curvature");
@@ -68,8 +69,8 @@ Subcommand add_curvature_command(CLI::App& app, const Common_options& common)
   curvature_app->add_option("-i,--input", curvature.input, "input points (.ply, .off, .xyz, .pwn)")->required();
   curvature_app->add_option("-o,--output", curvature.output, "output binary PLY with mean_curvature and colours")->required();
   add_neighbor_count_option(*curvature_app, curvature.k, "degree-2 fit", 5);
-  curvature_app->add_option("--fitting", curvature.fitting, "monge (CGAL::Monge_via_jet_fitting) or closed-form (faster)")
-    ->check(CLI::IsMember({"monge", "closed-form"}))->capture_default_str();
+  add_setting_option(*curvature_app, "--fitting", curvature.fitting,
+                     "monge (CGAL::Monge_via_jet_fitting, default) or closed_form (faster)");
   curvature_app->add_option("--png", curvature.png, "also render the curvature colour map (red: bends away from the normal)");
   curvature_app->add_option("--report", curvature.report, "write stage timings and curvature percentiles as JSON");
   add_render_options(*curvature_app, curvature.render, curvature.view);

@@ -42,15 +42,15 @@ struct Demo_command
     std::printf("demo: tentacle of %zu points with exact normals\n", input.points.size());
     for(const char* order : {"linear", "quadric", "cubic"}) {
       Detail_options options;
-      options.order = order;
+      options.filter.order = setting_value<CGAL_ext::Detail_order>(order, "order");
       Point_cloud cloud = input;
       Report rep(std::string("demo details ") + order);
       const Coloring coloring = add_details(cloud, options, progress, rep);
       const std::string stem = std::string("details_") + order;
       write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(cloud));
       write_file(outputs.add(dir / (stem + ".png")), render_on_base_surface(cloud, coloring, options.k, render, rep));
-      std::printf("demo: %-7s details (lambda %.1f, mu %.1f, k %u) in %.3f s -> %s.ply, %s.png\n", order, options.lambda,
-                  options.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
+      std::printf("demo: %-7s details (lambda %.1f, mu %.1f, k %u) in %.3f s -> %s.ply, %s.png\n", order, options.filter.lambda,
+                  options.filter.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
       runs.push_back(rep.data());
     }
     // Detail scaling of the tentacle's middle (paper Fig. 4) and enhancement of the whole tentacle (Fig. 5, 6),
@@ -92,7 +92,7 @@ struct Demo_command
     tip.translation = pivot - tip.rotation * pivot;
     bend.handles.push_back(tip);
     for(const char* order : {"linear", "quadric", "cubic"}) {
-      bend.settings.filter.order = detail_order(order, "order");
+      bend.settings.filter.order = setting_value<CGAL_ext::Detail_order>(order, "order");
       Report rep(std::string("demo edit ") + order);
       Point_cloud out;
       run_edit(input, bend, progress, rep, out);

@@ -5,7 +5,9 @@
 #include "operations.h"
 
 #include <cstdio>
-#include <map>
+#include <functional>
+#include <utility>
+#include <vector>
 
 namespace point_detail {
 namespace {
@@ -16,18 +18,13 @@ constexpr double swing_warning_ratio = 2.0;
 /// `edit`: detail-preserving editing of a region by handles (paper Sect. 6).
 struct Edit_command
 {
+  using Settings = CGAL_ext::Detail_preserving_deformation_settings;
   std::string input, output, edit, sel, def, png, report, view = "front";
-  std::string order, strength, origin, turn;
-  double lambda = 0, mu = 0, handle_weight = 0, rigid_smoothing = 0;
-  unsigned int k = CGAL_ext::default_laplacian_neighbors;
-  std::size_t max_cluster_size = 0, target = 0;
-  unsigned int rigid_iterations = 0, detail_iterations = 0;
-  std::string rotations, rigid_weights, rigid_smoothing_scale;
+  Settings options; // the settings the command line gives
+  // Each setting option, and how it overrides the edit file's setting when given.
+  std::vector<std::pair<CLI::Option*, std::function<void(Settings&, const Settings&)>>> overrides;
   bool upsample = false;
-  std::map<std::string, CLI::Option*> given;
   Render_settings render;
-
-  bool has(const std::string& name) const { return given.at(name)->count() > 0; }
 
   void run(const Common_options& common)
   {
@@ -47,25 +44,8 @@ struct Edit_command
                                                  : read_edit_json(edit, cloud.points);
     // Options given on the command line override the edit file's settings.
     auto& s = description.settings;
-    if(has("--order"))
-      s.filter.order = detail_order(order, "--order");
-    if(has("--lambda")) s.filter.lambda = lambda;
-    if(has("--mu")) s.filter.mu = mu;
-    if(has("-k")) s.sample_neighbors = k;
-    if(has("--strength")) s.strength_distance = strength == "geodesic" ? CGAL_ext::Strength_distance::geodesic : CGAL_ext::Strength_distance::euclidean;
-    if(has("--diffusion-origin")) s.diffusion_origin = origin == "nearest" ? CGAL_ext::Diffusion_origin::nearest_sample : CGAL_ext::Diffusion_origin::own_sample;
-    if(has("--diffusion-turn"))
-      s.diffusion_turn = turn == "frames" ? CGAL_ext::Sample_turn::frames : turn == "fitted" ? CGAL_ext::Sample_turn::fitted : CGAL_ext::Sample_turn::affine;
-    if(has("--handle-weight")) s.handle_weight = handle_weight;
-    if(has("--max-cluster-size")) s.simplification.max_cluster_size = max_cluster_size;
-    if(has("--target")) s.simplification.target_count = target;
-    if(has("--rotations")) s.rotations = detail_rotation(rotations, "--rotations");
-    if(has("--rigid-iterations")) s.rigid_iterations = rigid_iterations;
-    if(has("--rigid-smoothing")) s.rigid_rotation_smoothing = rigid_smoothing;
-    if(has("--rigid-weights")) s.rigid_edge_weights = rigid_edge_weights(rigid_weights, "--rigid-weights");
-    if(has("--rigid-smoothing-scale"))
-      s.rigid_rotation_smoothing_scale = rotation_smoothing_scale(rigid_smoothing_scale, "--rigid-smoothing-scale");
-    if(has("--detail-iterations")) s.detail_iterations = detail_iterations;
+    for(const auto& [option, apply] : overrides)
+      if(option->count() > 0) apply(s, options);
     s.validate();
     ensure_normals(cloud, progress, rep);
 
@@ -124,32 +104,67 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
   edit_def->needs(edit_sel);
   edit_app->add_option("--png", edit.png, "also render the result, coloured by the distance each point moved");
   edit_app->add_option("--report", edit.report, "write the paper's Table 1 fields, stage timings and solver figures as JSON");
-  edit.given["--order"] = edit_app->add_option("--order", edit.order, "transfer function (overrides the edit file)")
-                            ->check(CLI::IsMember({"linear", "quadric", "cubic"}));
-  edit.given["--lambda"] = edit_app->add_option("--lambda", edit.lambda, "pass-band frequency (> 0)");
-  edit.given["--mu"] = edit_app->add_option("--mu", edit.mu, "highest frequency (> lambda; quadric and cubic)");
-  edit.given["-k"] = add_neighbor_count_option(*edit_app, edit.k, "Laplacian row", 1, "sample point");
-  edit.given["--strength"] = edit_app->add_option("--strength", edit.strength, "distances of the strength field: euclidean (the paper's) or geodesic")
-                               ->check(CLI::IsMember({"euclidean", "geodesic"}));
-  edit.given["--diffusion-origin"] = edit_app->add_option("--diffusion-origin", edit.origin, "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)")
-                                       ->check(CLI::IsMember({"own", "nearest"}));
-  edit.given["--diffusion-turn"] = edit_app->add_option("--diffusion-turn", edit.turn, "affine (each SSP's best linear map of its neighbourhood, default), fitted (its best rotation) or frames (the paper's local frames)")
-                                     ->check(CLI::IsMember({"affine", "fitted", "frames"}));
-  edit.given["--handle-weight"] = edit_app->add_option("--handle-weight", edit.handle_weight, "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles");
-  edit.given["--max-cluster-size"] = edit_app->add_option("--max-cluster-size", edit.max_cluster_size, "largest number of points per SSP");
-  edit.given["--target"] = edit_app->add_option("--target", edit.target, "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule (default 3000)");
-  edit.given["--rotations"] = edit_app->add_option("--rotations", edit.rotations, "how the details turn: none, propagate (the paper's), arap (as rigid as possible)")
-    ->check(CLI::IsMember({"none", "propagate", "arap"}));
-  edit.given["--rigid-iterations"] = edit_app->add_option("--rigid-iterations", edit.rigid_iterations, "with --rotations arap: rotation fits and solves")
-    ->check(CLI::Range(1u, 1000u));
-  edit.given["--rigid-smoothing"] = edit_app->add_option("--rigid-smoothing", edit.rigid_smoothing, "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: near CGAL's SRE_ARAP, with --rigid-iterations 10 or more; default 0)")
-    ->check(CLI::NonNegativeNumber);
-  edit.given["--rigid-smoothing-scale"] = edit_app->add_option("--rigid-smoothing-scale", edit.rigid_smoothing_scale, "with --rigid-smoothing: what its weight is relative to, edge_lengths (default: the same at every density) or surface_area (CGAL's SRE_ARAP: --rigid-smoothing 0.02 with --rigid-weights cotangent is its energy)")
-    ->check(CLI::IsMember({"edge_lengths", "surface_area"}));
-  edit.given["--rigid-weights"] = edit_app->add_option("--rigid-weights", edit.rigid_weights, "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent (from each SSP's Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)")
-    ->check(CLI::IsMember({"uniform", "cotangent"}));
-  edit.given["--detail-iterations"] = edit_app->add_option("--detail-iterations", edit.detail_iterations, "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)")
-    ->check(CLI::Range(0u, 100000u));
+  using Settings = Edit_command::Settings;
+  Settings& o = edit.options;
+  const auto given = [&edit](CLI::Option* option, std::function<void(Settings&, const Settings&)> apply) {
+    edit.overrides.emplace_back(option, std::move(apply));
+  };
+  // The settings' own names (doc/editing.md, "Settings"); the names after a comma are older spellings.
+  given(add_setting_option(*edit_app, "--order", o.filter.order, "transfer function (overrides the edit file)"),
+        [](Settings& s, const Settings& c) { s.filter.order = c.filter.order; });
+  given(edit_app->add_option("--lambda", o.filter.lambda, "pass-band frequency (> 0)"),
+        [](Settings& s, const Settings& c) { s.filter.lambda = c.filter.lambda; });
+  given(edit_app->add_option("--mu", o.filter.mu, "highest frequency (> lambda; quadric and cubic)"),
+        [](Settings& s, const Settings& c) { s.filter.mu = c.filter.mu; });
+  given(add_neighbor_count_option(*edit_app, o.sample_neighbors, "Laplacian row", 1, "sample point"),
+        [](Settings& s, const Settings& c) { s.sample_neighbors = c.sample_neighbors; });
+  given(add_setting_option(*edit_app, "--strength-distance,--strength", o.strength_distance,
+                           "distances of the strength field: euclidean (the paper's) or geodesic"),
+        [](Settings& s, const Settings& c) { s.strength_distance = c.strength_distance; });
+  given(edit_app->add_option("--diffusion-samples", o.diffusion_samples, "sample points that carry each point"),
+        [](Settings& s, const Settings& c) { s.diffusion_samples = c.diffusion_samples; });
+  given(add_setting_option(*edit_app, "--diffusion-origin", o.diffusion_origin,
+                           "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)"),
+        [](Settings& s, const Settings& c) { s.diffusion_origin = c.diffusion_origin; });
+  given(add_setting_option(*edit_app, "--diffusion-turn", o.diffusion_turn,
+                           "affine (each SSP's best linear map of its neighbourhood, default), fitted (its best "
+                           "rotation) or frames (the paper's local frames)"),
+        [](Settings& s, const Settings& c) { s.diffusion_turn = c.diffusion_turn; });
+  given(edit_app->add_option("--handle-weight", o.handle_weight,
+                             "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles"),
+        [](Settings& s, const Settings& c) { s.handle_weight = c.handle_weight; });
+  given(edit_app->add_option("--max-cluster-size", o.simplification.max_cluster_size, "largest number of points per SSP"),
+        [](Settings& s, const Settings& c) { s.simplification.max_cluster_size = c.simplification.max_cluster_size; });
+  given(edit_app->add_option("--target-count,--target", o.simplification.target_count,
+                             "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule "
+                             "(default 3000)"),
+        [](Settings& s, const Settings& c) { s.simplification.target_count = c.simplification.target_count; });
+  given(add_setting_option(*edit_app, "--rotations", o.rotations,
+                           "how the details turn: none, propagate (the paper's), arap (as rigid as possible)"),
+        [](Settings& s, const Settings& c) { s.rotations = c.rotations; });
+  given(edit_app->add_option("--rigid-iterations", o.rigid_iterations, "with --rotations arap: rotation fits and solves")
+          ->check(CLI::Range(1u, 1000u)),
+        [](Settings& s, const Settings& c) { s.rigid_iterations = c.rigid_iterations; });
+  given(edit_app->add_option("--rigid-rotation-smoothing,--rigid-smoothing", o.rigid_rotation_smoothing,
+                             "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: near CGAL's "
+                             "SRE_ARAP, with --rigid-iterations 10 or more; default 0)")
+          ->check(CLI::NonNegativeNumber),
+        [](Settings& s, const Settings& c) { s.rigid_rotation_smoothing = c.rigid_rotation_smoothing; });
+  given(add_setting_option(*edit_app, "--rigid-rotation-smoothing-scale,--rigid-smoothing-scale",
+                           o.rigid_rotation_smoothing_scale,
+                           "with --rigid-rotation-smoothing: what its weight is relative to, edge_lengths (default: "
+                           "the same at every density) or surface_area (CGAL's SRE_ARAP: --rigid-rotation-smoothing "
+                           "0.02 with --rigid-edge-weights cotangent is its energy)"),
+        [](Settings& s, const Settings& c) { s.rigid_rotation_smoothing_scale = c.rigid_rotation_smoothing_scale; });
+  given(add_setting_option(*edit_app, "--rigid-edge-weights,--rigid-weights", o.rigid_edge_weights,
+                           "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent "
+                           "(from each SSP's Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)"),
+        [](Settings& s, const Settings& c) { s.rigid_edge_weights = c.rigid_edge_weights; });
+  given(edit_app->add_option("--detail-iterations", o.detail_iterations,
+                             "at most this many iterations to put back the fine details the diffusion smoothed "
+                             "(default 100, 0: none)")
+          ->check(CLI::Range(0u, 100000u)),
+        [](Settings& s, const Settings& c) { s.detail_iterations = c.detail_iterations; });
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
   return {edit_app, [command, &common] { command->run(common); }};

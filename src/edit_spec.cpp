@@ -126,35 +126,6 @@ std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesy
 
 } // namespace
 
-CGAL_ext::Detail_order detail_order(const std::string& name, const std::string& where)
-{
-  for(CGAL_ext::Detail_order order : {CGAL_ext::Detail_order::linear, CGAL_ext::Detail_order::quadric, CGAL_ext::Detail_order::cubic})
-    if(name == CGAL_ext::Detail_filter::order_name(order)) return order;
-  throw Cli_error(where + " must be \"linear\", \"quadric\" or \"cubic\", not \"" + name + "\"");
-}
-
-CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where)
-{
-  if(name == "none") return CGAL_ext::Detail_rotation::none;
-  if(name == "propagate") return CGAL_ext::Detail_rotation::propagated;
-  if(name == "arap") return CGAL_ext::Detail_rotation::as_rigid_as_possible;
-  throw Cli_error(where + " must be \"none\", \"propagate\" or \"arap\", not \"" + name + "\"");
-}
-
-CGAL_ext::Rigid_edge_weights rigid_edge_weights(const std::string& name, const std::string& where)
-{
-  if(name == "uniform") return CGAL_ext::Rigid_edge_weights::uniform;
-  if(name == "cotangent") return CGAL_ext::Rigid_edge_weights::cotangent;
-  throw Cli_error(where + " must be \"uniform\" or \"cotangent\", not \"" + name + "\"");
-}
-
-CGAL_ext::Rotation_smoothing_scale rotation_smoothing_scale(const std::string& name, const std::string& where)
-{
-  if(name == "edge_lengths") return CGAL_ext::Rotation_smoothing_scale::edge_lengths;
-  if(name == "surface_area") return CGAL_ext::Rotation_smoothing_scale::surface_area;
-  throw Cli_error(where + " must be \"edge_lengths\" or \"surface_area\", not \"" + name + "\"");
-}
-
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
 {
   std::ifstream in = open_input(path);
@@ -167,7 +138,12 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
   const std::string file = path.filename().string();
   check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
                     "rigid_rotation_smoothing", "rigid_rotation_smoothing_scale", "rigid_edge_weights",
-                    "diffusion", "simplification"}, file);
+                    "diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations", "diffusion",
+                    "simplification"}, file);
+  if(edit.contains("diffusion"))
+    for(const char* flat : {"diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations"})
+      if(edit.contains(flat))
+        throw Cli_error(file + ": " + flat + " and the older \"diffusion\" object are both given; keep " + flat);
   const std::filesystem::path base = path.parent_path();
   Edit_description out;
   auto& settings = out.settings;
@@ -194,13 +170,16 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     handle.translation = pivot - handle.rotation * pivot + t; // p -> R (p - pivot) + pivot + t
     out.handles.push_back(std::move(handle));
   }
+  // A setting spelled by name (CGAL_ext::Setting_names).
+  auto named = [&](const json& parent, const char* key, const std::string& where, auto& value) {
+    if(!parent.contains(key)) return;
+    const json& v = parent[key];
+    value = setting_value<std::decay_t<decltype(value)>>(v.is_string() ? v.get<std::string>() : v.dump(), where);
+  };
   if(edit.contains("filter")) {
     const json& f = edit["filter"];
     check_keys(f, {"order", "lambda", "mu"}, file + ": filter");
-    if(f.contains("order")) {
-      const std::string order = f["order"].is_string() ? f["order"].get<std::string>() : "";
-      settings.filter.order = detail_order(order, file + ": filter.order");
-    }
+    named(f, "order", file + ": filter.order", settings.filter.order);
     if(f.contains("lambda")) settings.filter.lambda = number(f["lambda"], file + ": filter.lambda");
     if(f.contains("mu")) settings.filter.mu = number(f["mu"], file + ": filter.mu");
   }
@@ -210,47 +189,28 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     return x;
   };
   if(edit.contains("k")) settings.sample_neighbors = unsigned(whole(edit["k"], file + ": k"));
-  if(edit.contains("strength_distance")) {
-    const json& d = edit["strength_distance"];
-    if(d == "euclidean") settings.strength_distance = CGAL_ext::Strength_distance::euclidean;
-    else if(d == "geodesic") settings.strength_distance = CGAL_ext::Strength_distance::geodesic;
-    else throw Cli_error(file + ": strength_distance must be \"euclidean\" or \"geodesic\"");
-  }
+  named(edit, "strength_distance", file + ": strength_distance", settings.strength_distance);
   if(edit.contains("handle_weight")) settings.handle_weight = number(edit["handle_weight"], file + ": handle_weight");
-  if(edit.contains("rotations")) {
-    if(!edit["rotations"].is_string()) throw Cli_error(file + ": rotations must be \"none\", \"propagate\" or \"arap\"");
-    settings.rotations = detail_rotation(edit["rotations"].get<std::string>(), file + ": rotations");
-  }
+  named(edit, "rotations", file + ": rotations", settings.rotations);
   if(edit.contains("rigid_iterations")) settings.rigid_iterations = unsigned(whole(edit["rigid_iterations"], file + ": rigid_iterations"));
   if(edit.contains("rigid_rotation_smoothing"))
     settings.rigid_rotation_smoothing = number(edit["rigid_rotation_smoothing"], file + ": rigid_rotation_smoothing");
-  if(edit.contains("rigid_rotation_smoothing_scale")) {
-    const json& w = edit["rigid_rotation_smoothing_scale"];
-    settings.rigid_rotation_smoothing_scale =
-      rotation_smoothing_scale(w.is_string() ? w.get<std::string>() : "", file + ": rigid_rotation_smoothing_scale");
-  }
-  if(edit.contains("rigid_edge_weights")) {
-    const json& w = edit["rigid_edge_weights"];
-    settings.rigid_edge_weights = rigid_edge_weights(w.is_string() ? w.get<std::string>() : "", file + ": rigid_edge_weights");
-  }
-  if(edit.contains("diffusion")) {
-    const json& d = edit["diffusion"];
-    check_keys(d, {"samples", "origin", "turn", "detail_iterations"}, file + ": diffusion");
-    if(d.contains("samples")) settings.diffusion_samples = unsigned(whole(d["samples"], file + ": diffusion.samples"));
-    if(d.contains("detail_iterations"))
-      settings.detail_iterations = unsigned(whole(d["detail_iterations"], file + ": diffusion.detail_iterations"));
-    if(d.contains("origin")) {
-      if(d["origin"] == "own") settings.diffusion_origin = CGAL_ext::Diffusion_origin::own_sample;
-      else if(d["origin"] == "nearest") settings.diffusion_origin = CGAL_ext::Diffusion_origin::nearest_sample;
-      else throw Cli_error(file + ": diffusion.origin must be \"own\" or \"nearest\"");
-    }
-    if(d.contains("turn")) {
-      if(d["turn"] == "affine") settings.diffusion_turn = CGAL_ext::Sample_turn::affine;
-      else if(d["turn"] == "fitted") settings.diffusion_turn = CGAL_ext::Sample_turn::fitted;
-      else if(d["turn"] == "frames") settings.diffusion_turn = CGAL_ext::Sample_turn::frames;
-      else throw Cli_error(file + ": diffusion.turn must be \"affine\", \"fitted\" or \"frames\"");
-    }
-  }
+  named(edit, "rigid_rotation_smoothing_scale", file + ": rigid_rotation_smoothing_scale", settings.rigid_rotation_smoothing_scale);
+  named(edit, "rigid_edge_weights", file + ": rigid_edge_weights", settings.rigid_edge_weights);
+  // The diffusion's settings, flat as everywhere else; older files nest them as "diffusion": {"samples",
+  // "origin", "turn", "detail_iterations"}.
+  const bool nested = edit.contains("diffusion");
+  const json& diffusion = nested ? edit["diffusion"] : edit;
+  const std::string prefix = nested ? "diffusion." : "";
+  if(nested) check_keys(diffusion, {"samples", "origin", "turn", "detail_iterations"}, file + ": diffusion");
+  const char* samples = nested ? "samples" : "diffusion_samples";
+  if(diffusion.contains(samples)) settings.diffusion_samples = unsigned(whole(diffusion[samples], file + ": " + prefix + samples));
+  if(diffusion.contains("detail_iterations"))
+    settings.detail_iterations = unsigned(whole(diffusion["detail_iterations"], file + ": " + prefix + "detail_iterations"));
+  const char* origin = nested ? "origin" : "diffusion_origin";
+  named(diffusion, origin, file + ": " + prefix + origin, settings.diffusion_origin);
+  const char* turn = nested ? "turn" : "diffusion_turn";
+  named(diffusion, turn, file + ": " + prefix + turn, settings.diffusion_turn);
   if(edit.contains("simplification")) {
     const json& s = edit["simplification"];
     check_keys(s, {"max_cluster_size", "target_count", "mode_threshold"}, file + ": simplification");

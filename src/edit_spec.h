@@ -5,6 +5,7 @@
 #ifndef POINT_DETAIL_EDIT_SPEC_H
 #define POINT_DETAIL_EDIT_SPEC_H
 
+#include "cli_support.h"
 #include "point_io.h"
 
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
@@ -33,14 +34,16 @@ struct Edit_description
   CGAL_ext::Detail_preserving_deformation_settings settings;
 };
 
-/// The transfer function named `linear`, `quadric` or `cubic`; throws Cli_error naming `where`.
-CGAL_ext::Detail_order detail_order(const std::string& name, const std::string& where);
-/// The detail rotations named `none`, `propagate` (the paper's) or `arap`; throws Cli_error naming `where`.
-CGAL_ext::Detail_rotation detail_rotation(const std::string& name, const std::string& where);
-/// The ARAP edge weights named `uniform` or `cotangent`; throws Cli_error naming `where`.
-CGAL_ext::Rigid_edge_weights rigid_edge_weights(const std::string& name, const std::string& where);
-/// The smooth-rotation scale named `edge_lengths` or `surface_area`; throws Cli_error naming `where`.
-CGAL_ext::Rotation_smoothing_scale rotation_smoothing_scale(const std::string& name, const std::string& where);
+/// The value of the setting `Enum` that `name` spells (`CGAL_ext::Setting_names`); throws Cli_error naming
+/// `where` and the names it takes otherwise.
+template <typename Enum>
+Enum setting_value(const std::string& name, const std::string& where)
+{
+  Enum value{};
+  if(!CGAL_ext::find_setting(name, value))
+    throw Cli_error(where + " must be " + CGAL_ext::setting_choices<Enum>() + ", not \"" + name + "\"");
+  return value;
+}
 
 /*!
   Reads a JSON edit (documented in doc/editing.md):
@@ -49,8 +52,9 @@ CGAL_ext::Rotation_smoothing_scale rotation_smoothing_scale(const std::string& n
     "pivot": [x,y,z]}], "filter": {"order", "lambda", "mu"}, "k", "strength_distance", "handle_weight",
     "rotations" ("none" | "propagate" | "arap"), "rigid_iterations", "rigid_rotation_smoothing",
     "rigid_rotation_smoothing_scale" ("edge_lengths" | "surface_area"), "rigid_edge_weights"
-    ("uniform" | "cotangent"), "diffusion": {"samples", "origin", "turn", "detail_iterations"}, "simplification":
-    {"max_cluster_size", "target_count", "mode_threshold"}}`. SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
+    ("uniform" | "cotangent"), "diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations",
+    "simplification": {"max_cluster_size", "target_count", "mode_threshold"}}` (older files: "diffusion":
+    {"samples", "origin", "turn", "detail_iterations"}). SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
   relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos).
   Throws Cli_error naming the key and the problem.
 */

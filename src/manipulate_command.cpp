@@ -38,10 +38,11 @@ constexpr double feature_deviation = 0.1;
 struct Manipulate_command
 {
   bool enhance = false;
-  std::string input, output, png, report, view = "front", solver = "cholesky";
+  std::string input, output, png, report, view = "front";
+  CGAL_ext::Linear_solver solver = CGAL_ext::Least_squares_settings().solver;
   double factor = 1;
   std::vector<std::string> roi, anchors;
-  std::string border = "auto";
+  CGAL_ext::Border_anchoring border = CGAL_ext::Detail_enhancement_settings().border_anchoring;
   Detail_options detail;
   Render_settings render;
 
@@ -54,10 +55,8 @@ struct Manipulate_command
     for(const std::string& t : roi) roi_specs.push_back(parse_region_spec(t));
     for(const std::string& t : anchors) anchor_specs.push_back(parse_region_spec(t));
     CGAL_ext::Detail_enhancement_settings settings(detail.settings());
-    settings.least_squares.solver = solver == "cg" ? CGAL_ext::Linear_solver::conjugate_gradient : CGAL_ext::Linear_solver::cholesky;
-    settings.border_anchoring = border == "anchored" ? CGAL_ext::Border_anchoring::anchored
-                                : border == "free"   ? CGAL_ext::Border_anchoring::free
-                                                     : CGAL_ext::Border_anchoring::automatic;
+    settings.least_squares.solver = solver;
+    settings.border_anchoring = border;
     settings.validate();
 
     Progress_printer progress(common.quiet);
@@ -89,8 +88,8 @@ struct Manipulate_command
     auto& r = rep.data();
     r["points"] = out.points.size();
     r["factor"] = factor;
-    r["order"] = detail.order;
-    r["neighbors"] = detail.neighbors;
+    r["order"] = CGAL_ext::setting_name(detail.filter.order);
+    r["neighbors"] = CGAL_ext::setting_name(detail.neighbors);
     r["roi_points"] = result.region_size;
     r["computed_points"] = result.computed_points;
     r["anchors"] = result.anchor_count;
@@ -130,11 +129,11 @@ std::vector<Subcommand> add_manipulate_commands(CLI::App& app, const Common_opti
     if(!command->enhance) roi_option->required();
     sub->add_option("--anchors", command->anchors, "anchored points, same syntax (default: the region's border; enhance "
                                                     "of the whole model needs none: its exact solution is written)");
-    sub->add_option("--border", command->border, "default anchors of a partial region: its border (anchored), none (free: the "
-                                                  "surroundings hold it), or auto (anchored except for the cubic order)")
-      ->check(CLI::IsMember({"auto", "anchored", "free"}))->capture_default_str();
-    sub->add_option("--solver", command->solver, "cholesky (factor once) or cg (conjugate gradients, the paper's)")
-      ->check(CLI::IsMember({"cholesky", "cg"}))->capture_default_str();
+    add_setting_option(*sub, "--border", command->border,
+                       "default anchors of a partial region: its border (anchored), none (free: the surroundings hold "
+                       "it), or auto (anchored except for the cubic order; default)");
+    add_setting_option(*sub, "--solver", command->solver,
+                       "cholesky (factor once; default) or cg (conjugate gradients, the paper's)");
     sub->add_option("--png", command->png, "also render the result, coloured by the displacement along the normal");
     sub->add_option("--report", command->report, "write stage timings, region and solver figures as JSON");
     add_detail_options(*sub, command->detail);

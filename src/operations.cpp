@@ -50,11 +50,11 @@ Coloring add_details(Point_cloud& cloud, const Detail_options& options, Progress
   auto& r = report.data();
   r["points"] = n;
   r["k"] = options.k;
-  r["order"] = options.order;
-  r["lambda"] = options.lambda;
-  if(settings.filter.order != CGAL_ext::Detail_order::linear) r["mu"] = options.mu;
-  r["weights"] = options.weights;
-  r["neighbors"] = options.neighbors;
+  r["order"] = CGAL_ext::setting_name(settings.filter.order);
+  r["lambda"] = settings.filter.lambda;
+  if(settings.filter.order != CGAL_ext::Detail_order::linear) r["mu"] = settings.filter.mu;
+  r["weights"] = CGAL_ext::setting_name(settings.weights.weighting);
+  r["neighbors"] = CGAL_ext::setting_name(settings.neighborhood);
   r["color_by"] = options.color_by;
   r["color_range"] = coloring.hi;
   return coloring;
@@ -225,10 +225,9 @@ void run_edit(const Point_cloud& cloud, const Edit_description& edit, Progress_p
   r["displacement_ratio"] = st.displacement_ratio;
   if(edit.settings.rotations == CGAL_ext::Detail_rotation::as_rigid_as_possible) {
     r["rigid_iterations"] = st.rigid_iterations;
-    r["rigid_edge_weights"] = edit.settings.rigid_edge_weights == CGAL_ext::Rigid_edge_weights::cotangent ? "cotangent" : "uniform";
+    r["rigid_edge_weights"] = CGAL_ext::setting_name(edit.settings.rigid_edge_weights);
     r["rigid_rotation_smoothing"] = edit.settings.rigid_rotation_smoothing;
-    r["rigid_rotation_smoothing_scale"] =
-      edit.settings.rigid_rotation_smoothing_scale == CGAL_ext::Rotation_smoothing_scale::surface_area ? "surface_area" : "edge_lengths";
+    r["rigid_rotation_smoothing_scale"] = CGAL_ext::setting_name(edit.settings.rigid_rotation_smoothing_scale);
   }
   if(edit.settings.detail_iterations > 0)
     r["restore_details"] = {{"iterations", st.restore_iterations}, {"residual", st.restore_residual}};

@@ -100,13 +100,11 @@ Subcommand add_simplify_command(CLI::App& app, const Common_options& common)
   simplify_app->add_option("-o,--output", simplify.output, "output binary PLY of the SSP surfels: position, normal, radius, member_count")->required();
   simplify.max_cluster_size_option = simplify_app->add_option("--max-cluster-size", simplify.max_cluster_size,
     "largest number of points per SSP (default: ceil(points / target))");
-  simplify_app->add_option("--target", simplify.settings.target_count, "SSP count the clustering aims at: the largest clusters split to it, then the mode-spread rule adds at most half as many again")->capture_default_str();
+  simplify_app->add_option("--target-count,--target", simplify.settings.target_count, "SSP count the clustering aims at: the largest clusters split to it, then the mode-spread rule adds at most half as many again")->capture_default_str();
   simplify_app->add_option("--mode-threshold", simplify.settings.mode_spread_threshold,
     "split while the members' modes spread more than this many range bandwidths (inf: by size only)")->capture_default_str();
   add_neighbor_count_option(*simplify_app, simplify.settings.mean_shift_neighbors, "mean-shift candidates", 5);
-  simplify_app->add_option("--kernel", simplify.settings.mean_shift.kernel, "mean-shift kernel")
-    ->transform(CLI::CheckedTransformer(std::map<std::string, CGAL_ext::Mean_shift_kernel>{
-      {"gaussian", CGAL_ext::Mean_shift_kernel::gaussian}, {"epanechnikov", CGAL_ext::Mean_shift_kernel::epanechnikov}}));
+  add_setting_option(*simplify_app, "--kernel", simplify.settings.mean_shift.kernel, "mean-shift kernel");
   simplify_app->add_option("--spatial-bandwidth", simplify.settings.mean_shift.spatial_bandwidth, "h_s (0: the average spacing)")->capture_default_str();
   simplify_app->add_option("--range-bandwidth", simplify.settings.mean_shift.range_bandwidth, "h_r over normal and scaled curvature")->capture_default_str();
   simplify_app->add_option("--clusters", simplify.clusters, "also write the input with its ssp_index and cluster colours (PLY)");

@@ -606,7 +606,7 @@ TEST_F(Cli, RegionSpecsWithMistakesAreRejectedNamingTheBadToken)
 TEST_F(Cli, CurvatureOfASphereIsOneOverItsRadius)
 {
   const std::string in = write_sphere_ply("in.ply", 4000);
-  for(const char* fitting : {"monge", "closed-form"}) {
+  for(const char* fitting : {"monge", "closed_form", "closed-form"}) { // and the older spelling
     const Program_run r = run("curvature -i " + in + " -o " + path("h.ply") + " --fitting " + fitting + " --png " + path("h.png") +
                               " --report " + path("h.json"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -717,10 +717,38 @@ TEST_F(Cli, DetailsWiringMeanShiftNeighbourhoodsAsTheLibrary)
   auto mag = output.property_map<double>("detail_magnitude").first;
   std::size_t i = 0;
   for(auto it = output.begin(); it != output.end(); ++it, ++i) ASSERT_DOUBLE_EQ(mag[*it], magnitude[i]);
-  EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["neighbors"], "mean-shift");
+  EXPECT_EQ(nlohmann::json::parse(contents(path("r.json")))["neighbors"], "mean_shift"); // the name, not the older spelling
   const Program_run bad = run("details -i " + in + " -o " + path("x.ply") + " --neighbors delaunay");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("delaunay"), std::string::npos) << bad.output;
+}
+
+// An edit file spells each setting as the library, the options and Python do (flat "diffusion_origin"); older
+// files' "diffusion" object is still read, to the same edit; both at once are refused.
+TEST_F(Cli, EditFilesSpellSettingsAsEverywhereAndOlderFilesStillRead)
+{
+  const std::string in = write_sphere_ply("in.ply", 2000);
+  const std::string edit = R"({"roi": ["box:-2,-2,0,2,2,2"], "handles": [{"select": ["sphere:0,0,1,0.25"],
+                               "translation": [0.1, 0, 0.2]}], )";
+  const std::map<std::string, std::string> files = {
+    {"flat", edit + R"("diffusion_origin": "nearest", "diffusion_turn": "frames", "diffusion_samples": 5})"},
+    {"nested", edit + R"("diffusion": {"origin": "nearest", "turn": "frames", "samples": 5}})"},
+    {"both", edit + R"("diffusion_turn": "frames", "diffusion": {"origin": "nearest"}})"}};
+  for(const auto& [name, text] : files) {
+    std::ofstream(path(name + ".json")) << text;
+    const Program_run r = run("edit -i " + in + " -o " + path(name + ".ply") + " --edit " + path(name + ".json"));
+    if(name == "both") {
+      EXPECT_NE(r.exit_code, 0);
+      EXPECT_NE(r.output.find("diffusion_turn and the older \"diffusion\" object are both given"), std::string::npos)
+        << r.output;
+    } else
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  EXPECT_EQ(contents(path("flat.ply")), contents(path("nested.ply")));
+  const Program_run other = run("edit -i " + in + " -o " + path("other.ply") + " --edit " + path("flat.json") +
+                                " --diffusion-turn fitted --diffusion-samples 6");
+  ASSERT_EQ(other.exit_code, 0) << other.output;
+  EXPECT_NE(contents(path("flat.ply")), contents(path("other.ply"))) << "the options override the file";
 }
 
 TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
@@ -828,7 +856,7 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_LT(max_distance(std::vector<Point>(capped_set.points().begin(), capped_set.points().end()), library_edit(settings)), 1e-12);
   // SRE-ARAP's smooth-rotation term, as the library does it.
   const Program_run smooth = run("edit -i " + in + " -o " + path("smooth.ply") + " --edit " + path("edit.json") +
-                                 " --rotations arap --rigid-iterations 2 --rigid-smoothing 1");
+                                 " --rotations arap --rigid-iterations 2 --rigid-rotation-smoothing 1");
   ASSERT_EQ(smooth.exit_code, 0) << smooth.output;
   CGAL::Point_set_3<Point> smooth_set;
   ASSERT_TRUE(CGAL::IO::read_point_set(path("smooth.ply"), smooth_set));
@@ -851,8 +879,8 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_EQ(nlohmann::json::parse(contents(path("cotangent.json")))["rigid_edge_weights"], "cotangent");
   // SRE_ARAP's own energy (the term relative to the surface's area), as the library does it; the report names it.
   const Program_run sre = run("edit -i " + in + " -o " + path("sre.ply") + " --edit " + path("edit.json") +
-                              " --rotations arap --rigid-iterations 2 --rigid-weights cotangent --rigid-smoothing 0.02"
-                              " --rigid-smoothing-scale surface_area --report " + path("sre.json"));
+                              " --rotations arap --rigid-iterations 2 --rigid-edge-weights cotangent --rigid-rotation-smoothing 0.02"
+                              " --rigid-rotation-smoothing-scale surface_area --report " + path("sre.json"));
   ASSERT_EQ(sre.exit_code, 0) << sre.output;
   CGAL::Point_set_3<Point> sre_set;
   ASSERT_TRUE(CGAL::IO::read_point_set(path("sre.ply"), sre_set));

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_DETAIL_FILTER_H
 #define CGAL_EXT_DETAIL_FILTER_H
 
+#include <CGAL_ext/setting_names.h>
 #include <CGAL_ext/Mean_shift_settings.h>
 #include <CGAL_ext/exceptions.h>
 
@@ -22,6 +23,13 @@ enum class Detail_order
   linear,  ///< `f(k) = k / lambda`
   quadric, ///< `f(k) = (1/lambda + 1/mu) k - k^2 / (lambda mu)`
   cubic    ///< `f(k) = (1/lambda^2 + 1/(lambda mu) + 1/mu^2) k^2 - (1/(lambda mu)) (1/lambda + 1/mu) k^3`
+};
+
+/// The names of `Detail_order`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Detail_order>
+{
+  static constexpr Setting_spelling<Detail_order> table[] = {{"linear", Detail_order::linear}, {"quadric", Detail_order::quadric}, {"cubic", Detail_order::cubic}};
 };
 
 /*!
@@ -79,15 +87,7 @@ struct Detail_filter
   /// Highest power of `K` the filter uses (1, 2 or 3).
   int degree() const { return order == Detail_order::linear ? 1 : order == Detail_order::quadric ? 2 : 3; }
 
-  static const char* order_name(Detail_order o)
-  {
-    switch(o) {
-      case Detail_order::linear: return "linear";
-      case Detail_order::quadric: return "quadric";
-      case Detail_order::cubic: return "cubic";
-    }
-    return "?";
-  }
+  static const char* order_name(Detail_order o) { return setting_name(o); }
 };
 
 /*!
@@ -98,6 +98,13 @@ enum class Laplacian_weighting
 {
   uniform,       ///< `w_ij = 1 / d_i`, `d_i` the number of neighbours (the paper's simple choice)
   distance_power ///< `w_ij` proportional to `||p_i - p_j||^t`, `t = distance_power` (the paper uses `t = -1`)
+};
+
+/// The names of `Laplacian_weighting`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Laplacian_weighting>
+{
+  static constexpr Setting_spelling<Laplacian_weighting> table[] = {{"uniform", Laplacian_weighting::uniform}, {"distance", Laplacian_weighting::distance_power}};
 };
 
 /*!
@@ -126,6 +133,14 @@ enum class Laplacian_neighborhood
 {
   k_nearest, ///< the symmetrised k-nearest-neighbour graph
   mean_shift ///< the k nearest whose mean-shift modes agree (Miao et al. 2007, Sect. 5.1; needs normals)
+};
+
+/// The names of `Laplacian_neighborhood`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Laplacian_neighborhood>
+{
+  static constexpr Setting_spelling<Laplacian_neighborhood> table[] = {{"knn", Laplacian_neighborhood::k_nearest}, {"mean_shift", Laplacian_neighborhood::mean_shift},
+                                                                   {"mean-shift", Laplacian_neighborhood::mean_shift, true}};
 };
 
 /// Default neighbour count of the Laplacian (doc/geometric_details.md, "Defaults").

@@ -354,6 +354,7 @@ private:
   }
 
   static double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+  void set_up_drag();    // preprocess(): what each drag uses, once the sample points' system is set up
   void return_to_rest(); // every point and sample point back to its input position, no rotation
 
   // The input and the selection.
@@ -404,17 +405,31 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   m_statistics.clustering_seconds = seconds_since(start);
   progress.stage(0.6, 1.0);
   if(!progress.report(0.0)) return false;
-
-  const internal::Edit_sample_points& samples = m_sample_points;
-  std::vector<int> point_of_sample(samples.size());
-  for(std::size_t s = 0; s < samples.size(); ++s) point_of_sample[s] = m_cloud.input_index[std::size_t(samples.first_rows[s])];
-  m_system.template setup<ConcurrencyTag>(samples.positions, samples.normals, samples.labels, point_of_sample, m_settings, who);
+  m_system.template setup<ConcurrencyTag>(m_sample_points.positions, m_sample_points.normals, m_sample_points.labels,
+                                          m_sample_points.input_points(m_cloud.input_index), m_settings, who);
   if(!progress.report(0.6)) return false;
+  set_up_drag();
+  return_to_rest();
+  if(!progress.report(1.0)) return false;
+  m_statistics.points = m_cloud.size();
+  m_statistics.samples = m_sample_points.size();
+  m_statistics.requested_samples = m_sample_points.requested_count;
+  m_statistics.roi_samples = m_system.roi.size();
+  m_statistics.handle_samples = m_system.anchors.size();
+  m_statistics.least_squares = m_system.statistics();
+  m_statistics.preprocess_seconds = seconds_since(start);
+  return m_preprocessed = true;
+}
 
+template <typename ConcurrencyTag>
+void Detail_preserving_deformation<ConcurrencyTag>::set_up_drag()
+{
+  const internal::Edit_sample_points& samples = m_sample_points;
+  const std::size_t groups = m_selection.transforms.size();
   const bool exact_handles = std::isinf(m_settings.handle_weight);
-  m_strength.template setup<ConcurrencyTag>(samples.positions, m_system.graph, samples.labels, m_selection.transforms.size(),
+  m_strength.template setup<ConcurrencyTag>(samples.positions, m_system.graph, samples.labels, groups,
                                             m_settings.strength_distance == Strength_distance::geodesic);
-  m_rigid_drag.setup(m_system, samples.positions, m_selection.transforms.size());
+  m_rigid_drag.setup(m_system, samples.positions, groups);
   m_sample_turns.template setup<ConcurrencyTag>(m_settings.diffusion_turn, samples.positions, samples.normals,
                                                 m_system.graph, m_system.roi);
   m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, samples.positions,
@@ -424,22 +439,10 @@ bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
   m_movable_points.clear();
   for(int row : m_moving_rows) m_movable_points.push_back(m_cloud.input_index[std::size_t(row)]);
   std::sort(m_movable_points.begin(), m_movable_points.end());
-  m_collar.template setup<ConcurrencyTag>(m_cloud, m_selection.labels, m_selection.transforms.size(), exact_handles, m_settings.handle_collar,
+  m_collar.template setup<ConcurrencyTag>(m_cloud, m_selection.labels, groups, exact_handles, m_settings.handle_collar,
                                           m_stencil, samples.positions, m_moving_rows);
-  m_group_rotations.resize(m_selection.transforms.size());
+  m_group_rotations.resize(groups);
   m_has_relaxation = false;
-  return_to_rest();
-  if(!progress.report(1.0)) return false;
-
-  m_statistics.points = m_cloud.size();
-  m_statistics.samples = samples.size();
-  m_statistics.requested_samples = samples.requested_count;
-  m_statistics.roi_samples = m_system.roi.size();
-  m_statistics.handle_samples = m_system.anchors.size();
-  m_statistics.least_squares = m_system.statistics();
-  m_statistics.preprocess_seconds = seconds_since(start);
-  m_preprocessed = true;
-  return true;
 }
 
 template <typename ConcurrencyTag>

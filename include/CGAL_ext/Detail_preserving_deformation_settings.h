@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_SETTINGS_H
 #define CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_SETTINGS_H
 
+#include <CGAL_ext/setting_names.h>
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/Least_squares_settings.h>
 #include <CGAL_ext/Simplification_settings.h>
@@ -25,6 +26,13 @@ enum class Strength_distance
              ///< that are close in space but far along the surface, like an arm held near the body
 };
 
+/// The names of `Strength_distance`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Strength_distance>
+{
+  static constexpr Setting_spelling<Strength_distance> table[] = {{"euclidean", Strength_distance::euclidean}, {"geodesic", Strength_distance::geodesic}};
+};
+
 /*!
   \ingroup PkgCGALExtRef
   How the sample points' details turn during an edit (the `R_i` of `delta'_i = R_i delta_i`).
@@ -36,6 +44,14 @@ enum class Detail_rotation
   as_rigid_as_possible ///< each sample point's best rotation of its neighbourhood (Sorkine and Alexa 2007),
                        ///< alternated with the solve: follows the solved shape, so large twists and bends that
                        ///< the strength field cannot foresee keep their details
+};
+
+/// The names of `Detail_rotation`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Detail_rotation>
+{
+  static constexpr Setting_spelling<Detail_rotation> table[] = {{"none", Detail_rotation::none}, {"propagate", Detail_rotation::propagated},
+                                                            {"arap", Detail_rotation::as_rigid_as_possible}};
 };
 
 /*!
@@ -53,6 +69,13 @@ enum class Rigid_edge_weights
             ///< bends (doc/editing.md, "As rigid as possible")
 };
 
+/// The names of `Rigid_edge_weights`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Rigid_edge_weights>
+{
+  static constexpr Setting_spelling<Rigid_edge_weights> table[] = {{"uniform", Rigid_edge_weights::uniform}, {"cotangent", Rigid_edge_weights::cotangent}};
+};
+
 /*!
   \ingroup PkgCGALExtRef
   What the weight of the smooth-rotation term of `Detail_rotation::as_rigid_as_possible`
@@ -68,6 +91,14 @@ enum class Rotation_smoothing_scale
                 ///< with the number of sample points, as the mesh ARAP's grows with the vertices
 };
 
+/// The names of `Rotation_smoothing_scale`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Rotation_smoothing_scale>
+{
+  static constexpr Setting_spelling<Rotation_smoothing_scale> table[] = {{"edge_lengths", Rotation_smoothing_scale::edge_lengths},
+                                                                     {"surface_area", Rotation_smoothing_scale::surface_area}};
+};
+
 /*!
   \ingroup PkgCGALExtRef
   Where a point's offset is measured from when the deformation is diffused from the sample points to every
@@ -78,6 +109,13 @@ enum class Diffusion_origin
 {
   nearest_sample, ///< the paper's: `p - ssp_0` (the nearest sample point) decoded in every frame from `ssp'_0`
   own_sample      ///< `p - ssp_i` decoded in frame i from `ssp'_i`: each sample point carries the point rigidly
+};
+
+/// The names of `Diffusion_origin`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Diffusion_origin>
+{
+  static constexpr Setting_spelling<Diffusion_origin> table[] = {{"own", Diffusion_origin::own_sample}, {"nearest", Diffusion_origin::nearest_sample}};
 };
 
 /*!
@@ -99,6 +137,13 @@ enum class Sample_turn
           ///< surface, neighbouring sample points then agree on how the points between them move, and the
           ///< blend adds no wrinkles (doc/editing.md, "Sample point turns"). Normals follow the blended map's
           ///< cofactor, so they stay normal to the stretched surface
+};
+
+/// The names of `Sample_turn`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Sample_turn>
+{
+  static constexpr Setting_spelling<Sample_turn> table[] = {{"affine", Sample_turn::affine}, {"fitted", Sample_turn::fitted}, {"frames", Sample_turn::frames}};
 };
 
 /*!

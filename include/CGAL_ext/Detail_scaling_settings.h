@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_DETAIL_SCALING_SETTINGS_H
 #define CGAL_EXT_DETAIL_SCALING_SETTINGS_H
 
+#include <CGAL_ext/setting_names.h>
 #include <CGAL_ext/Balanced_flow_settings.h>
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/Least_squares_settings.h>
@@ -30,6 +31,14 @@ enum class Border_anchoring
   automatic, ///< border anchors for the linear and quadric orders, none for the cubic order (the default)
   anchored,  ///< border anchors for every order (the paper's soft constraints)
   free       ///< no border anchors: the surroundings alone hold the region
+};
+
+/// The names of `Border_anchoring`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Border_anchoring>
+{
+  static constexpr Setting_spelling<Border_anchoring> table[] = {{"auto", Border_anchoring::automatic}, {"anchored", Border_anchoring::anchored},
+                                                             {"free", Border_anchoring::free}};
 };
 
 /*!

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_LEAST_SQUARES_SETTINGS_H
 #define CGAL_EXT_LEAST_SQUARES_SETTINGS_H
 
+#include <CGAL_ext/setting_names.h>
 #include <CGAL_ext/exceptions.h>
 
 #include <cmath>
@@ -24,6 +25,13 @@ enum class Linear_solver
   /// Jacobi-preconditioned conjugate gradients on the normal equations (the paper's method), matrix-free:
   /// the normal matrix is never formed, which saves its assembly and memory on very large regions.
   conjugate_gradient
+};
+
+/// The names of `Linear_solver`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Linear_solver>
+{
+  static constexpr Setting_spelling<Linear_solver> table[] = {{"cholesky", Linear_solver::cholesky}, {"cg", Linear_solver::conjugate_gradient}};
 };
 
 /*!

@@ -3,6 +3,8 @@
 #ifndef CGAL_EXT_LOCAL_FIT_SETTINGS_H
 #define CGAL_EXT_LOCAL_FIT_SETTINGS_H
 
+#include <CGAL_ext/setting_names.h>
+
 namespace CGAL_ext {
 
 // How the local surface is fitted around each point: the neighbour counts of normal estimation and of the
@@ -23,6 +25,14 @@ enum class Curvature_fitting
   /// frame of the point's normal, with fixed-size Eigen matrices; `H` from the fit's derivatives at the point.
   /// Validated against the Monge fit in the tests; several times faster.
   closed_form
+};
+
+/// The names of `Curvature_fitting`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Curvature_fitting>
+{
+  static constexpr Setting_spelling<Curvature_fitting> table[] = {{"closed_form", Curvature_fitting::closed_form}, {"monge", Curvature_fitting::monge_jet_fitting},
+                                                              {"closed-form", Curvature_fitting::closed_form, true}};
 };
 
 /// Default neighbour count of the curvature fit.

@@ -3,6 +3,7 @@
 #ifndef CGAL_EXT_MEAN_SHIFT_SETTINGS_H
 #define CGAL_EXT_MEAN_SHIFT_SETTINGS_H
 
+#include <CGAL_ext/setting_names.h>
 #include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/exceptions.h>
 
@@ -28,6 +29,13 @@ enum class Mean_shift_kernel
   /// The mean shift of the Epanechnikov kernel: `g = 1` where `d_s <= 1` and `d_r <= 1`, else 0, so the mode
   /// moves to the plain mean of the samples within one bandwidth of it in both parts.
   epanechnikov
+};
+
+/// The names of `Mean_shift_kernel`'s values in the edit files, the program's options, the reports and Python.
+template <>
+struct Setting_names<Mean_shift_kernel>
+{
+  static constexpr Setting_spelling<Mean_shift_kernel> table[] = {{"gaussian", Mean_shift_kernel::gaussian}, {"epanechnikov", Mean_shift_kernel::epanechnikov}};
 };
 
 /*!

@@ -135,6 +135,14 @@ struct Edit_sample_points
   std::size_t requested_count = 0; ///< what the mode-spread rule asked for
 
   std::size_t size() const { return labels.size(); }
+
+  /// A member of each sample point, as an input index (`input_index` per row), to name it in messages.
+  std::vector<int> input_points(const std::vector<int>& input_index) const
+  {
+    std::vector<int> points(size());
+    for(std::size_t s = 0; s < size(); ++s) points[s] = input_index[std::size_t(first_rows[s])];
+    return points;
+  }
 };
 
 /// `cluster_into_sample_points` of the cloud with the edit's `labels` (per row) kept apart, as arrays.

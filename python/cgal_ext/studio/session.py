@@ -43,7 +43,7 @@ class Session:
             raise StudioError("%s is not a folder" % root)
         self.scan = None  # path relative to root
         self.points = self.normals = None
-        self.settings = {"order": "cubic", "rotations": "propagate", "strength": "euclidean"}
+        self.settings = {"order": "cubic", "rotations": "propagate", "strength_distance": "euclidean"}
         self.deformation = None
         self.base_changed = False  # details applied: the edit's input is no longer the scan file
         # One Deformation per scan and settings, whose selection-independent part (the mean shift) is computed in
@@ -120,7 +120,7 @@ class Session:
 
         def make():
             editor = cgal_ext.Deformation(points, normals, order=settings["order"], rotations=settings["rotations"],
-                                          strength=settings["strength"])
+                                          strength_distance=settings["strength_distance"])
             editor.analyse_points()
             return editor
         self._editor = self._worker.submit(make)  # one worker: made after any editor before it
@@ -190,9 +190,9 @@ class Session:
     def _checked_settings(self, settings):
         new = dict(self.settings)
         for key, value in settings.items():
-            allowed = {"order": ORDERS, "rotations": ROTATIONS, "strength": STRENGTHS}.get(key)
+            allowed = {"order": ORDERS, "rotations": ROTATIONS, "strength_distance": STRENGTHS}.get(key)
             if allowed is None:
-                raise StudioError("unknown setting %r (order, rotations, strength)" % key)
+                raise StudioError("unknown setting %r (order, rotations, strength_distance)" % key)
             if value not in allowed:
                 raise StudioError("%s must be one of %s, not %r" % (key, ", ".join(allowed), value))
             new[key] = value
@@ -347,7 +347,7 @@ class Session:
                             "matrix": T[:3, :3].tolist(), "translation": T[:3, 3].tolist()})
         return {"roi": ["indices:%s.roi.txt" % name], "handles": handles,
                 "filter": {"order": self.settings["order"]}, "rotations": self.settings["rotations"],
-                "strength_distance": self.settings["strength"]}
+                "strength_distance": self.settings["strength_distance"]}
 
     def save(self, name):
         """Writes NAME.ply (the shown state with the program's fields) and NAME.json (+ index files) such that
@@ -436,7 +436,8 @@ class Session:
             labels[indices(specs)] = FIRST_HANDLE + g
         settings = self._checked_settings({"order": edit.get("filter", {}).get("order", self.settings["order"]),
                                            "rotations": edit.get("rotations", self.settings["rotations"]),
-                                           "strength": edit.get("strength_distance", self.settings["strength"])})
+                                           "strength_distance": edit.get("strength_distance",
+                                                                         self.settings["strength_distance"])})
         self.labels, self.groups = labels, len(handle_files)
         self.transforms = [_identity() for _ in range(self.groups)]
         self.history, self.step = [[_identity() for _ in range(self.groups)]], 0

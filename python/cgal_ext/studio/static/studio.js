@@ -260,7 +260,7 @@ function onState(m) {
     for (let g = 0; g < wanted; ++g) group.add(new Option(`handle group ${g}`, g));
     group.selectedIndex = wanted ? Math.max(active, wanted - 1) : -1;
   }
-  for (const key of ['order', 'rotations', 'strength']) $(key).value = m.settings[key];
+  for (const key of ['order', 'rotations', 'strength_distance']) $(key).value = m.settings[key];
   $('history').textContent = `step ${m.step} of ${m.steps}`;
   status(m.scan ? `${m.scan}: ${m.points} points, region ${m.region}, ${m.groups} handle group(s)` +
                   (m.preprocessed ? ', ready to drag' : '') : 'no scan open');
@@ -635,7 +635,7 @@ $('group').onchange = () => { if (studio.renderer) attachGizmo(); };
 $('invert').onclick = () => send({ type: 'invert' });
 $('clear').onclick = () => send({ type: 'clear' });
 $('load-edit').onclick = () => send({ type: 'load_edit', path: $('edit-file').value });
-for (const key of ['order', 'rotations', 'strength']) $(key).onchange = () => send({ type: 'settings', [key]: $(key).value });
+for (const key of ['order', 'rotations', 'strength_distance']) $(key).onchange = () => send({ type: 'settings', [key]: $(key).value });
 $('edit-start').onclick = () => { studio.busy = true; send({ type: 'preprocess' }); };
 for (const input of document.querySelectorAll('input[name=gizmo]')) input.onchange = () => { gizmo.setMode(input.value); requestRender(); };
 $('undo').onclick = () => { studio.busy = true; send({ type: 'undo' }); };
