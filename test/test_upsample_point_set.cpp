@@ -2,6 +2,7 @@
 // surface, nothing grown past open borders, nothing added where nothing is missing.
 #include "upsampling_fixtures.h"
 
+#include <CGAL_ext/detect_sparse_directions.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/local_fit.h>
 #include <CGAL_ext/upsample_point_set.h>
