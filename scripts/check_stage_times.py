@@ -7,7 +7,7 @@ import sys
 EXPECTED = ["setup", "release build", "release tests + quick benchmark", "quoted figures", "include layers",
             "API reference", "pictures", "sanitized build", "sanitized tests", "fuzz build", "fuzz runs"]
 SLACK_SECONDS = 3.0      # the script's own glue between stages
-BUDGET_SECONDS = 25 * 60  # on a fresh clone with the compiler cache off (doc/design.md, "Build time")
+BUDGET_SECONDS = 25 * 60  # on a fresh clone with the compiler cache off (doc/build_time.md)
 
 
 def main(path, total):
@@ -34,7 +34,7 @@ def main(path, total):
                       "some work is not timed as a stage")
     if total > BUDGET_SECONDS:
         print(f"run_tests.sh: warning: {total:.0f} s is over the {BUDGET_SECONDS} s that a fresh clone with the "
-              "compiler cache off is meant to take (doc/design.md, \"Build time\")")
+              "compiler cache off is meant to take (doc/build_time.md)")
     for e in errors:
         print(f"check_stage_times.py: {e}", file=sys.stderr)
     return 1 if errors else 0

@@ -7,8 +7,8 @@
 # header (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into
 # the build folder), the unit tests of the library and the program built with AddressSanitizer and
 # UndefinedBehaviorSanitizer (the unit tests again), and each fuzz target for 20 seconds. Ends with
-# the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/design.md,
-# "Build time", gives the figures of a fresh clone with the compiler cache off on 2 cores.
+# the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/build_time.md
+# gives the figures of a fresh clone with the compiler cache off on 2 cores.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -4,7 +4,7 @@
 # and every test with AddressSanitizer and UndefinedBehaviorSanitizer (clang, -O1, the test programs -O0, line
 # tables), and the libFuzzer targets of the program's readers. One build serves scripts/run_sanitized_tests.sh and
 # scripts/run_fuzzers.sh. clang, not GCC: it compiles the sanitized library in about two thirds of GCC's time
-# (doc/design.md, "Build time").
+# (doc/build_time.md).
 # Usage: scripts/sanitized_build.sh [TARGET...]
 set -euo pipefail
 cd "$(dirname "$0")/.."

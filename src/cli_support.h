@@ -37,7 +37,7 @@ struct Cancelled : std::runtime_error
 ///   older than AVX2 on a CPU that has AVX2 and FMA (`openblas_core_predates_avx2`), unless OPENBLAS_CORETYPE
 ///   is set or POINT_DETAIL_OPENBLAS_CORE=0. OpenBLAS falls back to its SSE3 kernels (Prescott) on a CPU whose
 ///   model it does not know, as a virtual machine's generic one; they take twice as long to factor
-///   (doc/design.md, "Editing's factorisation").
+///   (doc/editing_at_scale.md, "Editing's factorisation").
 /// Returns only when the program runs as it is (nothing to change, disabled, or the exec failed).
 void tune_process_environment(char** argv);
 /// "transparent huge pages" or "4 KiB pages", as the running process's malloc was set up (for reports).

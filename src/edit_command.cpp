@@ -109,7 +109,7 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
   const auto given = [&edit](CLI::Option* option, std::function<void(Settings&, const Settings&)> apply) {
     edit.overrides.emplace_back(option, std::move(apply));
   };
-  // The settings' own names (doc/editing.md, "Settings"); the names after a comma are older spellings.
+  // The settings' own names (doc/editing.md, "Edit files"); the names after a comma are older spellings.
   given(add_setting_option(*edit_app, "--order", o.filter.order, "transfer function (overrides the edit file)"),
         [](Settings& s, const Settings& c) { s.filter.order = c.filter.order; });
   given(edit_app->add_option("--lambda", o.filter.lambda, "pass-band frequency (> 0)"),

@@ -237,7 +237,7 @@ TEST(DetailPreservingDeformation, ExactHandlesLeaveNoStepAtTheirBorder)
   // carries each handle point's step into the region about it (build_handle_collar, `handle_collar`) the kNN
   // edges across the handle's border stretch more than anywhere else in the region: a step, which grows with the
   // sampling density. With the collar the border is no worse than the rest, the region's worst edge is no worse
-  // than without it, and the handle points stay exact. (The stretches are printed; doc/editing.md quotes them.)
+  // than without it, and the handle points stay exact. (The stretches are printed; doc/editing_diffusion.md quotes them.)
   namespace in = CGAL_ext::internal;
   const Tentacle t(60000);
   const std::size_t n = t.shape.points.size();
@@ -546,7 +546,7 @@ TEST(DetailPreservingDeformation, FittedSampleTurnsChangeThePointDetailsLessThan
 {
   // The bent tentacle of 12,000 points carried by about 3,000 sample points: the diffused points' own quadric
   // details (k = 10) change less when each sample point turns by the best rotation of its neighbourhood than by
-  // its frames, whose twist hangs on one reference neighbour (doc/editing.md, "Sample point turns"); as rigid as
+  // its frames, whose twist hangs on one reference neighbour (doc/editing_diffusion.md, "Sample point turns"); as rigid as
   // possible, the best linear map changes them less again, as it follows the stretch of the solve. Measured,
   // frames / fitted / affine: propagated 0.196 / 0.165 / 0.166, as rigid as possible 0.091 / 0.074 / 0.069 (on
   // this bumpy tube of about four points per sample point the affine maps gain nothing propagated; on the
@@ -587,7 +587,7 @@ TEST(DetailPreservingDeformation, RestoringTheDetailsTakesOutTheBlendsWrinkles)
 {
   // The bent tentacle of 12,000 points on about 3,000 sample points. The diffusion blends the sample points'
   // motions, and where neighbouring ones move differently the blend wrinkles the fine details;
-  // restore_details() puts them back (doc/editing.md, "Restoring the details"). Measured on the region's own
+  // restore_details() puts them back (doc/editing_diffusion.md, "Restoring the details"). Measured on the region's own
   // quadric details (k = 10) and, at a coarser scale, linear details over 20 neighbours: propagated 0.166 ->
   // 0.045 and 0.170 -> 0.101, as rigid as possible 0.069 -> 0.032 and 0.062 -> 0.066 (at the coarser scale,
   // where the wrinkles are fewer, it neither takes off nor adds much). Handle points stay on their targets,
@@ -1009,7 +1009,7 @@ TEST(DetailPreservingDeformation, SmoothRotationsKeepTheIdentitiesAndConverge)
 {
   // SRE-ARAP's smooth-rotation term (rigid_rotation_smoothing): unmoved handles still return every point bit
   // for bit, more iterations still approach one fixed point, and that fixed point is not plain ARAP's
-  // (doc/editing.md, "As rigid as possible"). WholeModelMovesRigidlyWithItsHandles checks its rigid motions.
+  // (doc/editing_arap.md, "As rigid as possible"). WholeModelMovesRigidlyWithItsHandles checks its rigid motions.
   const Tentacle t(1000);
   Settings settings = with_order(Detail_order::quadric, CGAL_ext::Detail_rotation::as_rigid_as_possible);
   settings.rigid_rotation_smoothing = 1;

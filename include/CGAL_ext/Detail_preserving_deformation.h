@@ -214,7 +214,7 @@ public:
     neighbourhood's rotation there; `a` = `settings().detail_anchor`) by conjugate gradients, up to
     `settings().detail_iterations` or `settings().detail_tolerance`. Handle points (exact handles), points that
     did not move and the fixed part keep their positions bit for bit; normals keep the diffusion's. It costs many
-    diffusions: call it once a drag ends (doc/editing.md, "Restoring the details").
+    diffusions: call it once a drag ends (doc/editing_diffusion.md, "Restoring the details").
     \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.
   */
   void restore_details();

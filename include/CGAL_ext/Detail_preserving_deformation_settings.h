@@ -66,7 +66,7 @@ enum class Rigid_edge_weights
             ///< its graph neighbours in its tangent plane, an edge's weight the length of the cell's side it
             ///< crosses over its own (on a planar Delaunay 1-ring exactly `(cot a + cot b) / 2`), the mean of
             ///< both ends' values. Less dependent on the graph's size k, and nearer a mesh ARAP on large
-            ///< bends (doc/editing.md, "As rigid as possible")
+            ///< bends (doc/editing_arap.md, "As rigid as possible")
 };
 
 /// The names of `Rigid_edge_weights`'s values in the edit files, the program's options, the reports and Python.
@@ -131,11 +131,11 @@ enum class Sample_turn
           ///< neighbour), turned by `F' F^T`; its twist about the normal hangs on that one neighbour
   fitted, ///< the rotation that best maps the edges to the sample point's graph neighbours onto their deformed
           ///< edges, in the least-squares sense (as the local step of `as_rigid_as_possible`): every neighbour
-          ///< counts, which changes the details less (doc/editing.md, "Sample point turns")
+          ///< counts, which changes the details less (doc/editing_diffusion.md, "Sample point turns")
   affine  ///< the linear map (rotation and stretch) that best maps those edges onto their deformed edges, held
           ///< to the fitted rotation along directions the edges do not span: where the edit stretches the
           ///< surface, neighbouring sample points then agree on how the points between them move, and the
-          ///< blend adds no wrinkles (doc/editing.md, "Sample point turns"). Normals follow the blended map's
+          ///< blend adds no wrinkles (doc/editing_diffusion.md, "Sample point turns"). Normals follow the blended map's
           ///< cofactor, so they stay normal to the stretched surface
 };
 
@@ -180,7 +180,7 @@ struct Detail_preserving_deformation_settings
   /// larger than `rigid_step_degrees` or `rigid_step_fraction` of the region's size is taken in steps). Each drag starts from the last
   /// drag's rotations (the first from the propagated ones), so a drag in small steps converges as it goes.
   /// ARAP converges slowly: more iterations bring the result closer to its fixed point, and to a converged mesh
-  /// ARAP (doc/editing.md, "As rigid as possible").
+  /// ARAP (doc/editing_arap.md, "As rigid as possible").
   unsigned int rigid_iterations = 3;
   /// With `as_rigid_as_possible`: a step stops iterating before `rigid_iterations` once no sample point moved
   /// more than this fraction of the region's size in the last iteration (0: always `rigid_iterations`).
@@ -190,12 +190,12 @@ struct Detail_preserving_deformation_settings
   /// edge lengths (or, with `rigid_rotation_smoothing_scale`, to the surface's area, as CGAL's), >= 0 (0: plain
   /// ARAP). About 1 brings the result near CGAL's SRE_ARAP's on the Botsch–Sorkine cactus. It pays with 10 or
   /// more `rigid_iterations` (it uses the previous iteration's rotations): with 3 it lands farther from SRE_ARAP
-  /// than plain ARAP on most scans (doc/editing.md, "As rigid as possible", gives the distances).
+  /// than plain ARAP on most scans (doc/editing_arap.md, "As rigid as possible", gives the distances).
   double rigid_rotation_smoothing = 0;
   /// With `as_rigid_as_possible`: what `rigid_rotation_smoothing` is relative to. `surface_area` with
   /// `Rigid_edge_weights::cotangent` and `rigid_rotation_smoothing` 0.02 is CGAL's SRE_ARAP energy on the sample
   /// points: converged on the Botsch–Sorkine cactus it lands close to SRE_ARAP's converged result
-  /// (doc/editing.md, "As rigid as possible", gives the distance).
+  /// (doc/editing_arap.md, "As rigid as possible", gives the distance).
   Rotation_smoothing_scale rigid_rotation_smoothing_scale = Rotation_smoothing_scale::edge_lengths;
   /// With `as_rigid_as_possible`: the weights of the graph's edges.
   Rigid_edge_weights rigid_edge_weights = Rigid_edge_weights::uniform;
@@ -209,14 +209,14 @@ struct Detail_preserving_deformation_settings
   /// larger ones.
   unsigned int max_rigid_steps = 1000;
   /// Nearest sample points that carry each point (m of Sect. 6.2), >= 1. More of them make the blend smoother
-  /// and keep the fine details better at the cost of the diffusion's time (doc/editing.md, "Seamless
+  /// and keep the fine details better at the cost of the diffusion's time (doc/editing_diffusion.md, "Seamless
   /// diffusion", measures both).
   unsigned int diffusion_samples = 6;
   Diffusion_origin diffusion_origin = Diffusion_origin::own_sample;
   /// How each region sample point's turn (and, affine, its stretch) is measured for the diffusion.
   Sample_turn diffusion_turn = Sample_turn::affine;
   /// `Detail_preserving_deformation::restore_details()`, which puts back the fine details the diffusion's blend
-  /// smooths out, solves for them by conjugate gradients (doc/editing.md, "Restoring the details"): at most
+  /// smooths out, solves for them by conjugate gradients (doc/editing_diffusion.md, "Restoring the details"): at most
   /// this many iterations (0: it leaves the diffused points). It stops earlier at `detail_tolerance`, which a
   /// few tens of iterations at most reach on every model measured, whatever the number of points.
   unsigned int detail_iterations = 100;
@@ -224,11 +224,11 @@ struct Detail_preserving_deformation_settings
   double detail_tolerance = 1e-2;
   /// How firmly `restore_details()` holds the diffused shape at coarse scales (> 0): it keeps what is coarser than
   /// about `1 / sqrt(detail_anchor)` point spacings (10 by default) where the blend put it and restores what
-  /// is finer. Smaller values restore coarser details and take more iterations (doc/editing.md, "Restoring
+  /// is finer. Smaller values restore coarser details and take more iterations (doc/editing_diffusion.md, "Restoring
   /// the details").
   double detail_anchor = 1e-2;
   /// With exact handles, whether each handle point's step from its blended position to its transform also moves
-  /// the region's points about the handle, fading out over twice the diffusion's reach (doc/editing.md, "Exact
+  /// the region's points about the handle, fading out over twice the diffusion's reach (doc/editing_diffusion.md, "Exact
   /// handles without a seam"). Off, the kNN edges across a handle's border stretch in a step: off only to see it.
   bool handle_collar = true;
   /// Whether the diffusion keeps to portable arithmetic instead of the processor's 4-wide vectors with fused
@@ -305,7 +305,7 @@ struct Detail_preserving_deformation_statistics
   unsigned int rigid_iterations = 0;
   /// Last `deform()`: the largest displacement of a sample point over the largest of a handle sample point (0
   /// when no handle moved). Well above 1, the solve swings parts of the region farther than the user moved
-  /// anything (the cubic order on a long region can: doc/editing.md, "Against CGAL on the Botsch–Sorkine
+  /// anything (the cubic order on a long region can: doc/editing_arap.md, "Against CGAL on the Botsch–Sorkine
   /// cactus").
   double displacement_ratio = 0;
   double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal

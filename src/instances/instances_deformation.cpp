@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 //
 // Detail_preserving_deformation compiled once for the project's own programs, tests, examples and
-// benchmarks (doc/design.md, "Build time"), for each concurrency tag; its cores come from the other
+// benchmarks (doc/build_time.md), for each concurrency tag; its cores come from the other
 // instance files.
 #include <CGAL_ext/Detail_preserving_deformation.h>
 

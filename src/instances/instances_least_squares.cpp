@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 //
 // The sparse-algebra cores of CGAL_ext compiled once for the project's own programs, tests, examples and
-// benchmarks (doc/design.md, "Build time"): Laplacians, sparse products, the detail least squares and its
+// benchmarks (doc/build_time.md): Laplacians, sparse products, the detail least squares and its
 // factorisation, the balanced flow and the diffusion stencil, for each concurrency tag.
 #include <CGAL_ext/internal/Detail_least_squares.h>
 #include <CGAL_ext/internal/Laplacian.h>

@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 //
 // The neighbourhood cores of CGAL_ext compiled once for the project's own programs, tests, examples and
-// benchmarks (doc/design.md, "Build time"): the spatial sort, neighbour graphs, oriented normals, curvature,
+// benchmarks (doc/build_time.md): the spatial sort, neighbour graphs, oriented normals, curvature,
 // mean shift, hole gaps, cluster splitting, rigid fits and the strength field, for each concurrency tag.
 #include <CGAL_ext/internal/cluster_split.h>
 #include <CGAL_ext/internal/estimate_oriented_normals.h>

@@ -23,7 +23,7 @@ TEST(DetailRelaxation, DetailRestorationSolvesItsSystem)
   // a y_i, checked here with neighbours found by brute force and rotations by an SVD. Turned rigidly, the bumps
   // come back. (Bent, the details at rest lack the bend's own curvature, and the solve flattens the bend by
   // about its curvature times the squared spacing over a: an offset along the normal, strong on this coarse
-  // sheet bent a quarter turn, a fraction of a spacing on a scan; doc/editing.md, "Restoring the details".)
+  // sheet bent a quarter turn, a fraction of a spacing on a scan; doc/editing_diffusion.md, "Restoring the details".)
   namespace in = CGAL_ext::internal;
   const int side = 30;
   const std::size_t n = std::size_t(side * side), k = 10;

@@ -268,7 +268,7 @@ TEST(DiffusionStencil, DiffusionOfASmoothBendIsContinuous)
   // Sample points of a real edit do not turn exactly as their neighbours do (their turns are fitted to a few
   // neighbours). With each turn off the bend's by a random 0.02 rad, more sample points per point average more
   // of the disagreement away: the edges follow the bend more closely, on average and at worst (the default, 6,
-  // against the paper-sized 4; doc/editing.md, "Seamless diffusion"). The largest error of 6 and 8 are too close
+  // against the paper-sized 4; doc/editing_diffusion.md, "Seamless diffusion"). The largest error of 6 and 8 are too close
   // to order (0.045 / 0.044; when the grid's jitter was drawn in an order the compiler chose, clang's grid gave
   // 0.044 / 0.046). With exact turns a wider
   // stencil is slightly worse (largest 0.030 / 0.032 / 0.039 for 4 / 6 / 8): its farther sample points' rigid
@@ -317,7 +317,7 @@ TEST(DiffusionStencil, AffineSampleMapsCarryAStretch)
   // A jittered plane and 900 sample points (as in the bend test), moved by one linear map that stretches and
   // tilts it (x grows by a tenth, z by 0.3 x). Each sample point's best rotation cannot follow the stretch, and
   // neighbouring sample points disagree on how the points between them move: every kNN edge comes out wrong.
-  // The best linear map follows it (doc/editing.md, "Sample point turns"), and the normals, turned by the
+  // The best linear map follows it (doc/editing_diffusion.md, "Sample point turns"), and the normals, turned by the
   // blended map's cofactor, stay normal to the moved plane.
   namespace in = CGAL_ext::internal;
   std::mt19937 rng(5);

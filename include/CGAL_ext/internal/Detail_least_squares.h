@@ -136,8 +136,8 @@ private:
 /// While it lives, the OpenMP regions the calling thread opens run on that thread alone (the OpenMP runtime's
 /// `max-active-levels` of this thread set to 0; other threads are untouched). CHOLMOD 3 runs parts of its
 /// supernodal factorisation in OpenMP regions of a fixed four threads, which on a machine with few cores fight
-/// OpenBLAS's threads, idle but spinning, for the cores: serial regions factor faster there (doc/design.md,
-/// "Editing's factorisation").
+/// OpenBLAS's threads, idle but spinning, for the cores: serial regions factor faster there
+/// (doc/editing_at_scale.md, "Editing's factorisation").
 struct Serial_openmp_regions : Scoped_runtime_setting
 {
   Serial_openmp_regions() : Scoped_runtime_setting(openmp_max_active_levels(), 0) {}
@@ -145,7 +145,7 @@ struct Serial_openmp_regions : Scoped_runtime_setting
 
 /// While it lives, OpenBLAS (CHOLMOD's BLAS, when it is OpenBLAS) runs its calls on the calling thread. A solve
 /// with the factor is a sequence of small triangular blocks: OpenBLAS's threads gain nothing on them, and once
-/// woken they spin for the cores the caller's next parallel loop needs (doc/design.md, "Editing's
+/// woken they spin for the cores the caller's next parallel loop needs (doc/editing_at_scale.md, "Editing's
 /// factorisation").
 struct Serial_blas : Scoped_runtime_setting
 {
@@ -167,7 +167,7 @@ inline bool fits_address_space_limit(double bytes)
 /// The address space OpenBLAS may still map for its work buffers: one per thread it runs, each of the size
 /// Debian's OpenBLAS is built with (a build with smaller buffers is only refused sooner). OpenBLAS retries a
 /// failed allocation of them forever (blas_memory_alloc), so a factorisation that reaches it under a tight
-/// address-space limit would hang instead of failing (doc/design.md, "Editing's factorisation").
+/// address-space limit would hang instead of failing (doc/editing_at_scale.md, "Editing's factorisation").
 inline double blas_buffer_bytes()
 {
   constexpr double debian_buffer_bytes = double(std::size_t(128) << 20);

@@ -20,7 +20,7 @@
 namespace CGAL_ext {
 namespace internal {
 
-/// Puts back the fine details that a blend of sample-point motions smooths out (doc/editing.md, "Restoring
+/// Puts back the fine details that a blend of sample-point motions smooths out (doc/editing_diffusion.md, "Restoring
 /// the details"). Over the relaxed rows that moved, it solves
 ///
 ///     (1 + a) x_i - mean_j x_j = R_i d_i + a y_i
@@ -32,7 +32,7 @@ namespace internal {
 /// put it (the blend is right at the sample points' scale) and restores the details below. Scaled by each
 /// row's degree the system is symmetric positive definite (the anchor makes it so even for a part that no
 /// pinned point touches) with a condition number of about 2 / a, so Jacobi-preconditioned conjugate gradients
-/// reach a residual of 1 % in a few iterations whatever the number of points (doc/editing.md, "Restoring the
+/// reach a residual of 1 % in a few iterations whatever the number of points (doc/editing_diffusion.md, "Restoring the
 /// details"). A rigid motion (`y = R p + t`) solves it already and stays exact to rounding.
 class Detail_relaxation
 {

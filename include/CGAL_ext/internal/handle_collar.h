@@ -25,7 +25,7 @@ namespace internal {
 /// also takes the step of the group's nearest handle point h, T_g(h) - F(h), weighted by w = 1 - smoothstep(d / r),
 /// d its distance to h and r twice the median distance from a handle point to the farthest sample point of its
 /// stencil (how far the diffusion spreads one sample point's motion): the motion is continuous up to the handle
-/// (doc/editing.md, "Exact handles without a seam"). `setup` runs once per selection, `apply` after each blend.
+/// (doc/editing_diffusion.md, "Exact handles without a seam"). `setup` runs once per selection, `apply` after each blend.
 class Handle_collar
 {
 public:

@@ -108,7 +108,7 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
   const double tolerance2 = settings.tolerance * settings.tolerance;
   const int measured_from = settings.stop == Mean_shift_stop::range_part ? 3 : 0; // the coordinates the stop measures
   // Plain arrays of seven, not Eigen's small expressions: the same time in a Release build, half of it under
-  // the sanitizers, where each expression's temporary is a checked copy (doc/design.md, "Build time").
+  // the sanitizers, where each expression's temporary is a checked copy (doc/build_time.md).
   const double* f = features.data();
   auto squared_distance = [](const double* a, const double* b, int from, int to) {
     double d2 = 0;
@@ -121,7 +121,7 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
     int anchor = int(i);
     int step = 0;
     // The Gaussian weights of a block of candidates go through Eigen's vectorised exp, two at a time: the
-    // scalar exp was half of the mean shift's time (doc/design.md, "Preprocess at 1.66M points"). In aligned
+    // scalar exp was half of the mean shift's time (doc/editing_at_scale.md, "Preprocess at 1.66M points"). In aligned
     // blocks of fixed size a candidate takes the same path (packet or scalar tail) on every thread count.
     constexpr int block = 32;
     alignas(16) double weight[block];

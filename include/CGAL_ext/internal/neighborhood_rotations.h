@@ -29,7 +29,7 @@ namespace internal {
 /// The right singular vectors come from the closed-form eigenvectors of `C^T C` (C the covariance), the left
 /// ones of the two largest singular values from `C v` (Gram-Schmidt), the third from their cross product with
 /// the handedness of V: about half the time of Eigen's JacobiSVD, and as exact on random and flat
-/// neighbourhoods (doc/editing.md, "As rigid as possible", measures both). A nearly collinear neighbourhood (its
+/// neighbourhoods (doc/editing_arap.md, "As rigid as possible", measures both). A nearly collinear neighbourhood (its
 /// middle singular value below a hundredth of the largest), where the closed-form eigenvectors of the two small
 /// singular values lose their accuracy and the rotation about the line its optimum, takes the SVD. (A template,
 /// so that only the files that call it instantiate the solvers.)
@@ -65,7 +65,7 @@ Matrix3 best_rotation(const Matrix3& covariance)
 /// `e'_j`, each weighted by `weights` (one per entry of `graph.indices`; null: uniform), into the row-major
 /// `covariance`; returns whether `s` or a neighbour moved. Plain arrays, not Eigen's small expressions: the
 /// same time in a Release build, half of it under the sanitizers, where each expression's temporary is a
-/// checked copy (doc/design.md, "Build time").
+/// checked copy (doc/build_time.md).
 template <typename Positions>
 bool edge_covariance(const Positions& rest, const Positions& deformed, const Neighbor_graph& graph, std::size_t s,
                      const double* weights, double covariance[9])
@@ -103,7 +103,7 @@ Eigen::Matrix3d fitted_rotation(const Positions& rest, const Positions& deformed
 /// deformed edges `e'_j`, held to the neighbourhood's `rotation` where the edges do not span space:
 /// `min sum_j |A e_j - e'_j|^2 + mu |A - rotation|^2`, so `A = (sum_j e'_j e_j^T + mu R)(sum_j e_j e_j^T + mu I)^-1`,
 /// with `mu` a tenth of `sum_j |e_j|^2`: a flat neighbourhood leaves its normal direction to `R`, and a
-/// neighbourhood whose sample points the solve moved unevenly passes on less of that unevenness (doc/editing.md,
+/// neighbourhood whose sample points the solve moved unevenly passes on less of that unevenness (doc/editing_diffusion.md,
 /// "Sample point turns"). A neighbourhood moved rigidly gives that rotation.
 /// `Linear_map_prior` is the part fixed by the rest positions, set up once per edit; a drag adds the deformed
 /// edges as `edge_covariance`'s unweighted `covariance` (`sum_j e_j e'_j^T`, row-major).

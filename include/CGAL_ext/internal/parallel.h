@@ -20,7 +20,7 @@
 /*
   Compiled instances. The numerical cores below the public API are templates on the concurrency tag alone, so
   the project's own programs, tests and benchmarks compile them once, in the `CGAL_ext_instances` library,
-  instead of once per translation unit (doc/design.md, "Build time"). Each header lists its cores in a macro
+  instead of once per translation unit (doc/build_time.md). Each header lists its cores in a macro
   `LIST(EXTERN, Tag)` and passes it to `CGAL_EXT_DECLARE_COMPILED_INSTANCES`, which declares them `extern`
   when `CGAL_EXT_COMPILED_INSTANCES` is defined (by linking `CGAL_ext::instances`). A user of the header-only
   library defines nothing and sees no difference.

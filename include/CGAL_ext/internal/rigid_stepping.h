@@ -96,7 +96,7 @@ unsigned int rigid_iterations(Sample_system& system, const Matrix_n3& samples, u
 /// handles' common centre, which moves on a line), along which the solution follows the deformation the user would
 /// drag through. Each step starts from the rotations of the one before (the first drag from the propagated
 /// ones): on the cactus that lands far closer to CGAL's mesh ARAP than one step of more iterations, or each step
-/// first turning the rotations by the strength field's blend (doc/editing.md, "As rigid as possible").
+/// first turning the rotations by the strength field's blend (doc/editing_arap.md, "As rigid as possible").
 class Rigid_drag
 {
 public:

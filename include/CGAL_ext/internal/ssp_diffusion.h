@@ -32,7 +32,7 @@
 namespace CGAL_ext {
 namespace internal {
 
-/// Local frames of the simplification sample points (doc/editing.md, "The paper's encoding and ours"), built
+/// Local frames of the simplification sample points (doc/editing_diffusion.md, "The paper's encoding and ours"), built
 /// the same way before and after an edit: the third axis is the normal of a plane fitted to the sample point
 /// and its frame neighbours (oriented like a given hint), the first axis the tangent part of the direction to
 /// a fixed reference neighbour. Columns of a frame: e1, e2, n.
@@ -116,7 +116,7 @@ public:
 
   /// Weights `(1 - d_j / d_max)^2` (Sumner, Schmid and Pauly 2007), normalised per point, with `d_max` the
   /// distance to the (m+1)-th nearest sample point: a sample point's weight falls to zero before it leaves the
-  /// stencil, so the blend, and the motion, is continuous in space (doc/editing.md, "Seamless diffusion").
+  /// stencil, so the blend, and the motion, is continuous in space (doc/editing_diffusion.md, "Seamless diffusion").
   /// With `sample_of_point` (each point's own sample point, such as its cluster's), the nearest sample points
   /// are found from each sample point's neighbourhood instead of one tree query per point: the same stencil,
   /// found faster.
@@ -455,7 +455,7 @@ inline std::vector<int> moving_rows(const Diffusion_stencil& stencil, const std:
 /// The linear part of each region sample point's motion, by which it carries its points (`Sample_turn`): the
 /// best rotation or linear map of its neighbourhood's edges, or its deformed frame against its original one. A
 /// sample point whose neighbourhood did not move (and, with frames, that was not turned) keeps the identity
-/// exactly, so unchanged parts stay bit for bit; fixed sample points keep theirs (doc/editing.md, "Sample point
+/// exactly, so unchanged parts stay bit for bit; fixed sample points keep theirs (doc/editing_diffusion.md, "Sample point
 /// turns"). `setup` runs once per selection, `update` once per drag.
 class Sample_turns
 {
