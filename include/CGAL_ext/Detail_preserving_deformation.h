@@ -6,9 +6,10 @@
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/edit_selection.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/handle_collar.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -537,7 +538,7 @@ void Detail_preserving_deformation<ConcurrencyTag>::restore_details()
   m_statistics.restore_seconds = seconds_since(start);
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_DEFORMATION_INSTANCES(EXTERN, Tag) EXTERN template class Detail_preserving_deformation<Tag>;
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_DEFORMATION_INSTANCES)
 

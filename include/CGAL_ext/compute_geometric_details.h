@@ -6,7 +6,7 @@
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/geometric_details.h>
 #include <CGAL_ext/internal/parallel.h>
 

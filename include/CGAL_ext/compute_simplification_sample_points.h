@@ -6,7 +6,7 @@
 #include <CGAL_ext/Simplification_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
 #include <CGAL_ext/internal/sample_points.h>

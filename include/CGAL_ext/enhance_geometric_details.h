@@ -7,7 +7,7 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/balanced_flow.h>
 #include <CGAL_ext/internal/detail_manipulation.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/geometric_details.h>
 
 #include <numeric>

@@ -7,7 +7,7 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/mean_curvature.h>
 #include <CGAL_ext/internal/parallel.h>
 

@@ -5,7 +5,7 @@
 
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Named_function_parameters.h>

@@ -6,7 +6,7 @@
 #include <CGAL_ext/Detail_scaling_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/detail_manipulation.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/geometric_details.h>
 
 #include <CGAL/Named_function_parameters.h>

@@ -5,7 +5,7 @@
 // benchmarks (doc/build_time.md): the spatial sort, neighbour graphs, oriented normals, curvature,
 // mean shift, hole gaps, cluster splitting, rigid fits and the strength field, for each concurrency tag.
 #include <CGAL_ext/internal/cluster_split.h>
-#include <CGAL_ext/internal/estimate_oriented_normals.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/mean_curvature.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>

@@ -8,6 +8,7 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Sparse_products.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/nested_dissection.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -728,7 +729,7 @@ try {
   out_of_memory("solving");
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_DETAIL_LEAST_SQUARES_INSTANCES(EXTERN, Tag) \
   EXTERN template Sparse_row_matrix detail_operator_rows<Tag>(const Sparse_row_matrix&, const Detail_filter&, \
                                                               const std::vector<int>&); \

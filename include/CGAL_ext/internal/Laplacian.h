@@ -6,6 +6,7 @@
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/SparseCore>
@@ -107,7 +108,7 @@ Matrix_n3 apply_detail_filter(const Sparse_row_matrix& K, const Detail_filter& f
   return result;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_LAPLACIAN_INSTANCES(EXTERN, Tag) \
   EXTERN template Sparse_row_matrix laplacian_matrix<Tag>(const Matrix_n3&, const Neighbor_graph&, \
                                                           const Laplacian_weights&); \
@@ -158,7 +159,7 @@ inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const Spatia
   return P;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_BUILD_LAPLACIAN_INSTANCES(EXTERN, Tag) \
   EXTERN template bool build_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Laplacian_weights&, \
                                             Progress&, Sparse_row_matrix&, Neighbor_graph*);

@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Fuzzy_sphere.h>
@@ -251,7 +252,7 @@ Neighbor_graph symmetrize(const Neighbor_graph& directed)
   return graph;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_NEIGHBOR_GRAPH_INSTANCES(EXTERN, Tag) \
   EXTERN template Neighbor_graph k_nearest_neighbor_graph<Tag>(const Matrix_n3&, std::size_t, Progress&); \
   EXTERN template Neighbor_graph k_nearest_samples<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t); \

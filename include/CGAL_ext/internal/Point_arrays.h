@@ -4,6 +4,7 @@
 #define CGAL_EXT_INTERNAL_POINT_ARRAYS_H
 
 #include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Named_function_parameters.h>
@@ -218,7 +219,7 @@ bool has_given_normals(const PointRange& points)
   }
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_POINT_ARRAYS_INSTANCES(EXTERN, Tag) \
   EXTERN template Spatial_point_cloud sort_spatially<Tag>(const std::vector<CGAL::Simple_cartesian<double>::Point_3>&, \
                                                           const char*);

@@ -4,6 +4,7 @@
 #define CGAL_EXT_INTERNAL_SPARSE_PRODUCTS_H
 
 #include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <algorithm>
@@ -114,7 +115,7 @@ Sparse_row_matrix sparse_product(const Sparse_row_matrix& A, const Sparse_row_ma
   return C;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_SPARSE_PRODUCTS_INSTANCES(EXTERN, Tag) \
   EXTERN template Sparse_row_matrix sparse_product<Tag>(const Sparse_row_matrix&, const Sparse_row_matrix&, \
                                                         const std::vector<int>&, Eigen::Index, bool);

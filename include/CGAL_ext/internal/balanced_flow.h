@@ -6,6 +6,7 @@
 #include <CGAL_ext/Balanced_flow_settings.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Laplacian.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/SparseCore>
@@ -159,7 +160,7 @@ Matrix_n3 balanced_flow_base_surface(const Sparse_row_matrix& K, const Matrix_n3
   return positions + (normals.array().colwise() * h.array()).matrix();
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_BALANCED_FLOW_INSTANCES(EXTERN, Tag) \
   EXTERN template Matrix_n3 balanced_flow_base_surface<Tag>(const Sparse_row_matrix&, const Matrix_n3&, \
                                                             const Matrix_n3&, const Balanced_flow_settings&);

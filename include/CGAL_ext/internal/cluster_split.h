@@ -4,6 +4,7 @@
 #define CGAL_EXT_INTERNAL_CLUSTER_SPLIT_H
 
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -229,7 +230,7 @@ std::vector<int> split_into_clusters(const Matrix_n3& positions, const Cluster_s
   return first_positions(settled);
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_CLUSTER_SPLIT_INSTANCES(EXTERN, Tag) \
   EXTERN template std::vector<int> split_into_clusters<Tag>(const Matrix_n3&, const Cluster_split_rule&, \
                                                             std::vector<int>&, Cluster_split_counts*);

@@ -11,6 +11,7 @@
 #include <CGAL_ext/internal/Detail_least_squares.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/Named_function_parameters.h>
@@ -373,7 +374,7 @@ Detail_manipulation_result solve_and_write_region(PointRange& points, PointMap p
   return result;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_DETAIL_MANIPULATION_INSTANCES(EXTERN, Tag) \
   EXTERN template void Region_system::factor<Tag>(const Sparse_row_matrix&, const Matrix_n3&, const Detail_filter&, \
                                                   const std::vector<int>&, const std::vector<int>&, \

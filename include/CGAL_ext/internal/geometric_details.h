@@ -6,6 +6,7 @@
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -58,7 +59,7 @@ bool geometric_details(const Spatial_point_cloud& cloud, unsigned int k, const D
   return true;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_GEOMETRIC_DETAILS_INSTANCES(EXTERN, Tag) \
   EXTERN template bool detail_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Detail_settings&, \
                                              const Matrix_n3&, Progress&, Sparse_row_matrix&, const char*); \

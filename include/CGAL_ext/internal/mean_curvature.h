@@ -6,6 +6,7 @@
 #include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <Eigen/Core>
@@ -88,7 +89,7 @@ bool mean_curvatures(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
 }
 #endif
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_MEAN_CURVATURE_INSTANCES(EXTERN, Tag) \
   EXTERN template bool mean_curvatures<Tag>(const Spatial_point_cloud&, const Matrix_n3&, const Neighbor_graph&, \
                                             Curvature_fitting, Progress&, Eigen::VectorXd&);

@@ -7,6 +7,7 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/mean_curvature.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -282,7 +283,7 @@ inline Mean_shift_result summarize(const Mean_shift_analysis& analysis, const Me
   return result;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_MEAN_SHIFT_INSTANCES(EXTERN, Tag) \
   EXTERN template bool mean_shift_modes<Tag>(const Matrix_n7&, const Neighbor_graph&, const Mean_shift_settings&, \
                                              Progress&, Matrix_n7&, std::vector<int>&); \

@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/internal/Laplacian.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 #include <CGAL_ext/internal/tangent_cotangent_weights.h>
 
@@ -241,7 +242,7 @@ Matrix_n3 rigid_edge_change(const std::vector<std::pair<int, int>>& edges, const
   return change;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_NEIGHBORHOOD_ROTATIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template void fit_neighborhood_rotations<Tag>(const Matrix_n3&, const Matrix_n3&, const Neighbor_graph&, \
                                                        const std::vector<double>&, const std::vector<int>&, double, \

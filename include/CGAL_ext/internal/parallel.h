@@ -3,6 +3,10 @@
 #ifndef CGAL_EXT_INTERNAL_PARALLEL_H
 #define CGAL_EXT_INTERNAL_PARALLEL_H
 
+// Parallel loops over the concurrency tag (TBB where CGAL has it), with progress and cancellation.
+
+#include <CGAL_ext/internal/progress.h>
+
 #include <CGAL/tags.h>
 
 #include <algorithm>
@@ -15,31 +19,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
-#endif
-
-/*
-  Compiled instances. The numerical cores below the public API are templates on the concurrency tag alone, so
-  the project's own programs, tests and benchmarks compile them once, in the `CGAL_ext_instances` library,
-  instead of once per translation unit (doc/build_time.md). Each header lists its cores in a macro
-  `LIST(EXTERN, Tag)` and passes it to `CGAL_EXT_DECLARE_COMPILED_INSTANCES`, which declares them `extern`
-  when `CGAL_EXT_COMPILED_INSTANCES` is defined (by linking `CGAL_ext::instances`). A user of the header-only
-  library defines nothing and sees no difference.
-*/
-#ifdef CGAL_LINKED_WITH_TBB
-#define CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, EXTERN) LIST(EXTERN, CGAL::Sequential_tag) LIST(EXTERN, CGAL::Parallel_tag)
-#else
-#define CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, EXTERN) LIST(EXTERN, CGAL::Sequential_tag)
-#endif
-#ifdef CGAL_EXT_COMPILED_INSTANCES
-#define CGAL_EXT_DECLARE_COMPILED_INSTANCES(LIST) CGAL_EXT_FOR_EACH_CONCURRENCY_TAG(LIST, extern)
-#else
-#define CGAL_EXT_DECLARE_COMPILED_INSTANCES(LIST)
-#endif
-// Where the cores are compiled, a translation unit sees only their declarations and skips the headers their
-// definitions need (CGAL's jet fitting and its SVD, the MST orientation, the spatial sort): a third of such a
-// unit's parse time. The instances library itself defines CGAL_EXT_DEFINING_INSTANCES.
-#if !defined(CGAL_EXT_COMPILED_INSTANCES) || defined(CGAL_EXT_DEFINING_INSTANCES)
-#define CGAL_EXT_CORE_DEFINITIONS
 #endif
 
 namespace CGAL_ext {
@@ -56,41 +35,6 @@ constexpr bool is_parallel()
   return false;
 #endif
 }
-
-/// Maps the progress of a sequence of stages onto the caller's `callback` in [0, 1] and remembers a
-/// cancellation. Only the calling thread invokes the callback (between chunks of parallel loops).
-class Progress
-{
-public:
-  explicit Progress(std::function<bool(double)> callback = {}) : m_callback(std::move(callback)) {}
-
-  /// The following reports cover [begin, end] of the whole run.
-  void stage(double begin, double end) { m_begin = begin; m_end = end; }
-
-  /// A stage's span; `at(f)` is the overall progress a fraction f into it (to split a stage into steps).
-  struct Range
-  {
-    double begin, end;
-    double at(double f) const { return begin + (end - begin) * f; }
-  };
-  Range range() const { return {m_begin, m_end}; }
-
-  /// Reports a fraction of the current stage; returns false once the caller has cancelled.
-  bool report(double fraction)
-  {
-    if(m_cancelled) return false;
-    if(m_callback && !m_callback(m_begin + (m_end - m_begin) * std::clamp(fraction, 0.0, 1.0)))
-      m_cancelled = true;
-    return !m_cancelled;
-  }
-
-  bool cancelled() const { return m_cancelled; }
-
-private:
-  std::function<bool(double)> m_callback;
-  double m_begin = 0, m_end = 1;
-  std::atomic<bool> m_cancelled{false};
-};
 
 /// Runs `body(i)` for i in [begin, end), in parallel when ConcurrencyTag says so.
 template <typename ConcurrencyTag, typename Body>

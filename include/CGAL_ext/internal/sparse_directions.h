@@ -9,6 +9,7 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/number_type_config.h>
@@ -240,7 +241,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
   return gaps;
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag) \
   EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&); \
   EXTERN template std::vector<double> local_spacings<Tag>(const Matrix_n3&, const Position_tree&); \

@@ -6,6 +6,7 @@
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/neighborhood_rotations.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -65,7 +66,7 @@ private:
 };
 
 #ifdef CGAL_EXT_CORE_DEFINITIONS
-// Defined where the editing class is compiled (internal/parallel.h): its eigen solver is costly to compile.
+// Defined where the editing class is compiled (internal/compiled_instances.h): its eigen solver is costly to compile.
 inline Eigen::Matrix3d Ssp_frames::frame(const Matrix_n3& positions, std::size_t i, const Eigen::Vector3d& hint) const
 {
   const Eigen::Vector3d origin = positions.row(Eigen::Index(i)).transpose();
@@ -424,7 +425,7 @@ Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const M
 inline bool Diffusion_stencil::wide_vectors_available() { return false; }
 #endif
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_SSP_DIFFUSION_INSTANCES(EXTERN, Tag) \
   EXTERN template void Diffusion_stencil::setup<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t, \
                                                      const std::vector<int>*); \

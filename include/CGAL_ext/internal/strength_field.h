@@ -5,6 +5,7 @@
 
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/parallel.h>
 
@@ -171,7 +172,7 @@ private:
   std::vector<double> m_d1, m_strength; // per sample point and group
 };
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_STRENGTH_FIELD_INSTANCES(EXTERN, Tag) \
   EXTERN template Eigen::VectorXd euclidean_distance_to<Tag>(const Matrix_n3&, const std::vector<int>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_STRENGTH_FIELD_INSTANCES)

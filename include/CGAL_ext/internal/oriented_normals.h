@@ -1,11 +1,12 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-#ifndef CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
-#define CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
+#ifndef CGAL_EXT_INTERNAL_ORIENTED_NORMALS_H
+#define CGAL_EXT_INTERNAL_ORIENTED_NORMALS_H
 
 #include <CGAL_ext/Local_fit_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
 #include <CGAL/boost/graph/named_params_helper.h>
@@ -231,7 +232,7 @@ bool given_or_estimated_normals(const PointRange& points, const NamedParameters&
   return estimate_oriented_normals<ConcurrencyTag>(cloud, neighbors, progress, normals);
 }
 
-// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/parallel.h).
+// The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_ORIENTED_NORMALS_INSTANCES(EXTERN, Tag) \
   EXTERN template bool estimate_jet_normals<Tag>(const Matrix_n3&, const Neighbor_graph&, Progress&, Matrix_n3&); \
   EXTERN template std::size_t orient_normals_by_spanning_forest<Tag>(const Matrix_n3&, const Neighbor_graph&, \
@@ -243,4 +244,4 @@ CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_ORIENTED_NORMALS_INSTANCES)
 } // namespace internal
 } // namespace CGAL_ext
 
-#endif // CGAL_EXT_INTERNAL_ESTIMATE_ORIENTED_NORMALS_H
+#endif // CGAL_EXT_INTERNAL_ORIENTED_NORMALS_H
