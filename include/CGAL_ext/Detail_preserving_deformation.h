@@ -175,13 +175,15 @@ public:
   /// handle group. `R` must be a rotation (orthonormal within 1e-6, determinant +1).
   void set_handle_transform(std::size_t group, const Eigen::Matrix3d& R, const Eigen::Vector3d& t)
   {
-    m_selection.transforms[check_group(group)] = internal::checked_rigid_transform(R, t, group, who);
+    check_group(group);
+    m_selection.transforms[group] = internal::checked_rigid_transform(R, t, group, who);
   }
 
   /// As above with the rotation as a unit quaternion (norm within 1e-6 of 1).
   void set_handle_transform(std::size_t group, const Eigen::Quaterniond& q, const Eigen::Vector3d& t)
   {
-    m_selection.transforms[check_group(group)] = internal::checked_rigid_transform(q, t, group, who);
+    check_group(group);
+    m_selection.transforms[group] = internal::checked_rigid_transform(q, t, group, who);
   }
 
   /*!
@@ -345,7 +347,7 @@ public:
   /// @}
 
 private:
-  std::size_t check_group(std::size_t group) const { return m_selection.checked_group(group, who); }
+  void check_group(std::size_t group) const { m_selection.checked_group(group, who); }
 
   std::size_t checked_row(std::size_t i) const { return internal::checked_row(m_row_of, i, who); }
   template <typename PointRange>
