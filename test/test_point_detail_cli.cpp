@@ -834,60 +834,47 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   EXPECT_LE(report["restore_details"]["residual"].get<double>(), settings.detail_tolerance);
   EXPECT_EQ(contents(path("out.png")).substr(1, 3), "PNG");
 
-  // As rigid as possible, chosen on the command line over the file, as the library does it.
-  const Program_run arap = run("edit -i " + in + " -o " + path("arap.ply") + " --edit " + path("edit.json") +
-                               " --rotations arap --rigid-iterations 2");
-  ASSERT_EQ(arap.exit_code, 0) << arap.output;
-  CGAL::Point_set_3<Point> rigid;
-  ASSERT_TRUE(CGAL::IO::read_point_set(path("arap.ply"), rigid));
+  // The program's edit with `options` over the file, read back: it must be the library's with `s`.
+  auto program_edit = [&](const std::string& name, const std::string& options,
+                          const CGAL_ext::Detail_preserving_deformation_settings& s) {
+    const Program_run r = run("edit -i " + in + " -o " + path(name + ".ply") + " --edit " + path("edit.json") + " " + options);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    CGAL::Point_set_3<Point> edited;
+    EXPECT_TRUE(CGAL::IO::read_point_set(path(name + ".ply"), edited));
+    const std::vector<Point> points(edited.points().begin(), edited.points().end());
+    EXPECT_LT(max_distance(points, library_edit(s)), 1e-12) << options;
+    return std::make_pair(points, r.output);
+  };
+  // As rigid as possible, chosen on the command line over the file.
   settings.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
   settings.rigid_iterations = 2;
-  const std::vector<Point> rigid_points(rigid.points().begin(), rigid.points().end());
-  EXPECT_LT(max_distance(rigid_points, library_edit(settings)), 1e-12);
+  const std::vector<Point> rigid_points = program_edit("arap", "--rotations arap --rigid-iterations 2", settings).first;
   EXPECT_GT(max_distance(rigid_points, std::vector<Point>(output.points().begin(), output.points().end())), 1e-3);
-  // Two iterations of the restore: what the library gives with two, and a warning that it stopped early.
-  const Program_run capped = run("edit -i " + in + " -o " + path("capped.ply") + " --edit " + path("edit.json") +
-                                 " --rotations arap --rigid-iterations 2 --detail-iterations 2");
-  ASSERT_EQ(capped.exit_code, 0) << capped.output;
-  EXPECT_NE(capped.output.find("stopped after 2 iterations"), std::string::npos) << capped.output;
-  CGAL::Point_set_3<Point> capped_set;
-  ASSERT_TRUE(CGAL::IO::read_point_set(path("capped.ply"), capped_set));
+  // Two iterations of the restore, and a warning that it stopped early.
   settings.detail_iterations = 2;
-  EXPECT_LT(max_distance(std::vector<Point>(capped_set.points().begin(), capped_set.points().end()), library_edit(settings)), 1e-12);
-  // SRE-ARAP's smooth-rotation term, as the library does it.
-  const Program_run smooth = run("edit -i " + in + " -o " + path("smooth.ply") + " --edit " + path("edit.json") +
-                                 " --rotations arap --rigid-iterations 2 --rigid-rotation-smoothing 1");
-  ASSERT_EQ(smooth.exit_code, 0) << smooth.output;
-  CGAL::Point_set_3<Point> smooth_set;
-  ASSERT_TRUE(CGAL::IO::read_point_set(path("smooth.ply"), smooth_set));
+  const std::string capped =
+    program_edit("capped", "--rotations arap --rigid-iterations 2 --detail-iterations 2", settings).second;
+  EXPECT_NE(capped.find("stopped after 2 iterations"), std::string::npos) << capped;
+  // SRE-ARAP's smooth-rotation term.
   settings.detail_iterations = CGAL_ext::Detail_preserving_deformation_settings().detail_iterations;
   settings.rigid_rotation_smoothing = 1;
-  const std::vector<Point> smooth_points(smooth_set.points().begin(), smooth_set.points().end());
-  EXPECT_LT(max_distance(smooth_points, library_edit(settings)), 1e-12);
+  const std::vector<Point> smooth_points =
+    program_edit("smooth", "--rotations arap --rigid-iterations 2 --rigid-rotation-smoothing 1", settings).first;
   EXPECT_GT(max_distance(smooth_points, rigid_points), 1e-6);
-  // Cotangent edge weights, as the library does them; the report names them.
-  const Program_run cotangent = run("edit -i " + in + " -o " + path("cotangent.ply") + " --edit " + path("edit.json") +
-                                    " --rotations arap --rigid-iterations 2 --rigid-weights cotangent --report " + path("cotangent.json"));
-  ASSERT_EQ(cotangent.exit_code, 0) << cotangent.output;
-  CGAL::Point_set_3<Point> cotangent_set;
-  ASSERT_TRUE(CGAL::IO::read_point_set(path("cotangent.ply"), cotangent_set));
+  // Cotangent edge weights (by their older option's spelling); the report names them.
   settings.rigid_rotation_smoothing = 0;
   settings.rigid_edge_weights = CGAL_ext::Rigid_edge_weights::cotangent;
-  const std::vector<Point> cotangent_points(cotangent_set.points().begin(), cotangent_set.points().end());
-  EXPECT_LT(max_distance(cotangent_points, library_edit(settings)), 1e-12);
+  const std::vector<Point> cotangent_points =
+    program_edit("cotangent", "--rotations arap --rigid-iterations 2 --rigid-weights cotangent --report " +
+                                path("cotangent.json"), settings).first;
   EXPECT_GT(max_distance(cotangent_points, rigid_points), 1e-6);
   EXPECT_EQ(nlohmann::json::parse(contents(path("cotangent.json")))["rigid_edge_weights"], "cotangent");
-  // SRE_ARAP's own energy (the term relative to the surface's area), as the library does it; the report names it.
-  const Program_run sre = run("edit -i " + in + " -o " + path("sre.ply") + " --edit " + path("edit.json") +
-                              " --rotations arap --rigid-iterations 2 --rigid-edge-weights cotangent --rigid-rotation-smoothing 0.02"
-                              " --rigid-rotation-smoothing-scale surface_area --report " + path("sre.json"));
-  ASSERT_EQ(sre.exit_code, 0) << sre.output;
-  CGAL::Point_set_3<Point> sre_set;
-  ASSERT_TRUE(CGAL::IO::read_point_set(path("sre.ply"), sre_set));
+  // SRE_ARAP's own energy (the term relative to the surface's area); the report names it.
   settings.rigid_rotation_smoothing = 0.02;
   settings.rigid_rotation_smoothing_scale = CGAL_ext::Rotation_smoothing_scale::surface_area;
-  const std::vector<Point> sre_points(sre_set.points().begin(), sre_set.points().end());
-  EXPECT_LT(max_distance(sre_points, library_edit(settings)), 1e-12);
+  const std::vector<Point> sre_points =
+    program_edit("sre", "--rotations arap --rigid-iterations 2 --rigid-edge-weights cotangent --rigid-rotation-smoothing "
+                        "0.02 --rigid-rotation-smoothing-scale surface_area --report " + path("sre.json"), settings).first;
   EXPECT_GT(max_distance(sre_points, cotangent_points), 1e-6);
   EXPECT_EQ(nlohmann::json::parse(contents(path("sre.json")))["rigid_rotation_smoothing_scale"], "surface_area");
   // A misspelt mode is named.
