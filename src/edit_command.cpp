@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <functional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -105,66 +106,67 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
   edit_app->add_option("--png", edit.png, "also render the result, coloured by the distance each point moved");
   edit_app->add_option("--report", edit.report, "write the paper's Table 1 fields, stage timings and solver figures as JSON");
   using Settings = Edit_command::Settings;
+  using CGAL_ext::Detail_filter;
+  using CGAL_ext::Simplification_settings;
   Settings& o = edit.options;
-  const auto given = [&edit](CLI::Option* option, std::function<void(Settings&, const Settings&)> apply) {
-    edit.overrides.emplace_back(option, std::move(apply));
+  // When `option` is given, its value (the member at `path` of the command line's settings) overrides the edit
+  // file's.
+  const auto overriding = [&edit](CLI::Option* option, auto... path) {
+    edit.overrides.emplace_back(option, [=](Settings& s, const Settings& c) { (s .* ... .* path) = (c .* ... .* path); });
+    return option;
+  };
+  // The option of the setting at `path`: an enum's by the names of its values, any other as given.
+  const auto setting = [&](const std::string& name, const std::string& description, auto... path) {
+    auto& value = (o .* ... .* path);
+    if constexpr(std::is_enum_v<std::decay_t<decltype(value)>>)
+      return overriding(add_setting_option(*edit_app, name, value, description), path...);
+    else
+      return overriding(edit_app->add_option(name, value, description), path...);
   };
   // The settings' own names (doc/editing.md, "Edit files"); the names after a comma are older spellings.
-  given(add_setting_option(*edit_app, "--order", o.filter.order, "transfer function (overrides the edit file)"),
-        [](Settings& s, const Settings& c) { s.filter.order = c.filter.order; });
-  given(edit_app->add_option("--lambda", o.filter.lambda, "pass-band frequency (> 0)"),
-        [](Settings& s, const Settings& c) { s.filter.lambda = c.filter.lambda; });
-  given(edit_app->add_option("--mu", o.filter.mu, "highest frequency (> lambda; quadric and cubic)"),
-        [](Settings& s, const Settings& c) { s.filter.mu = c.filter.mu; });
-  given(add_neighbor_count_option(*edit_app, o.sample_neighbors, "Laplacian row", 1, "sample point"),
-        [](Settings& s, const Settings& c) { s.sample_neighbors = c.sample_neighbors; });
-  given(add_setting_option(*edit_app, "--strength-distance,--strength", o.strength_distance,
-                           "distances of the strength field: euclidean (the paper's) or geodesic"),
-        [](Settings& s, const Settings& c) { s.strength_distance = c.strength_distance; });
-  given(edit_app->add_option("--diffusion-samples", o.diffusion_samples, "sample points that carry each point"),
-        [](Settings& s, const Settings& c) { s.diffusion_samples = c.diffusion_samples; });
-  given(add_setting_option(*edit_app, "--diffusion-origin", o.diffusion_origin,
-                           "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)"),
-        [](Settings& s, const Settings& c) { s.diffusion_origin = c.diffusion_origin; });
-  given(add_setting_option(*edit_app, "--diffusion-turn", o.diffusion_turn,
-                           "affine (each SSP's best linear map of its neighbourhood, default), fitted (its best "
-                           "rotation) or frames (the paper's local frames)"),
-        [](Settings& s, const Settings& c) { s.diffusion_turn = c.diffusion_turn; });
-  given(edit_app->add_option("--handle-weight", o.handle_weight,
-                             "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles"),
-        [](Settings& s, const Settings& c) { s.handle_weight = c.handle_weight; });
-  given(edit_app->add_option("--max-cluster-size", o.simplification.max_cluster_size, "largest number of points per SSP"),
-        [](Settings& s, const Settings& c) { s.simplification.max_cluster_size = c.simplification.max_cluster_size; });
-  given(edit_app->add_option("--target-count,--target", o.simplification.target_count,
-                             "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule "
-                             "(default 3000)"),
-        [](Settings& s, const Settings& c) { s.simplification.target_count = c.simplification.target_count; });
-  given(add_setting_option(*edit_app, "--rotations", o.rotations,
-                           "how the details turn: none, propagate (the paper's), arap (as rigid as possible)"),
-        [](Settings& s, const Settings& c) { s.rotations = c.rotations; });
-  given(edit_app->add_option("--rigid-iterations", o.rigid_iterations, "with --rotations arap: rotation fits and solves")
-          ->check(CLI::Range(1u, 1000u)),
-        [](Settings& s, const Settings& c) { s.rigid_iterations = c.rigid_iterations; });
-  given(edit_app->add_option("--rigid-rotation-smoothing,--rigid-smoothing", o.rigid_rotation_smoothing,
-                             "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: near CGAL's "
-                             "SRE_ARAP, with --rigid-iterations 10 or more; default 0)")
-          ->check(CLI::NonNegativeNumber),
-        [](Settings& s, const Settings& c) { s.rigid_rotation_smoothing = c.rigid_rotation_smoothing; });
-  given(add_setting_option(*edit_app, "--rigid-rotation-smoothing-scale,--rigid-smoothing-scale",
-                           o.rigid_rotation_smoothing_scale,
-                           "with --rigid-rotation-smoothing: what its weight is relative to, edge_lengths (default: "
-                           "the same at every density) or surface_area (CGAL's SRE_ARAP: --rigid-rotation-smoothing "
-                           "0.02 with --rigid-edge-weights cotangent is its energy)"),
-        [](Settings& s, const Settings& c) { s.rigid_rotation_smoothing_scale = c.rigid_rotation_smoothing_scale; });
-  given(add_setting_option(*edit_app, "--rigid-edge-weights,--rigid-weights", o.rigid_edge_weights,
-                           "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent "
-                           "(from each SSP's Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)"),
-        [](Settings& s, const Settings& c) { s.rigid_edge_weights = c.rigid_edge_weights; });
-  given(edit_app->add_option("--detail-iterations", o.detail_iterations,
-                             "at most this many iterations to put back the fine details the diffusion smoothed "
-                             "(default 100, 0: none)")
-          ->check(CLI::Range(0u, 100000u)),
-        [](Settings& s, const Settings& c) { s.detail_iterations = c.detail_iterations; });
+  setting("--order", "transfer function (overrides the edit file)", &Settings::filter, &Detail_filter::order);
+  setting("--lambda", "pass-band frequency (> 0)", &Settings::filter, &Detail_filter::lambda);
+  setting("--mu", "highest frequency (> lambda; quadric and cubic)", &Settings::filter, &Detail_filter::mu);
+  overriding(add_neighbor_count_option(*edit_app, o.sample_neighbors, "Laplacian row", 1, "sample point"),
+             &Settings::sample_neighbors);
+  setting("--strength-distance,--strength", "distances of the strength field: euclidean (the paper's) or geodesic",
+          &Settings::strength_distance);
+  setting("--diffusion-samples", "sample points that carry each point", &Settings::diffusion_samples);
+  setting("--diffusion-origin", "own (p - ssp_i in frame i, default) or nearest (the paper's p - ssp_0)",
+          &Settings::diffusion_origin);
+  setting("--diffusion-turn",
+          "affine (each SSP's best linear map of its neighbourhood, default), fitted (its best rotation) or frames "
+          "(the paper's local frames)",
+          &Settings::diffusion_turn);
+  setting("--handle-weight", "weight of soft handle constraints (the paper's, e.g. 1); default: exact handles",
+          &Settings::handle_weight);
+  setting("--max-cluster-size", "largest number of points per SSP", &Settings::simplification,
+          &Simplification_settings::max_cluster_size);
+  setting("--target-count,--target",
+          "SSP count the clustering aims at, at most 1.5 times it with the mode-spread rule (default 3000)",
+          &Settings::simplification, &Simplification_settings::target_count);
+  setting("--rotations", "how the details turn: none, propagate (the paper's), arap (as rigid as possible)",
+          &Settings::rotations);
+  setting("--rigid-iterations", "with --rotations arap: rotation fits and solves", &Settings::rigid_iterations)
+    ->check(CLI::Range(1u, 1000u));
+  setting("--rigid-rotation-smoothing,--rigid-smoothing",
+          "with --rotations arap: weight of SRE-ARAP's smooth-rotation term (about 1: near CGAL's SRE_ARAP, with "
+          "--rigid-iterations 10 or more; default 0)",
+          &Settings::rigid_rotation_smoothing)
+    ->check(CLI::NonNegativeNumber);
+  setting("--rigid-rotation-smoothing-scale,--rigid-smoothing-scale",
+          "with --rigid-rotation-smoothing: what its weight is relative to, edge_lengths (default: the same at every "
+          "density) or surface_area (CGAL's SRE_ARAP: --rigid-rotation-smoothing 0.02 with --rigid-edge-weights "
+          "cotangent is its energy)",
+          &Settings::rigid_rotation_smoothing_scale);
+  setting("--rigid-edge-weights,--rigid-weights",
+          "with --rotations arap: weights of the SSP graph's edges, uniform (default) or cotangent (from each SSP's "
+          "Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)",
+          &Settings::rigid_edge_weights);
+  setting("--detail-iterations",
+          "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)",
+          &Settings::detail_iterations)
+    ->check(CLI::Range(0u, 100000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");
   add_render_options(*edit_app, edit.render, edit.view);
   return {edit_app, [command, &common] { command->run(common); }};

@@ -3,8 +3,7 @@
 #ifndef CGAL_EXT_SETTING_NAMES_H
 #define CGAL_EXT_SETTING_NAMES_H
 
-#include <CGAL_ext/exceptions.h>
-
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -72,16 +71,6 @@ bool find_setting(const std::string& name, Enum& value)
       return true;
     }
   return false;
-}
-
-/// The value `name` spells. \throws Invalid_input naming `setting` and the names it takes otherwise.
-template <typename Enum>
-Enum parse_setting(const std::string& name, const std::string& setting)
-{
-  Enum value{};
-  if(!find_setting(name, value))
-    throw Invalid_input(setting + " must be " + setting_choices<Enum>() + ", not \"" + name + "\"");
-  return value;
 }
 
 } // namespace CGAL_ext
