@@ -9,14 +9,12 @@
 #include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/edit_selection.h>
-#include <CGAL_ext/internal/oriented_normals.h>
-#include <CGAL_ext/internal/handle_collar.h>
 #include <CGAL_ext/internal/mean_shift.h>
-#include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/internal/oriented_normals.h>
+#include <CGAL_ext/internal/point_diffusion.h>
 #include <CGAL_ext/internal/rigid_stepping.h>
 #include <CGAL_ext/internal/sample_points.h>
 #include <CGAL_ext/internal/sample_system.h>
-#include <CGAL_ext/internal/ssp_diffusion.h>
 #include <CGAL_ext/internal/strength_field.h>
 
 #include <CGAL/Named_function_parameters.h>
@@ -69,7 +67,6 @@ template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag>
 class Detail_preserving_deformation
 {
   using Matrix_n3 = internal::Matrix_n3;
-  using Transform = internal::Rigid_transform;
   using Clock = std::chrono::steady_clock;
   static constexpr const char* who = "Detail_preserving_deformation";
 
@@ -156,7 +153,42 @@ public:
             outside the region, or a part of the region that neither a handle nor the fixed part pins.
     \throws Numerical_failure when the factorisation fails.
   */
-  bool preprocess();
+  bool preprocess()
+  {
+    const auto start = Clock::now();
+    m_preprocessed = false;
+    m_selection.check(m_cloud.input_index, who);
+    internal::Progress progress(m_callback);
+    progress.stage(0.0, m_has_mean_shift ? 0.0 : 0.6);
+    if(!internal::cluster_edit_sample_points<ConcurrencyTag>(m_cloud, m_normals, m_settings.simplification,
+                                                             m_selection.labels, progress, m_mean_shift,
+                                                             m_has_mean_shift, m_sample_points))
+      return false;
+    m_statistics = Statistics();
+    m_statistics.clustering_seconds = seconds_since(start);
+    progress.stage(0.6, 1.0);
+    if(!progress.report(0.0)) return false;
+    const internal::Edit_sample_points& samples = m_sample_points;
+    m_system.template setup<ConcurrencyTag>(samples.positions, samples.normals, samples.labels,
+                                            samples.input_points(m_cloud.input_index), m_settings, who);
+    if(!progress.report(0.6)) return false;
+    const std::size_t groups = m_selection.transforms.size();
+    m_strength.template setup<ConcurrencyTag>(samples.positions, m_system.graph, samples.labels, groups,
+                                              m_settings.strength_distance == Strength_distance::geodesic);
+    m_rigid_drag.setup(m_system, samples.positions, groups);
+    m_diffusion.template setup<ConcurrencyTag>(m_cloud, samples, m_system.graph, m_system.roi, m_selection, m_settings);
+    m_has_relaxation = false;
+    return_to_rest();
+    if(!progress.report(1.0)) return false;
+    m_statistics.points = m_cloud.size();
+    m_statistics.samples = samples.size();
+    m_statistics.requested_samples = samples.requested_count;
+    m_statistics.roi_samples = m_system.roi.size();
+    m_statistics.handle_samples = m_system.anchors.size();
+    m_statistics.least_squares = m_system.statistics();
+    m_statistics.preprocess_seconds = seconds_since(start);
+    return m_preprocessed = true;
+  }
 
   /*!
     Computes now the part of `preprocess()` that does not depend on the selection, the points' mean-shift modes
@@ -191,11 +223,36 @@ public:
     selection changed). Only the right-hand side changes between calls: one back-substitution.
     \return false if a needed preprocessing was cancelled.
   */
-  bool deform();
+  bool deform()
+  {
+    if(!m_preprocessed && !preprocess()) return false;
+    const auto start = Clock::now();
+    const Matrix_n3& samples = m_sample_points.positions;
+    if(m_settings.rotations == Detail_rotation::as_rigid_as_possible)
+      m_statistics.rigid_iterations = m_rigid_drag.template drag<ConcurrencyTag>(
+        m_system, m_strength, samples, m_selection.transforms, m_settings, m_detail_rotations, m_deformed_samples);
+    else
+      internal::propagated_drag<ConcurrencyTag>(m_system, m_strength, samples, m_selection.transforms,
+                                                m_settings.rotations, m_detail_rotations, m_deformed_samples);
+    m_statistics.least_squares = m_system.statistics();
+    m_statistics.displacement_ratio = m_system.displacement_ratio(samples, m_deformed_samples, m_sample_points.labels);
+    m_statistics.deform_seconds = seconds_since(start);
+    return true;
+  }
 
   /// Carries the sample points' deformation to every point and normal (internal arrays; read them with
   /// `deformed_point()` or write them with `diffuse(points, np)`). Parallel and allocation-free.
-  void diffuse();
+  void diffuse()
+  {
+    check_preprocessed("diffuse()");
+    const auto start = Clock::now();
+    update_sample_motions();
+    m_diffusion.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_sample_points.positions,
+                                               m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms,
+                                               m_deformed_points, m_deformed_normals);
+    m_diffused = true;
+    m_statistics.diffuse_seconds = seconds_since(start);
+  }
 
   /*!
     `diffuse()`, then writes every point's deformed position through `point_map` and, when given, its
@@ -220,7 +277,28 @@ public:
     diffusions: call it once a drag ends (doc/editing_diffusion.md, "Restoring the details").
     \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.
   */
-  void restore_details();
+  void restore_details()
+  {
+    check_preprocessed("restore_details()");
+    if(!m_diffused)
+      throw Invalid_input(std::string(who) + ": restore_details() works on the result of diffuse(); call diffuse() first");
+    const auto start = Clock::now();
+    m_statistics.restore_iterations = 0;
+    m_statistics.restore_residual = 0;
+    const std::size_t neighbors = std::min<std::size_t>(10, m_cloud.size() - 1);
+    if(neighbors == 0 || m_settings.detail_iterations == 0) return;
+    if(!m_has_relaxation)
+      m_relaxation.template setup<ConcurrencyTag>(
+        m_cloud.positions,
+        internal::relaxed_rows(m_diffusion.moving_rows, m_selection.labels, m_diffusion.collar.handle_rows), neighbors);
+    m_has_relaxation = true;
+    const auto outcome = m_relaxation.template apply<ConcurrencyTag>(
+      m_cloud.positions, m_settings.detail_anchor, m_settings.detail_iterations, m_settings.detail_tolerance,
+      m_deformed_points);
+    m_statistics.restore_iterations = outcome.iterations;
+    m_statistics.restore_residual = outcome.residual;
+    m_statistics.restore_seconds = seconds_since(start);
+  }
 
   /// `restore_details()`, then writes every point and normal as `diffuse(points, np)` does.
   template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
@@ -235,7 +313,7 @@ public:
   /// preprocessing is kept.
   void reset()
   {
-    for(Transform& t : m_selection.transforms) t = Transform();
+    for(internal::Rigid_transform& t : m_selection.transforms) t = internal::Rigid_transform();
     return_to_rest();
   }
   /// @}
@@ -259,7 +337,7 @@ public:
   template <typename Writer>
   void for_each_deformed_point(const Writer& write, bool movable_only = false) const
   {
-    internal::for_each_row_in_input_order<ConcurrencyTag>(m_row_of, movable_only ? &m_movable_points : nullptr,
+    internal::for_each_row_in_input_order<ConcurrencyTag>(m_row_of, movable_only ? &m_diffusion.movable_points : nullptr,
                                                           m_deformed_points, m_deformed_normals, write);
   }
 
@@ -307,19 +385,25 @@ public:
 
   /// The first half of `diffuse()`: each sample point's motion for the last `deform()`; moves no point.
   /// O(sample points).
-  void update_sample_motions();
+  void update_sample_motions()
+  {
+    check_preprocessed("update_sample_motions()");
+    m_diffusion.template update_motions<ConcurrencyTag>(
+      m_sample_points, m_deformed_samples, m_system.graph, m_system.roi, m_selection.transforms, m_detail_rotations,
+      m_settings.rotations == Detail_rotation::as_rigid_as_possible && m_rigid_drag.has_rotations());
+  }
 
   /// Sample point `s`'s motion record from `update_sample_motions()` (or `diffuse()`): `[A_s - I, c_s; 0, 1]`,
   /// so that a point it carries alone moves by `(A_s - I) p + c_s`.
-  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_stencil.motion_record(s); }
+  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_diffusion.stencil.motion_record(s); }
 
   /// The number of sample points that carry each point (the same for every point, after `preprocess()`).
-  std::size_t stencil_size() const { return m_stencil.samples.size() ? std::size_t(m_stencil.samples.degree(0)) : 0; }
+  std::size_t stencil_size() const { return m_diffusion.stencil.width(); }
 
   /// Writes point `i`'s stencil: `stencil_size()` sample points and their weights (which sum to 1).
   void stencil(std::size_t i, int* sample_points, double* weights) const
   {
-    m_stencil.copy_row(checked_row(i), sample_points, weights);
+    m_diffusion.stencil.copy_row(checked_row(i), sample_points, weights);
   }
 
   /// Whether point `i` follows its handle group's transform exactly (exact handles, `handle_weight` infinite).
@@ -330,19 +414,20 @@ public:
 
   /// The handle points whose steps the collar spreads (input indices); `collar_handle_step(c)` is the step of the
   /// c-th.
-  const std::vector<int>& collar_handle_points() const { return m_collar.stepping_handle_points; }
+  const std::vector<int>& collar_handle_points() const { return m_diffusion.collar.stepping_handle_points; }
 
   /// Calls `visit(i, handles, weights, count)` for each point `i` of the collar: it moves by the weighted sum of
   /// the steps of `count` collar handle points (indices into `collar_handle_points()`).
   template <typename Visitor>
-  void for_each_collar_point(const Visitor& visit) const { m_collar.for_each_point(m_cloud.input_index, visit); }
+  void for_each_collar_point(const Visitor& visit) const { m_diffusion.collar.for_each_point(m_cloud.input_index, visit); }
 
   /// The step of collar handle point `c` for the motions of `update_sample_motions()`: its transform's position
   /// less its blended one, and the same for its normal.
   void collar_handle_step(std::size_t c, Eigen::Vector3d& step, Eigen::Vector3d& normal_step) const
   {
-    m_collar.handle_step(c, m_stencil, m_cloud.positions, m_normals, m_sample_points.positions, m_deformed_samples,
-                         m_settings.diffusion_origin, m_selection.transforms, step, normal_step);
+    m_diffusion.collar.handle_step(c, m_diffusion.stencil, m_cloud.positions, m_normals, m_sample_points.positions,
+                                   m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms, step,
+                                   normal_step);
   }
   /// @}
 
@@ -356,9 +441,23 @@ private:
     internal::check_same_size(points, m_cloud.size(), call, who);
   }
 
+  void check_preprocessed(const char* call) const
+  {
+    if(!m_preprocessed) throw Invalid_input(std::string(who) + ": " + call + " needs preprocess() or deform() first");
+  }
   static double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-  void set_up_drag();    // preprocess(): what each drag uses, once the sample points' system is set up
-  void return_to_rest(); // every point and sample point back to its input position, no rotation
+
+  // Every point and sample point back to its input position, no rotation.
+  void return_to_rest()
+  {
+    m_deformed_points = m_cloud.positions;
+    m_deformed_normals = m_normals;
+    m_deformed_samples = m_sample_points.positions;
+    m_diffusion.turns.reset();
+    m_detail_rotations.assign(m_sample_points.size(), Eigen::Matrix3d::Identity());
+    m_rigid_drag.reset(m_selection.transforms.size());
+    m_diffused = false;
+  }
 
   // The input and the selection.
   Settings m_settings;
@@ -376,169 +475,17 @@ private:
   internal::Sample_system m_system; // the sample points' graph, Laplacian, region and factored least squares
   internal::Strength_field m_strength;
   internal::Rigid_drag m_rigid_drag;
-  internal::Sample_turns m_sample_turns;
-  internal::Diffusion_stencil m_stencil;
-  std::vector<int> m_moving_rows;    // rows a region sample point carries, and exact handles
-  std::vector<int> m_movable_points; // their input indices, increasing (for_each_deformed_point())
-  internal::Handle_collar m_collar;
+  internal::Point_diffusion m_diffusion; // the sample turns, the stencils, the movable points and the collar
   internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
   bool m_has_relaxation = false;
 
   // The edit's state, per drag.
   Matrix_n3 m_deformed_samples;
   std::vector<Eigen::Matrix3d> m_detail_rotations; // per sample point: R(Q_s), propagated or fitted
-  std::vector<Eigen::Matrix3d> m_group_rotations;  // per handle group, its transform's rotation (diffuse())
   bool m_diffused = false; // diffuse() ran since preprocess() or reset(): the stencil holds its motions
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
 };
-
-template <typename ConcurrencyTag>
-bool Detail_preserving_deformation<ConcurrencyTag>::preprocess()
-{
-  const auto start = Clock::now();
-  m_preprocessed = false;
-  m_selection.check(m_cloud.input_index, who);
-  internal::Progress progress(m_callback);
-  progress.stage(0.0, m_has_mean_shift ? 0.0 : 0.6);
-  if(!internal::cluster_edit_sample_points<ConcurrencyTag>(m_cloud, m_normals, m_settings.simplification, m_selection.labels,
-                                                           progress, m_mean_shift, m_has_mean_shift, m_sample_points))
-    return false;
-  m_statistics = Statistics();
-  m_statistics.clustering_seconds = seconds_since(start);
-  progress.stage(0.6, 1.0);
-  if(!progress.report(0.0)) return false;
-  m_system.template setup<ConcurrencyTag>(m_sample_points.positions, m_sample_points.normals, m_sample_points.labels,
-                                          m_sample_points.input_points(m_cloud.input_index), m_settings, who);
-  if(!progress.report(0.6)) return false;
-  set_up_drag();
-  return_to_rest();
-  if(!progress.report(1.0)) return false;
-  m_statistics.points = m_cloud.size();
-  m_statistics.samples = m_sample_points.size();
-  m_statistics.requested_samples = m_sample_points.requested_count;
-  m_statistics.roi_samples = m_system.roi.size();
-  m_statistics.handle_samples = m_system.anchors.size();
-  m_statistics.least_squares = m_system.statistics();
-  m_statistics.preprocess_seconds = seconds_since(start);
-  return m_preprocessed = true;
-}
-
-template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::set_up_drag()
-{
-  const internal::Edit_sample_points& samples = m_sample_points;
-  const std::size_t groups = m_selection.transforms.size();
-  const bool exact_handles = std::isinf(m_settings.handle_weight);
-  m_strength.template setup<ConcurrencyTag>(samples.positions, m_system.graph, samples.labels, groups,
-                                            m_settings.strength_distance == Strength_distance::geodesic);
-  m_rigid_drag.setup(m_system, samples.positions, groups);
-  m_sample_turns.template setup<ConcurrencyTag>(m_settings.diffusion_turn, samples.positions, samples.normals,
-                                                m_system.graph, m_system.roi);
-  m_stencil.template setup<ConcurrencyTag>(m_cloud.positions, samples.positions,
-                                           std::min<std::size_t>(m_settings.diffusion_samples, samples.size()), &samples.of_row);
-  m_stencil.use_wide_vectors = !m_settings.portable_diffusion;
-  m_moving_rows = internal::moving_rows(m_stencil, samples.labels, m_selection.labels, exact_handles);
-  m_movable_points.clear();
-  for(int row : m_moving_rows) m_movable_points.push_back(m_cloud.input_index[std::size_t(row)]);
-  std::sort(m_movable_points.begin(), m_movable_points.end());
-  m_collar.template setup<ConcurrencyTag>(m_cloud, m_selection.labels, groups, exact_handles, m_settings.handle_collar,
-                                          m_stencil, samples.positions, m_moving_rows);
-  m_group_rotations.resize(groups);
-  m_has_relaxation = false;
-}
-
-template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::return_to_rest()
-{
-  m_deformed_points = m_cloud.positions;
-  m_deformed_normals = m_normals;
-  m_deformed_samples = m_sample_points.positions;
-  m_sample_turns.reset();
-  m_detail_rotations.assign(m_sample_points.size(), Eigen::Matrix3d::Identity());
-  m_rigid_drag.reset(m_selection.transforms.size());
-  m_diffused = false;
-}
-
-template <typename ConcurrencyTag>
-bool Detail_preserving_deformation<ConcurrencyTag>::deform()
-{
-  if(!m_preprocessed && !preprocess()) return false;
-  const auto start = Clock::now();
-  const Matrix_n3& samples = m_sample_points.positions;
-  if(m_settings.rotations == Detail_rotation::as_rigid_as_possible) {
-    m_statistics.rigid_iterations = m_rigid_drag.template drag<ConcurrencyTag>(
-      m_system, m_strength, samples, m_selection.transforms, m_settings, m_detail_rotations, m_deformed_samples);
-  } else {
-    if(m_settings.rotations == Detail_rotation::none)
-      std::fill(m_detail_rotations.begin(), m_detail_rotations.end(), Eigen::Matrix3d::Identity());
-    else {
-      std::vector<Eigen::Quaterniond> rotations(m_selection.transforms.size());
-      for(std::size_t g = 0; g < m_selection.transforms.size(); ++g) rotations[g] = m_selection.transforms[g].rotation;
-      m_strength.template propagate<ConcurrencyTag>(rotations, m_system.roi, m_detail_rotations);
-    }
-    m_system.pull_anchors(samples, m_selection.transforms);
-    m_system.template solve_turned_details<ConcurrencyTag>(samples, m_detail_rotations, m_deformed_samples);
-  }
-  m_statistics.least_squares = m_system.statistics();
-  m_statistics.displacement_ratio = m_system.displacement_ratio(samples, m_deformed_samples, m_sample_points.labels);
-  m_statistics.deform_seconds = seconds_since(start);
-  return true;
-}
-
-template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::update_sample_motions()
-{
-  if(!m_preprocessed)
-    throw Invalid_input(std::string(who) + ": the sample points' motions need preprocess() or deform() first");
-  for(std::size_t g = 0; g < m_selection.transforms.size(); ++g) m_group_rotations[g] = m_selection.transforms[g].rotation.toRotationMatrix();
-  const bool fitted_rotations = m_settings.rotations == Detail_rotation::as_rigid_as_possible && m_rigid_drag.has_rotations();
-  m_sample_turns.template update<ConcurrencyTag>(m_sample_points.positions, m_sample_points.normals, m_deformed_samples,
-                                                 m_system.graph, m_system.roi, m_sample_points.labels,
-                                                 !m_collar.handle_rows.empty(), m_group_rotations, m_detail_rotations,
-                                                 fitted_rotations);
-  m_stencil.template set_motions<ConcurrencyTag>(m_sample_points.positions, m_deformed_samples, m_sample_turns.maps);
-}
-
-template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::diffuse()
-{
-  if(!m_preprocessed) throw Invalid_input(std::string(who) + ": diffuse() needs preprocess() or deform() first");
-  const auto start = Clock::now();
-  update_sample_motions();
-  m_stencil.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_sample_points.positions, m_deformed_samples,
-                                           m_sample_turns.maps, m_settings.diffusion_origin, m_deformed_points, m_deformed_normals,
-                                           &m_moving_rows);
-  m_collar.template apply<ConcurrencyTag>(m_cloud.positions, m_normals, m_group_rotations, m_selection.transforms,
-                                          m_deformed_points, m_deformed_normals);
-  m_diffused = true;
-  m_statistics.diffuse_seconds = seconds_since(start);
-}
-
-template <typename ConcurrencyTag>
-void Detail_preserving_deformation<ConcurrencyTag>::restore_details()
-{
-  if(!m_preprocessed)
-    throw Invalid_input(std::string(who) + ": restore_details() needs preprocess() or deform() first");
-  if(!m_diffused)
-    throw Invalid_input(std::string(who) + ": restore_details() works on the result of diffuse(); call diffuse() first");
-  const auto start = Clock::now();
-  m_statistics.restore_iterations = 0;
-  m_statistics.restore_residual = 0;
-  const std::size_t neighbors = std::min<std::size_t>(10, m_cloud.size() - 1);
-  if(neighbors == 0 || m_settings.detail_iterations == 0) return;
-  if(!m_has_relaxation) {
-    m_relaxation.template setup<ConcurrencyTag>(
-      m_cloud.positions, internal::relaxed_rows(m_moving_rows, m_selection.labels, m_collar.handle_rows), neighbors);
-    m_has_relaxation = true;
-  }
-  const auto outcome = m_relaxation.template apply<ConcurrencyTag>(
-    m_cloud.positions, m_settings.detail_anchor, m_settings.detail_iterations, m_settings.detail_tolerance,
-    m_deformed_points);
-  m_statistics.restore_iterations = outcome.iterations;
-  m_statistics.restore_residual = outcome.residual;
-  m_statistics.restore_seconds = seconds_since(start);
-}
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
 #define CGAL_EXT_DEFORMATION_INSTANCES(EXTERN, Tag) EXTERN template class Detail_preserving_deformation<Tag>;

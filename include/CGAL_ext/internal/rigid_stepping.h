@@ -3,8 +3,8 @@
 #ifndef CGAL_EXT_INTERNAL_RIGID_STEPPING_H
 #define CGAL_EXT_INTERNAL_RIGID_STEPPING_H
 
-// As-rigid-as-possible editing on the sample points (Sorkine and Alexa 2007): a drag cut into steps, and the
-// alternation of solve and rotation fits within a step.
+// The drag of the sample points: as rigid as possible (Sorkine and Alexa 2007), a drag cut into steps and the
+// alternation of solve and rotation fits within a step; or with the strength field's propagated rotations, one solve.
 
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/internal/Point_arrays.h>
@@ -168,6 +168,25 @@ private:
   Matrix_n3 m_edge_change, m_previous;                // per-iteration buffers
   std::vector<Eigen::Matrix3d> m_previous_rotations;
 };
+
+/// The drag without fitted rotations: the details turned by the rotations the strength `field` propagates from the
+/// handle groups' `transforms` (`Detail_rotation::propagated`) or not turned (`none`), in one solve; writes the
+/// region's rows of `deformed` and the `rotations` (per sample point).
+template <typename ConcurrencyTag>
+void propagated_drag(Sample_system& system, const Strength_field& field, const Matrix_n3& samples,
+                     const std::vector<Rigid_transform>& transforms, Detail_rotation kind,
+                     std::vector<Eigen::Matrix3d>& rotations, Matrix_n3& deformed)
+{
+  if(kind == Detail_rotation::none)
+    std::fill(rotations.begin(), rotations.end(), Eigen::Matrix3d::Identity());
+  else {
+    std::vector<Eigen::Quaterniond> turns(transforms.size());
+    for(std::size_t g = 0; g < transforms.size(); ++g) turns[g] = transforms[g].rotation;
+    field.propagate<ConcurrencyTag>(turns, system.roi, rotations);
+  }
+  system.pull_anchors(samples, transforms);
+  system.template solve_turned_details<ConcurrencyTag>(samples, rotations, deformed);
+}
 
 } // namespace internal
 } // namespace CGAL_ext

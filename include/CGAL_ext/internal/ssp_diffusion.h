@@ -113,6 +113,8 @@ class Diffusion_stencil
 {
 public:
   Neighbor_graph samples; ///< nearest first, the same number for every point
+  /// The number of sample points that carry each point.
+  std::size_t width() const { return samples.size() ? std::size_t(samples.degree(0)) : 0; }
   std::vector<double> weights;
 
   /// Weights `(1 - d_j / d_max)^2` (Sumner, Schmid and Pauly 2007), normalised per point, with `d_max` the

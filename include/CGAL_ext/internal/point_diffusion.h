@@ -1,0 +1,90 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_INTERNAL_POINT_DIFFUSION_H
+#define CGAL_EXT_INTERNAL_POINT_DIFFUSION_H
+
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
+#include <CGAL_ext/internal/Neighbor_graph.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/edit_selection.h>
+#include <CGAL_ext/internal/handle_collar.h>
+#include <CGAL_ext/internal/sample_points.h>
+#include <CGAL_ext/internal/ssp_diffusion.h>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace CGAL_ext {
+namespace internal {
+
+/// The editing's diffusion of the sample points' motions to every point (doc/editing_diffusion.md): the sample
+/// points' turns, each point's stencil, the rows a drag can move and the exact handles' collar, set up once per
+/// selection; per drag, `update_motions` (O(sample points)) then `apply` (the movable points).
+class Point_diffusion
+{
+public:
+  Sample_turns turns;
+  Diffusion_stencil stencil;
+  Handle_collar collar;
+  std::vector<int> moving_rows;    ///< the rows a region sample point carries, and the exact handles'
+  std::vector<int> movable_points; ///< their input indices, increasing
+
+  /// `samples` of `cloud` (`normals` per row), their neighbour `graph` and region `roi`; the edit's `selection`.
+  template <typename ConcurrencyTag>
+  void setup(const Spatial_point_cloud& cloud, const Edit_sample_points& samples, const Neighbor_graph& graph,
+             const std::vector<int>& roi, const Edit_selection& selection,
+             const Detail_preserving_deformation_settings& settings)
+  {
+    const bool exact_handles = std::isinf(settings.handle_weight);
+    turns.template setup<ConcurrencyTag>(settings.diffusion_turn, samples.positions, samples.normals, graph, roi);
+    stencil.template setup<ConcurrencyTag>(cloud.positions, samples.positions,
+                                           std::min<std::size_t>(settings.diffusion_samples, samples.size()),
+                                           &samples.of_row);
+    stencil.use_wide_vectors = !settings.portable_diffusion;
+    moving_rows = internal::moving_rows(stencil, samples.labels, selection.labels, exact_handles);
+    movable_points.clear();
+    for(int row : moving_rows) movable_points.push_back(cloud.input_index[std::size_t(row)]);
+    std::sort(movable_points.begin(), movable_points.end());
+    collar.template setup<ConcurrencyTag>(cloud, selection.labels, selection.transforms.size(), exact_handles,
+                                          settings.handle_collar, stencil, samples.positions, moving_rows);
+    m_group_rotations.resize(selection.transforms.size());
+  }
+
+  /// The sample points' motions to their `deformed` positions, each turning its points by its sample turn (from
+  /// `detail_rotations`, taken as they are when `fitted_rotations`); the handle groups' `transforms`. Moves no point.
+  template <typename ConcurrencyTag>
+  void update_motions(const Edit_sample_points& samples, const Matrix_n3& deformed, const Neighbor_graph& graph,
+                      const std::vector<int>& roi, const std::vector<Rigid_transform>& transforms,
+                      const std::vector<Eigen::Matrix3d>& detail_rotations, bool fitted_rotations)
+  {
+    for(std::size_t g = 0; g < transforms.size(); ++g) m_group_rotations[g] = transforms[g].rotation.toRotationMatrix();
+    turns.template update<ConcurrencyTag>(samples.positions, samples.normals, deformed, graph, roi, samples.labels,
+                                          !collar.handle_rows.empty(), m_group_rotations, detail_rotations,
+                                          fitted_rotations);
+    stencil.template set_motions<ConcurrencyTag>(samples.positions, deformed, turns.maps);
+  }
+
+  /// After `update_motions`: the movable rows of `deformed_points` and `deformed_normals` from their rest
+  /// `points` and `normals`, then the exact handles and their collar.
+  template <typename ConcurrencyTag>
+  void apply(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& samples,
+             const Matrix_n3& deformed_samples, Diffusion_origin origin, const std::vector<Rigid_transform>& transforms,
+             Matrix_n3& deformed_points, Matrix_n3& deformed_normals)
+  {
+    stencil.template apply<ConcurrencyTag>(points, normals, samples, deformed_samples, turns.maps, origin,
+                                           deformed_points, deformed_normals, &moving_rows);
+    collar.template apply<ConcurrencyTag>(points, normals, m_group_rotations, transforms, deformed_points,
+                                          deformed_normals);
+  }
+
+private:
+  std::vector<Eigen::Matrix3d> m_group_rotations; // the handle groups' rotations as matrices, per drag
+};
+
+} // namespace internal
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_INTERNAL_POINT_DIFFUSION_H
