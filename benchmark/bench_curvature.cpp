@@ -8,7 +8,7 @@
 // Usage: bench_curvature [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/curvature_results.{csv,md}, DIR/curvature_accuracy.csv and DIR/normals_results.{csv,md}.
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/estimate_mean_curvature.h>

@@ -4,7 +4,7 @@
 // Usage: bench_details [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/details_results.csv and DIR/details_results.md (medians, min-max, peak memory).
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/compute_geometric_details.h>

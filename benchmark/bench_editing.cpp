@@ -8,7 +8,7 @@
 // Writes DIR/editing_results.csv and DIR/editing_results.md.
 // Or: bench_editing --check-cactus --data DIR, a test against CGAL's converged SRE_ARAP (check_cactus).
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "edit_spec.h"
 #include "editing_metrics.h"
 #include "point_io.h"

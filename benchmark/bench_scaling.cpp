@@ -4,7 +4,7 @@
 // Usage: bench_scaling [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/scaling_results.csv and DIR/scaling_results.md (medians and min-max over repetitions).
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 #include "region_spec.h"
 

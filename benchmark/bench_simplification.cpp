@@ -6,7 +6,7 @@
 // Usage: bench_simplification [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/simplification_results.csv and DIR/simplification_results.md.
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/compute_simplification_sample_points.h>

@@ -2,7 +2,7 @@
 #ifndef POINT_DETAIL_BENCH_SUPPORT_H
 #define POINT_DETAIL_BENCH_SUPPORT_H
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/internal/Point_arrays.h>

@@ -6,7 +6,7 @@
 // Usage: bench_upsampling [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/upsampling_results.csv and DIR/upsampling_results.md.
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/Detail_preserving_deformation.h>

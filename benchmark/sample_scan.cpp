@@ -2,7 +2,7 @@
 // binary PLY: the large inputs of benchmark/measure_edit_memory.sh and benchmark/measure_raw_scan.sh.
 // Usage: sample_scan MESH.off N OUT.ply [--without-normals]
 #include "bench_support.h"
-#include "cli_support.h"
+#include "program_basics.h"
 
 #include <iostream>
 

@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The JSON edit parser of `point-detail edit --edit FILE`, on a 200-point sphere, fed by a mutator that changes
 // the parsed tree (fuzz/structure_mutators.h).
-#include "cli_support.h"
+#include "program_basics.h"
 #include "edit_spec.h"
 #include "fuzz_support.h"
 #include "structure_mutators.h"

@@ -1,7 +1,7 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The region spec parser of --roi and --anchors (sphere:, box:, indices:FILE), selecting on a 200-point sphere.
-#include "cli_support.h"
+#include "program_basics.h"
 #include "fuzz_support.h"
 #include "region_spec.h"
 

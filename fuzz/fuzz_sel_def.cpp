@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The .sel/.def reader of `point-detail edit --sel --def` for a 50-point model. The input is the .sel file,
 // a NUL byte, and the .def file.
-#include "cli_support.h"
+#include "program_basics.h"
 #include "edit_spec.h"
 #include "fuzz_support.h"
 

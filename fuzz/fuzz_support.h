@@ -4,7 +4,7 @@
 #ifndef POINT_DETAIL_FUZZ_SUPPORT_H
 #define POINT_DETAIL_FUZZ_SUPPORT_H
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL/number_type_config.h>

@@ -16,7 +16,7 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "colors.h"
 #include "point_io.h"
 #include "render.h"

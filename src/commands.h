@@ -5,7 +5,7 @@
 #ifndef POINT_DETAIL_COMMANDS_H
 #define POINT_DETAIL_COMMANDS_H
 
-#include "command_support.h"
+#include "subcommand_options.h"
 
 #include <CLI/CLI.hpp>
 

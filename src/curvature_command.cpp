@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `point-detail curvature`: signed mean curvature of every point.
 #include "commands.h"
-#include "command_support.h"
+#include "subcommand_options.h"
 
 #include <CGAL_ext/estimate_mean_curvature.h>
 

@@ -5,7 +5,7 @@
 #ifndef POINT_DETAIL_EDIT_SPEC_H
 #define POINT_DETAIL_EDIT_SPEC_H
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "point_io.h"
 
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>

@@ -1,8 +1,8 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "file_checks.h"
+#include "guarded_reading.h"
 
-#include "cli_support.h"
+#include "program_basics.h"
 
 #include <algorithm>
 #include <cctype>

@@ -3,8 +3,8 @@
 // What the program's readers check before CGAL's readers allocate anything: the memory a file's announced
 // points need, the PLY header (refused when malformed or when the file cannot hold what it announces), and an
 // OFF reader of the project's own.
-#ifndef POINT_DETAIL_FILE_CHECKS_H
-#define POINT_DETAIL_FILE_CHECKS_H
+#ifndef POINT_DETAIL_GUARDED_READING_H
+#define POINT_DETAIL_GUARDED_READING_H
 
 #include "point_io.h"
 

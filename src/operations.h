@@ -5,7 +5,7 @@
 #ifndef POINT_DETAIL_OPERATIONS_H
 #define POINT_DETAIL_OPERATIONS_H
 
-#include "command_support.h"
+#include "subcommand_options.h"
 
 #include <CGAL_ext/Detail_scaling_settings.h>
 #include <CGAL_ext/Upsampling_settings.h>

@@ -2,8 +2,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "point_io.h"
 
-#include "cli_support.h"
-#include "file_checks.h"
+#include "program_basics.h"
+#include "guarded_reading.h"
 
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Point_set_3.h>

@@ -1,6 +1,6 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "cli_support.h"
+#include "program_basics.h"
 
 #include <algorithm>
 #include <atomic>

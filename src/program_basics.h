@@ -1,8 +1,9 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-// What every subcommand of point-detail shares: errors, whole-or-nothing output files, progress and Ctrl-C, reports.
-#ifndef POINT_DETAIL_CLI_SUPPORT_H
-#define POINT_DETAIL_CLI_SUPPORT_H
+// What a run of point-detail needs, whatever its subcommand: errors, the process set-up, Ctrl-C, progress,
+// whole-or-nothing output files, reports.
+#ifndef POINT_DETAIL_PROGRAM_BASICS_H
+#define POINT_DETAIL_PROGRAM_BASICS_H
 
 #include <nlohmann/json.hpp>
 

@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `point-detail render`: a headless picture of a point set.
 #include "commands.h"
-#include "command_support.h"
+#include "subcommand_options.h"
 
 namespace point_detail {
 namespace {

@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `point-detail simplify`: simplification sample points.
 #include "commands.h"
-#include "command_support.h"
+#include "subcommand_options.h"
 
 #include <CGAL_ext/compute_simplification_sample_points.h>
 

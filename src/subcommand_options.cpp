@@ -1,6 +1,6 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "command_support.h"
+#include "subcommand_options.h"
 
 #include <CGAL_ext/estimate_oriented_normals.h>
 

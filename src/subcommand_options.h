@@ -2,10 +2,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // What the subcommands of point-detail share around the library: options, outputs, reading with a memory
 // check, normals for clouds that come without.
-#ifndef POINT_DETAIL_COMMAND_SUPPORT_H
-#define POINT_DETAIL_COMMAND_SUPPORT_H
+#ifndef POINT_DETAIL_SUBCOMMAND_OPTIONS_H
+#define POINT_DETAIL_SUBCOMMAND_OPTIONS_H
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "edit_spec.h"
 #include "point_io.h"
 #include "render.h"

@@ -5,7 +5,7 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/generated_shapes.h>
 
-#include "cli_support.h"
+#include "program_basics.h"
 #include "program_run.h"
 #include "test_support.h"
 
