@@ -6,10 +6,10 @@
 // the two diffusion encodings compared on a real scan.
 // Usage: bench_editing [--quick] [--data DIR] [--out DIR] [--reps N]
 // Writes DIR/editing_results.csv and DIR/editing_results.md.
-// Or: bench_editing --check-cactus --data DIR, a test against CGAL's converged SRE_ARAP (check_cactus).
 #include "bench_support.h"
 #include "program_basics.h"
 #include "edit_spec.h"
+#include "cactus_comparison.h"
 #include "editing_metrics.h"
 #include "point_io.h"
 
@@ -27,9 +27,11 @@
 #include <cstdarg>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 namespace fs = std::filesystem;
 
@@ -278,6 +280,8 @@ struct Cactus
     return deformed_points(*d);
   }
   double degrees(double fraction) const { return fraction * turn.angle() * 180 / CGAL_PI; }
+
+  mutable std::map<std::tuple<double, Cgal_arap, unsigned>, internal::Matrix_n3> cgal_results; // Cactus_comparison's
 };
 
 std::optional<Cactus> read_cactus(const fs::path& data)
@@ -429,73 +433,35 @@ void sample_point_quality(const std::string& name, const Point_cloud& cloud, con
 }
 
 
-/// `bench_editing --check-cactus`, a test (ctest `cactus_arap_convergence`) against CGAL's converged mesh ARAP
-/// on the cactus at 21 and 70 degrees: from 3 to 10 to 30 iterations per step, ARAP mode must not move away
-/// from CGAL's converged SRE_ARAP nor ORIGINAL_ARAP (the energy it shares), with the smooth-rotation term (1)
-/// not away from SRE_ARAP (its energy), and with cotangent weights not away from ORIGINAL_ARAP (whose
-/// cotangent energy they mirror); with 300 iterations, the smooth-rotation term must land within 3 % of the
-/// diagonal of SRE_ARAP and cotangent weights within 2.5 % of ORIGINAL_ARAP, and with 1,000 SRE_ARAP's own
-/// energy (cotangent weights, the term 0.02 of the surface's area) within 2 % of SRE_ARAP. The references are converged:
-/// SRE_ARAP's own 10 iterations stop 10-27 % of the diagonal short. Returns the process's exit status.
-int check_cactus(const fs::path& data)
+Cactus_comparison::Cactus_comparison(const fs::path& data)
 {
-  const std::optional<Cactus> c = read_cactus(data);
-  if(!c) {
-    std::fprintf(stderr, "bench_editing: no cactus under %s (run scripts/fetch_data.sh)\n", data.string().c_str());
-    return 1;
-  }
-  bool ok = true;
-  for(double fraction : {0.3, 1.0}) {
+  std::optional<Cactus> c = read_cactus(data);
+  if(!c) throw std::runtime_error("no cactus under " + data.string() + " (run scripts/fetch_data.sh)");
+  m_cactus = std::make_unique<Cactus>(std::move(*c));
+}
+
+Cactus_comparison::~Cactus_comparison() = default;
+
+double Cactus_comparison::degrees(double fraction) const { return m_cactus->degrees(fraction); }
+
+CGAL_ext::Detail_preserving_deformation_settings Cactus_comparison::settings() const { return m_cactus->full.settings; }
+
+double Cactus_comparison::distance_to_cgal(double fraction, const CGAL_ext::Detail_preserving_deformation_settings& settings,
+                                           Cgal_arap kind, unsigned iterations) const
+{
+  internal::Matrix_n3& reference = m_cactus->cgal_results[std::make_tuple(fraction, kind, iterations)];
+  if(reference.rows() == 0) {
     Stats pre{}, dt{};
-    const internal::Matrix_n3 sre = mesh_arap<CGAL::SRE_ARAP>(c->mesh, c->edit(fraction), 3000, pre, dt, 1);
-    const internal::Matrix_n3 original = mesh_arap<CGAL::ORIGINAL_ARAP>(c->mesh, c->edit(fraction), 3000, pre, dt, 1);
-    using Weights = CGAL_ext::Rigid_edge_weights;
-    using Scale = CGAL_ext::Rotation_smoothing_scale;
-    struct Pair
-    {
-      const char* what; double smoothing; Weights weights; const internal::Matrix_n3& reference; const char* name;
-      double bound; // the most the distance may be after `bound_iterations` (0: not checked)
-      Scale scale = Scale::edge_lengths;
-      unsigned bound_iterations = 300;
-    };
-    for(const Pair& pair : {Pair{"ARAP", 0, Weights::uniform, sre, "SRE_ARAP", 0},
-                            Pair{"ARAP", 0, Weights::uniform, original, "ORIGINAL_ARAP", 0},
-                            Pair{"ARAP with smooth rotations", 1, Weights::uniform, sre, "SRE_ARAP", 0.03},
-                            Pair{"ARAP with cotangent weights", 0, Weights::cotangent, original, "ORIGINAL_ARAP", 0.025},
-                            Pair{"ARAP with SRE_ARAP's energy", 0.02, Weights::cotangent, sre, "SRE_ARAP", 0.02,
-                                 Scale::surface_area, 1000}}) {
-      CGAL_ext::Detail_preserving_deformation_settings s = c->full.settings;
-      s.rotations = CGAL_ext::Detail_rotation::as_rigid_as_possible;
-      s.rigid_rotation_smoothing = pair.smoothing;
-      s.rigid_rotation_smoothing_scale = pair.scale;
-      s.rigid_edge_weights = pair.weights;
-      double previous = INFINITY;
-      for(unsigned iterations : {3u, 10u, 30u}) {
-        s.rigid_iterations = iterations;
-        const double distance = hausdorff(c->ours(fraction, s, 1), pair.reference) / c->diagonal;
-        const bool grew = distance > previous + 1e-3;
-        std::printf("%.0f degrees, %s, %u iterations: %.2f %% of the diagonal from %s converged%s\n", c->degrees(fraction), pair.what,
-                    iterations, 100 * distance, pair.name, grew ? " (grew: FAILED)" : "");
-        ok = ok && !grew;
-        previous = distance;
-      }
-      if(!(pair.bound > 0)) continue;
-      s.rigid_iterations = pair.bound_iterations;
-      const double distance = hausdorff(c->ours(fraction, s, 1), pair.reference) / c->diagonal;
-      const bool far = distance > pair.bound;
-      std::printf("%.0f degrees, %s, %u iterations: %.2f %% from %s converged (at most %.1f %%)%s\n", c->degrees(fraction),
-                  pair.what, pair.bound_iterations, 100 * distance, pair.name, 100 * pair.bound, far ? " FAILED" : "");
-      ok = ok && !far;
-    }
+    const Edit_description edit = m_cactus->edit(fraction);
+    reference = kind == Cgal_arap::sre ? mesh_arap<CGAL::SRE_ARAP>(m_cactus->mesh, edit, iterations, pre, dt, 1)
+                                       : mesh_arap<CGAL::ORIGINAL_ARAP>(m_cactus->mesh, edit, iterations, pre, dt, 1);
   }
-  std::printf("%s\n", ok ? "passed" : "FAILED");
-  return ok ? 0 : 1;
+  return hausdorff(m_cactus->ours(fraction, settings, 1), reference) / m_cactus->diagonal;
 }
 
 int run(int argc, char** argv)
 {
   tune_process_environment(argv);
-  if(argc == 4 && std::string(argv[1]) == "--check-cactus" && std::string(argv[2]) == "--data") return check_cactus(argv[3]);
   const Bench_options options = parse_bench_options(argc, argv, "bench_editing", 3);
   if(!options.valid) return 2;
   const bool quick = options.quick;
