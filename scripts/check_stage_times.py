@@ -4,7 +4,7 @@ and the stages add up to the whole run (so no stage went untimed or was skipped)
 Usage: check_stage_times.py STAGE_TIMES_TSV TOTAL_SECONDS"""
 import sys
 
-EXPECTED = ["setup", "release build", "release tests + quick benchmark", "quoted figures", "include layers",
+EXPECTED = ["setup", "release build", "release tests + quick benchmark", "quoted figures", "include layers", "layout",
             "API reference", "pictures", "sanitized build", "sanitized tests", "fuzz build", "fuzz runs"]
 SLACK_SECONDS = 3.0      # the script's own glue between stages
 BUDGET_SECONDS = 25 * 60  # on a fresh clone with the compiler cache off (doc/build_time.md)

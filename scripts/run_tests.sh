@@ -4,7 +4,8 @@
 # install; examples, determinism reruns, the installed package, the solver without CHOLMOD, real scans, the Python
 # package) with ctest, beside them the benchmark harness in its quick mode, that
 # README's headline figures come from committed result files, that no internal header includes an algorithm
-# header (scripts/include_layers.py), the API reference (no Doxygen warning allowed), the manual's pictures (into
+# header (scripts/include_layers.py), that the C++ lines changed since .clang-format follow it
+# (scripts/check_format.sh), the API reference (no Doxygen warning allowed), the manual's pictures (into
 # the build folder), the unit tests of the library and the program built with AddressSanitizer and
 # UndefinedBehaviorSanitizer (the unit tests again), and each fuzz target for 20 seconds. Ends with
 # the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/build_time.md
@@ -42,6 +43,7 @@ timed_stage "release tests + quick benchmark" release_tests_and_quick_benchmark
 quoted_figures() { python3 scripts/check_quoted_figures.py && /usr/bin/python3 -m pytest -q -p no:cacheprovider test/scripts; }
 timed_stage "quoted figures" quoted_figures
 timed_stage "include layers" python3 scripts/include_layers.py --check
+timed_stage layout bash scripts/check_format.sh
 timed_stage "API reference" bash scripts/build_api_docs.sh
 timed_stage pictures env BUILD_DIR="$build" DOC_IMAGES_DIR="$build/doc_images" bash scripts/make_doc_images.sh
 bash scripts/run_sanitized_tests.sh # times "sanitized build" and "sanitized tests"

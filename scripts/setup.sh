@@ -9,7 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libsuitesparse-dev libopenblas-dev
-  clang libclang-rt-14-dev time bc
+  clang clang-format-14 libclang-rt-14-dev time bc
   doxygen python3 python3-matplotlib
   pybind11-dev python3-dev python3-numpy python3-pytest
   python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
