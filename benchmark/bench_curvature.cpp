@@ -175,7 +175,7 @@ double flipped_fraction(const std::vector<Vector>& normals, const std::vector<Ve
 void bench_normals(const std::string& name, const Point_cloud& cloud, int reps, std::vector<Normals_row>& rows)
 {
   const std::size_t n = cloud.points.size();
-  if(n < CGAL_ext::default_normal_neighbors) return;
+  if(n <= CGAL_ext::default_normal_neighbors) return;
   std::vector<std::size_t> idx(n);
   std::iota(idx.begin(), idx.end(), std::size_t(0));
   auto add = [&](const std::string& method, Stats s, double flipped) {
@@ -199,8 +199,9 @@ void bench_normals(const std::string& name, const Point_cloud& cloud, int reps, 
     for(std::size_t i = 0; i < n; ++i) items.emplace_back(cloud.points[i], Vector(0, 0, 0), i);
     const auto np = CGAL::parameters::point_map(CGAL::Nth_of_tuple_property_map<0, Item>())
                       .normal_map(CGAL::Nth_of_tuple_property_map<1, Item>());
-    CGAL::jet_estimate_normals<CGAL::Parallel_tag>(items, CGAL_ext::default_normal_neighbors, np);
-    CGAL::mst_orient_normals(items, CGAL_ext::default_normal_neighbors, np);
+    // CGAL's k counts the point itself: k + 1 fits the same jets.
+    CGAL::jet_estimate_normals<CGAL::Parallel_tag>(items, CGAL_ext::default_normal_neighbors + 1, np);
+    CGAL::mst_orient_normals(items, CGAL_ext::default_normal_neighbors + 1, np);
   });
   std::vector<Vector> theirs(n);
   for(const Item& item : items) theirs[std::get<2>(item)] = std::get<1>(item);

@@ -230,7 +230,9 @@ PYBIND11_MODULE(_core, m)
         "k"_a = default_normal_neighbors, "progress"_a = py::none(),
         doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
             "estimates them for an input without normals).",
-            {points_doc, "k : int\n    Neighbours of each point's fit, the point itself counted; at most the number of points.",
+            {points_doc,
+             "k : int\n    Neighbours of each point's fit, the point itself not counted; at least 5, fewer than the "
+             "number of points.",
              progress_doc},
             "numpy.ndarray\n    (n, 3) float64 normals.")
           .c_str());

@@ -108,7 +108,7 @@ CGAL_ext::Detail_manipulation_result manipulate(bool enhance, const Point_cloud&
     if(out.points[i] != cloud.points[i]) displaced.push_back(i);
   if(!displaced.empty())
     CGAL_ext::refit_normals(index_range(out.points.size()), displaced,
-                            std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(out.points.size())),
+                            std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(out.points.size() - 1)),
                             CGAL::parameters::point_map(CGAL::make_property_map(out.points))
                               .normal_map(CGAL::make_property_map(out.normals)));
   out.set_scalar("displacement", std::move(displacement));

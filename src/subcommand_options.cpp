@@ -73,7 +73,7 @@ void ensure_normals(Point_cloud& cloud, Progress_printer& progress, Report& repo
   report.time("normals", [&] {
     if(!CGAL_ext::estimate_oriented_normals(
          index_range(cloud.points.size()),
-         std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(cloud.points.size())),
+         std::min<unsigned int>(CGAL_ext::default_normal_neighbors, unsigned(cloud.points.size() - 1)),
          CGAL::parameters::point_map(CGAL::make_property_map(cloud.points))
            .normal_map(CGAL::make_property_map(estimated))
            .callback(progress.stage("normals"))))

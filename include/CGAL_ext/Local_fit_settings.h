@@ -10,8 +10,10 @@ namespace CGAL_ext {
 // How the local surface is fitted around each point: the neighbour counts of normal estimation and of the
 // curvature fit, and the curvature fit's method.
 
-/// Default neighbour count of normal estimation when a point set comes without normals.
-constexpr unsigned int default_normal_neighbors = 18;
+/// Default neighbour count (the point itself not counted) of normal estimation when a point set comes without
+/// normals: each jet is fitted to the point and 17 neighbours, 18 points, as CGAL's `jet_estimate_normals` with
+/// its k = 18.
+constexpr unsigned int default_normal_neighbors = 17;
 
 /*!
   \ingroup PkgCGALExtRef

@@ -21,11 +21,11 @@ namespace CGAL_ext {
   \ingroup PkgCGALExtAlgorithms
   Estimates an oriented unit normal of every point, for scans that come without normals: what
   `CGAL::jet_estimate_normals` followed by `CGAL::mst_orient_normals` do, in parallel and in a fraction of the
-  time and memory (1M points, 2 threads: 3.9 s against 34 s; a whole `point-detail details` run on a raw 1M-point
-  scan peaks at 0.54 GiB against 2.0 GiB; doc/curvature.md, "Normals").
+  time and memory (doc/curvature.md, "Normals").
 
-  The normal of a point is that of the degree-2 jet fitted to it and its `k - 1` nearest neighbours (CGAL's
-  jet). The orientation propagates over a minimum spanning forest of the same neighbour graph, weighted by
+  The normal of a point is that of the degree-2 jet fitted to it and its `k` nearest neighbours (CGAL's jet;
+  CGAL's own k counts the point, so CGAL's `jet_estimate_normals` with `k + 1` fits the same jets). The
+  orientation propagates over a minimum spanning forest of the same neighbour graph, weighted by
   `1 - |n_i . n_j|`, from the highest point of each connected component, whose normal is turned to +z: every
   component is oriented, where `CGAL::mst_orient_normals` orients only the one holding the highest point. As
   with any propagation, two sheets closer than the neighbourhood size, or an open surface whose highest
@@ -36,8 +36,9 @@ namespace CGAL_ext {
   \tparam PointRange a model of `ConstRange` whose value type is the key type of the property maps.
 
   \param points the input points; not modified (the normals go to the normal map)
-  \param k neighbours of a jet, the point itself counted as in CGAL's functions; at least 6 (a degree-2 jet has
-           6 coefficients) and at most the number of points. Default in the program: `default_normal_neighbors`.
+  \param k neighbours of a jet, the point itself not counted (as everywhere in the package); at least 5 (a
+           degree-2 jet has 6 coefficients) and smaller than the number of points. Default in the program and in
+           Python: `default_normal_neighbors`.
   \param np `point_map`, `normal_map` (required: a `WritablePropertyMap` that receives the unit normals),
          `callback` (progress in [0, 1]; false cancels, and the normal map is then untouched), `geom_traits`
 
@@ -66,9 +67,11 @@ bool estimate_oriented_normals(const PointRange& points, unsigned int k, const N
   if(cloud.size() < 6)
     throw Invalid_input(std::string(who) + ": " + std::to_string(cloud.size()) +
                         " points; estimating normals needs at least 6 (a jet has 6 coefficients)");
-  if(k < 6 || k > cloud.size())
-    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) + " must be at least 6 (a jet has 6 "
-                        "coefficients) and at most the number of points (" + std::to_string(cloud.size()) + ")");
+  if(k < 5 || k >= cloud.size())
+    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) +
+                        " neighbours must be at least 5 (a jet has 6 coefficients: the point and 5 neighbours) "
+                        "and smaller than the number of points (" +
+                        std::to_string(cloud.size()) + ")");
   internal::Progress progress(
     choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>()));
   internal::Matrix_n3 normals;

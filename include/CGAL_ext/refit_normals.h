@@ -28,9 +28,9 @@ namespace CGAL_ext {
   \ingroup PkgCGALExtAlgorithms
   Re-fits the normals of points that moved (after `scale_geometric_details`, `enhance_geometric_details` or
   any displacement of a part of a point set), so that shading and later processing see the new shape, not
-  the old one: the normal of each point of `indices`, and of each point among their `k - 1` nearest
+  the old one: the normal of each point of `indices`, and of each point among their `k` nearest
   neighbours (their fits see the moved points), becomes that of a degree-2 height function fitted to the point
-  and its `k - 1` nearest neighbours over their principal plane, turned to the side of its current normal.
+  and its `k` nearest neighbours over their principal plane, turned to the side of its current normal.
   The other normals are not touched. A region flattened by `s = 0` gets the normals of the flat surface (a
   test checks within 3 degrees); one enhanced gets those of its sharper details. The fits read only the moved
   points' surroundings, so a small region of a large set costs what its surroundings cost.
@@ -40,8 +40,8 @@ namespace CGAL_ext {
 
   \param points the points, after they moved
   \param indices the indices (positions in `points`) of the points that moved
-  \param k neighbours of a fit, the point itself counted; at least 6 (the fit has 6 coefficients) and at most
-           the number of points
+  \param k neighbours of a fit, the point itself not counted (as everywhere in the package); at least 5 (the
+           fit has 6 coefficients) and smaller than the number of points
   \param np `point_map`, `normal_map` (required, read and written: the current normals give each new one its
          side), `geom_traits`
 
@@ -63,9 +63,12 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
   const std::vector<SC_point> copy = internal::copy_points(points, NP_helper::get_const_point_map(points, np), who);
   internal::check_spans_a_surface(copy, who);
   const std::size_t n = copy.size();
-  if(k < 6 || k > n)
-    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) + " must be at least 6 (the fit has 6 "
-                        "coefficients) and at most the number of points (" + std::to_string(n) + ")");
+  if(k < 5 || k >= n)
+    throw Invalid_input(std::string(who) + ": k = " + std::to_string(k) +
+                        " neighbours must be at least 5 (the fit has 6 coefficients: the point and 5 neighbours) "
+                        "and smaller than the number of points (" +
+                        std::to_string(n) + ")");
+  const unsigned int fit_size = k + 1; // a fit's points: the point and its k nearest neighbours
   if(!internal::has_given_normals<NamedParameters>(points))
     throw Invalid_input(std::string(who) + ": the points need normals (normal_map): they give the new normals their side");
   std::vector<int> identity(n);
@@ -75,8 +78,8 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
 
   // Only the moved points' surroundings take part (doc/design.md, "Refitted normals"): the points in their
   // bounding box grown by a reach, in spatial order. The reach is checked after the fact: when each moved
-  // point's k nearest points in the surroundings lie within d of it and the box holds the ball of radius 3 d
-  // about it, those are its k nearest in the whole set, and so are the k nearest of each of them (within 2 d
+  // point's fit_size nearest points in the surroundings lie within d of it and the box holds the ball of radius
+  // 3 d about it, those are its nearest in the whole set, and so are the nearest of each of them (within 2 d
   // of them). Otherwise the whole set is used.
   auto surroundings_within = [&](double reach) {
     if(!std::isfinite(reach)) return internal::sort_spatially<ConcurrencyTag>(copy, who);
@@ -101,9 +104,9 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     return cloud;
   };
   double reach = std::numeric_limits<double>::infinity();
-  if(moved.size() >= k && moved.size() < n) {
+  if(moved.size() >= fit_size && moved.size() < n) {
     // The first reach: three times twice the largest distance of up to 2,000 moved points to their k-th
-    // nearest moved point (twice: a margin for the moved points not probed).
+    // nearest other moved point (twice: a margin for the moved points not probed).
     internal::Matrix_n3 moved_positions(Eigen::Index(moved.size()), 3);
     for(std::size_t m = 0; m < moved.size(); ++m)
       moved_positions.row(Eigen::Index(m)) = position(std::size_t(moved[m]));
@@ -111,7 +114,7 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     internal::Matrix_n3 probes(Eigen::Index((moved.size() + stride - 1) / stride), 3);
     for(Eigen::Index q = 0; q < probes.rows(); ++q) probes.row(q) = moved_positions.row(q * Eigen::Index(stride));
     const internal::Neighbor_graph probe_neighbors =
-      internal::k_nearest_samples<ConcurrencyTag>(moved_positions, probes, k);
+      internal::k_nearest_samples<ConcurrencyTag>(moved_positions, probes, fit_size);
     double largest = 0;
     for(std::size_t q = 0; q < std::size_t(probes.rows()); ++q)
       largest = std::max(largest,
@@ -138,14 +141,15 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     for(int i : moved) moved_rows.push_back(surroundings_row[std::size_t(i)]);
     std::sort(moved_rows.begin(), moved_rows.end()); // queries in spatial order walk the tree's memory in order
     tree = std::make_unique<internal::Position_tree>(surroundings.positions, ConcurrencyTag());
-    neighbors = internal::fixed_degree_graph(moved.size(), k);
+    neighbors = internal::fixed_degree_graph(moved.size(), fit_size);
     std::vector<double> kth_distance(moved.size());
     internal::for_range<ConcurrencyTag>(0, moved.size(), [&](std::size_t m) {
-      int* out = neighbors.indices.data() + m * k;
-      tree->nearest(internal::Position_tree::point(surroundings.positions, moved_rows[m]), k, [&](int j, double d2) {
-        *out++ = j;
-        kth_distance[m] = std::sqrt(d2);
-      });
+      int* out = neighbors.indices.data() + m * fit_size;
+      tree->nearest(internal::Position_tree::point(surroundings.positions, moved_rows[m]), fit_size,
+                    [&](int j, double d2) {
+                      *out++ = j;
+                      kth_distance[m] = std::sqrt(d2);
+                    });
     });
     if(!std::isfinite(reach)) break;
     bool enough = true;
@@ -178,7 +182,7 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
       near.assign(neighbors.begin(std::size_t(moved_of_row[std::size_t(row)])),
                   neighbors.end(std::size_t(moved_of_row[std::size_t(row)])));
     else
-      tree->nearest(internal::Position_tree::point(surroundings.positions, row), k,
+      tree->nearest(internal::Position_tree::point(surroundings.positions, row), fit_size,
                     [&](int j, double) { near.push_back(j); });
     // The principal plane frames the fit: the old normal may be far from the new surface's (s = 0 on a bump).
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();

@@ -48,7 +48,7 @@ template <typename ConcurrencyTag>
 std::size_t orient_normals_by_spanning_forest(const Matrix_n3& positions, const Neighbor_graph& graph,
                                               Progress& progress, Matrix_n3& normals);
 
-/// Normals of a cloud that came without any: `estimate_jet_normals` on the point and its k - 1 nearest
+/// Normals of a cloud that came without any: `estimate_jet_normals` on the point and its k nearest
 /// neighbours, then `orient_normals_by_spanning_forest` on the same neighbour graph. Rows follow the cloud's
 /// order. Returns false when cancelled. Measurements against CGAL's functions: doc/curvature.md (Normals).
 template <typename ConcurrencyTag>
@@ -201,10 +201,10 @@ bool estimate_oriented_normals(const Spatial_point_cloud& cloud, unsigned int k,
                                Matrix_n3& normals)
 {
   const std::size_t n = cloud.size();
-  k = std::max<unsigned int>(6, std::min<unsigned int>(k, unsigned(n))); // a degree-2 jet has 6 coefficients
+  k = std::max<unsigned int>(5, std::min<unsigned int>(k, unsigned(n - 1))); // a degree-2 jet has 6 coefficients
   const Progress::Range whole = progress.range();
   progress.stage(whole.begin, whole.at(0.4));
-  const Neighbor_graph graph = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k - 1, progress);
+  const Neighbor_graph graph = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
   if(progress.cancelled()) return false;
   progress.stage(whole.at(0.4), whole.at(0.6));
   if(!estimate_jet_normals<ConcurrencyTag>(cloud.positions, graph, progress, normals)) return false;

@@ -43,7 +43,7 @@ def parser():
     filter_options(details)
     details.add_argument("--color-by", dest="color_by", choices=["detail_normal", "detail_magnitude"], default=S)
     normals = command("normals", "normals by jet fitting, oriented consistently across the tiles")
-    normals.add_argument("-k", type=int, default=S, help="neighbours of each fit, the point itself counted")
+    normals.add_argument("-k", type=int, default=S, help="neighbours of each fit, the point itself not counted")
     curvature = command("curvature", "signed mean curvature of every point")
     curvature.add_argument("-k", type=int, default=S, help="neighbours of each fit")
     curvature.add_argument("--fitting", choices=["closed_form", "monge"], default=S)

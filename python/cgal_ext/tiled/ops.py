@@ -78,7 +78,7 @@ class Operation:
 
     def normal_neighbors(self):
         """The neighbours of an estimated normal's fit (itself not counted)."""
-        return signature_defaults(_core.estimate_oriented_normals)["k"] - 1  # the jet's k counts the point
+        return signature_defaults(_core.estimate_oriented_normals)["k"]
 
     def own_neighbors(self):
         """The neighbours (itself not counted) of the operation's own values."""
@@ -145,7 +145,7 @@ class Normals(Operation):
     function = _core.estimate_oriented_normals
 
     def own_neighbors(self):
-        return int(self.settings["k"]) - 1
+        return int(self.settings["k"])
 
     def normal_neighbors(self):
         return self.own_neighbors()
