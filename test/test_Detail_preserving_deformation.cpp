@@ -898,6 +898,41 @@ TEST(DetailPreservingDeformation, DeformedPointsAreWrittenInInputOrderAndTheUnmo
   }
 }
 
+TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying)
+{
+  // diffuse_in_input_order() writes the caller's arrays in place: the bits of diffuse() followed by the copy of
+  // for_each_deformed_point(), drag after drag, with the exact handle and its collar, in both rotation modes.
+  // Until the next diffuse(), the internal results it did not write are refused.
+  const Tentacle t(2500);
+  const std::size_t n = t.shape.points.size();
+  for(CGAL_ext::Detail_rotation rotations : both_rotations) {
+    auto d = t.edit(with_order(Detail_order::quadric, rotations));
+    ASSERT_TRUE(d->preprocess());
+    ASSERT_FALSE(d->collar_handle_points().empty());
+    std::vector<double> points(3 * n), normals(3 * n);
+    d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
+      std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
+      std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
+    });
+    for(int step = 1; step <= 3; ++step) {
+      const auto [R, shift] =
+        turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.3 * step, Eigen::Vector3d(0, 0.05, 0));
+      d->set_handle_transform(0, R, shift);
+      ASSERT_TRUE(d->deform());
+      d->diffuse_in_input_order(points.data(), normals.data());
+      EXPECT_THROW(d->deformed_point(0), CGAL_ext::Invalid_input);
+      EXPECT_THROW(d->restore_details(), CGAL_ext::Invalid_input);
+      d->diffuse();
+      for(std::size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&points[3 * i])), d->deformed_point(i))
+          << "step " << step << ", point " << i;
+        ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&normals[3 * i])), d->deformed_normal(i))
+          << "step " << step << ", point " << i;
+      }
+    }
+  }
+}
+
 TEST(DetailPreservingDeformation, SequentialAndParallelAgreeAndClustersKeepTheirStatus)
 {
   const Tentacle t(6000);

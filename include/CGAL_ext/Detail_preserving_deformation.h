@@ -40,23 +40,19 @@ namespace CGAL_ext {
   `CGAL::Surface_mesh_deformation`: select a region of interest (ROI) and handle groups, `preprocess()`,
   then move the handles with `set_handle_transform()` and call `deform()` and `diffuse()` as often as wanted.
 
-  - The points are clustered into sample points (simplification sample points, SSPs) that never mix fixed, ROI
-    and handle points (`compute_simplification_sample_points`).
+  - The points are clustered into sample points (SSPs) that never mix fixed, ROI and handle points.
   - `deform()` keeps the sample points' details `delta = f(K) s` in the least-squares sense with the handles on
-    their targets: `min alpha sum_{i in ROI} ||(f(K) s')_i - R(Q_i) delta_i||^2` subject to `s'_h = R_g s_h + t_g`
-    (with a finite `handle_weight` w, the paper's soft constraint `+ w sum_h ||s'_h - (R_g s_h + t_g)||^2`). The
-    normal matrix is factored once by `preprocess()`; a drag changes only the right-hand side.
-  - The details turn by rotations propagated from the handles by the strength field `f = beta(d0 / (d0 + d1))`,
-    `beta(t) = 3t^2 - 2t^3`, `Q_i = nlerp(identity, Q_handle, f)`, or (`Detail_rotation::as_rigid_as_possible`)
-    fitted to the solved shape, alternating with the solve.
+    their targets, `min sum_{i in ROI} ||(f(K) s')_i - R(Q_i) delta_i||^2` with `s'_h = R_g s_h + t_g` (or the
+    paper's soft constraint, `handle_weight`); `preprocess()` factors the normal matrix, a drag is one solve.
+  - The details turn by the handles' rotations blended by the strength field (`strength()`), or by rotations
+    fitted to the solved shape, alternating with the solve (`Detail_rotation::as_rigid_as_possible`).
   - `diffuse()` carries every point by its `m` nearest sample points' motions, blended by weights that vanish at
-    the (m+1)-th, so the motion is continuous in space; normals turn with the blended map. With exact handles,
-    handle points follow their transform exactly.
+    the (m+1)-th, so the motion is continuous in space; normals turn with the blended map.
 
-  Identities (tested): handle points end on their targets to rounding; unmoved handles return every point
-  exactly; with the whole model as ROI, moving every handle group by one rigid motion moves every point and
-  normal rigidly; points whose sample points are all fixed never move. The object copies the points and normals
-  at construction and writes the caller's range only in `diffuse(points, np)`; it is not copyable.
+  Identities (tested): handle points end on their targets; unmoved handles return every point exactly; with the
+  whole model as ROI, moving every handle group by one rigid motion moves every point and normal rigidly; points
+  whose sample points are all fixed never move. The object copies the points and normals at construction and
+  writes to the caller only in the calls given its points or arrays; it is not copyable.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag`, `CGAL::Parallel_tag` or `CGAL::Parallel_if_available_tag`.
 
@@ -251,6 +247,7 @@ public:
                                                m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms,
                                                m_deformed_points, m_deformed_normals);
     m_diffused = true;
+    m_diffused_elsewhere = false;
     m_statistics.diffuse_seconds = seconds_since(start);
   }
 
@@ -265,6 +262,26 @@ public:
     check_size(points, "diffuse()");
     diffuse();
     internal::write_points_and_normals(points, np, m_row_of, m_deformed_points, m_deformed_normals);
+  }
+
+  /*!
+    `diffuse()` into arrays in input order (numpy's, a renderer's): writes each point a drag can move straight to
+    row `i` of `points` and `normals` (input point `i`, three doubles per row), walking them in input order; the
+    other rows must hold the input points (as after one `diffuse(points, np)`). The same bits as `diffuse()`, but
+    the internal arrays keep the last `diffuse()`'s: until the next one, `deformed_point()`,
+    `for_each_deformed_point()` and `restore_details()` throw Invalid_input.
+  */
+  void diffuse_in_input_order(double* points, double* normals)
+  {
+    check_preprocessed("diffuse_in_input_order()");
+    const auto start = Clock::now();
+    update_sample_motions();
+    m_diffusion.template apply_in_input_order<ConcurrencyTag>(m_cloud, m_normals, m_sample_points.positions,
+                                                              m_deformed_samples, m_settings.diffusion_origin,
+                                                              m_selection.transforms, points, normals);
+    m_diffused = false;
+    m_diffused_elsewhere = true;
+    m_statistics.diffuse_seconds = seconds_since(start);
   }
 
   /*!
@@ -326,10 +343,10 @@ public:
   bool is_preprocessed() const { return m_preprocessed; }
   const Statistics& statistics() const { return m_statistics; }
 
-  Eigen::Vector3d point(std::size_t i) const { return m_cloud.positions.row(m_row_of.at(i)).transpose(); }
-  Eigen::Vector3d normal(std::size_t i) const { return m_normals.row(m_row_of.at(i)).transpose(); }
-  Eigen::Vector3d deformed_point(std::size_t i) const { return m_deformed_points.row(m_row_of.at(i)).transpose(); }
-  Eigen::Vector3d deformed_normal(std::size_t i) const { return m_deformed_normals.row(m_row_of.at(i)).transpose(); }
+  Eigen::Vector3d point(std::size_t i) const { return of_point(m_cloud.positions, i); }
+  Eigen::Vector3d normal(std::size_t i) const { return of_point(m_normals, i); }
+  Eigen::Vector3d deformed_point(std::size_t i) const { return of_point(current(m_deformed_points), i); }
+  Eigen::Vector3d deformed_normal(std::size_t i) const { return of_point(current(m_deformed_normals), i); }
 
   /// Calls `write(i, point, normal)` for every input index `i` with its deformed position and normal (three
   /// doubles each), in parallel and in increasing `i`. With `movable_only`, only for the points a region sample
@@ -337,8 +354,9 @@ public:
   template <typename Writer>
   void for_each_deformed_point(const Writer& write, bool movable_only = false) const
   {
-    internal::for_each_row_in_input_order<ConcurrencyTag>(m_row_of, movable_only ? &m_diffusion.movable_points : nullptr,
-                                                          m_deformed_points, m_deformed_normals, write);
+    internal::for_each_row_in_input_order<ConcurrencyTag>(m_row_of,
+                                                          movable_only ? &m_diffusion.movable_points : nullptr,
+                                                          current(m_deformed_points), m_deformed_normals, write);
   }
 
   /// The sample point of input point `i` (after `preprocess()`).
@@ -445,6 +463,16 @@ private:
   {
     if(!m_preprocessed) throw Invalid_input(std::string(who) + ": " + call + " needs preprocess() or deform() first");
   }
+  Eigen::Vector3d of_point(const Matrix_n3& rows, std::size_t i) const { return rows.row(m_row_of.at(i)).transpose(); }
+  // The internal deformed points or normals, unless the last diffusion wrote the caller's arrays instead.
+  const Matrix_n3& current(const Matrix_n3& deformed) const
+  {
+    if(m_diffused_elsewhere)
+      throw Invalid_input(std::string(who) +
+                          ": the last diffusion wrote the caller's arrays (diffuse_in_input_order()); "
+                          "call diffuse() to read its result here");
+    return deformed;
+  }
   static double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
   // Every point and sample point back to its input position, no rotation.
@@ -456,7 +484,7 @@ private:
     m_diffusion.turns.reset();
     m_detail_rotations.assign(m_sample_points.size(), Eigen::Matrix3d::Identity());
     m_rigid_drag.reset(m_selection.transforms.size());
-    m_diffused = false;
+    m_diffused = m_diffused_elsewhere = false;
   }
 
   // The input and the selection.
@@ -483,6 +511,7 @@ private:
   Matrix_n3 m_deformed_samples;
   std::vector<Eigen::Matrix3d> m_detail_rotations; // per sample point: R(Q_s), propagated or fitted
   bool m_diffused = false; // diffuse() ran since preprocess() or reset(): the stencil holds its motions
+  bool m_diffused_elsewhere = false; // diffuse_in_input_order() ran since: m_deformed_points are not its result
   Matrix_n3 m_deformed_points, m_deformed_normals;
   Statistics m_statistics;
 };

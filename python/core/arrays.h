@@ -64,6 +64,13 @@ struct Rows3
   }
 };
 
+/// Whether `rows` are contiguous rows of three aligned doubles, as a C-ordered (n, 3) float64 array's.
+inline bool is_c_contiguous(const Rows3& rows)
+{
+  return rows.row_stride == py::ssize_t(3 * sizeof(double)) && rows.column_stride == py::ssize_t(sizeof(double)) &&
+         reinterpret_cast<std::uintptr_t>(rows.data) % alignof(double) == 0;
+}
+
 /// The span of memory the library read through the points' and normals' maps since `_trace_reads(True)`: how the
 /// tests see that an input is read in place, not copied (off by default; one relaxed load per read).
 struct Read_trace

@@ -100,15 +100,25 @@ public:
   /// float64 arrays, reused from drag to drag), else into new arrays.
   Deformed_result diffuse(const Optional_array_like& points_out, const Optional_array_like& normals_out)
   {
-    return results([&] { m_deformation->diffuse(); }, points_out, normals_out);
+    return results([&] { m_deformation->diffuse(); }, points_out, normals_out, true);
   }
 
   Deformed_result restore_details(const Optional_array_like& points_out, const Optional_array_like& normals_out)
   {
-    return results([&] { m_deformation->restore_details(); }, points_out, normals_out);
+    return results(
+      [&] {
+        // It works on the library's own result of the diffusion, which the last diffuse() may have left elsewhere.
+        if(m_diffused_in_place) m_deformation->diffuse();
+        m_deformation->restore_details();
+      },
+      points_out, normals_out);
   }
 
-  void reset() { m_deformation->reset(); }
+  void reset()
+  {
+    m_deformation->reset();
+    m_diffused_in_place = false;
+  }
 
   Sample_points_of sample_point_of(const Array_like& points)
   {
@@ -309,9 +319,12 @@ private:
 
   /// Runs `step`, then writes every point's and normal's deformed position in the caller's order: the whole
   /// arrays, or, when they are the very arrays written whole since the last preprocessing, only the points the
-  /// edit can move (Detail_preserving_deformation::for_each_deformed_point).
+  /// edit can move (Detail_preserving_deformation::for_each_deformed_point). A diffusion (`is_diffusion`) into
+  /// such arrays, when they are C-contiguous, writes them in place instead, in one pass in the caller's order
+  /// (Detail_preserving_deformation::diffuse_in_input_order): the same results, without their copy.
   template <typename Step>
-  Deformed_result results(const Step& step, const Optional_array_like& points_out, const Optional_array_like& normals_out)
+  Deformed_result results(const Step& step, const Optional_array_like& points_out,
+                          const Optional_array_like& normals_out, bool is_diffusion = false)
   {
     const std::size_t n = size();
     auto [points, point_view] = output_rows3(points_out, "points_out", n);
@@ -319,7 +332,12 @@ private:
     // The same array objects (held here, so their memory cannot pass to other arrays meanwhile).
     const bool movable_only = m_deformation->is_preprocessed() && !points_out.is_none() && !normals_out.is_none() &&
                               points_out.is(m_written_points) && normals_out.is(m_written_normals);
+    const bool in_place = is_diffusion && movable_only && is_c_contiguous(point_view) && is_c_contiguous(normal_view);
     without_gil([&, point_view = point_view, normal_view = normal_view] {
+      if(in_place) {
+        m_deformation->diffuse_in_input_order(&point_view.at(0, 0), &normal_view.at(0, 0));
+        return 0;
+      }
       const auto write = [&](std::size_t i, const double* p, const double* v) {
         for(int c = 0; c < 3; ++c) {
           point_view.at(i, c) = p[c];
@@ -330,6 +348,7 @@ private:
       m_deformation->for_each_deformed_point(write, movable_only);
       return 0;
     });
+    m_diffused_in_place = in_place;
     // Caller's arrays written whole: the next drag into them writes only what it can move.
     m_written_points = points_out.is_none() || normals_out.is_none() ? py::object() : py::object(points_out);
     m_written_normals = points_out.is_none() || normals_out.is_none() ? py::object() : py::object(normals_out);
@@ -343,6 +362,7 @@ private:
     m_written_normals = py::object();
   }
   py::object m_written_points, m_written_normals;
+  bool m_diffused_in_place = false; // the last diffuse() wrote the caller's arrays in place, not the library's
 
   std::unique_ptr<Detail_preserving_deformation<>> m_deformation;
   std::function<bool(double)> m_callback;

@@ -442,6 +442,30 @@ def test_diffusing_into_the_same_arrays_drag_after_drag_is_the_fresh_result(sphe
     assert np.array_equal(Q, fresh.points)
 
 
+@pytest.mark.parametrize("layout", ["C", "F"])
+def test_drags_into_the_same_arrays_equal_fresh_results_in_place_or_copied(sphere, deformation, layout):
+    """Drag after drag into the same arrays, with no other call between: C-ordered arrays are written in place
+    (Deformation::diffuse_in_input_order), Fortran-ordered ones by the copy; either way the bits of a second
+    object's fresh arrays, in both rotation modes, and restore_details() into them afterwards too."""
+    points, normals = sphere
+    for rotations in ("propagate", "arap"):
+        d, twin = (cgal_ext.Deformation(points, normals, rotations=rotations) for _ in range(2))
+        for e in (d, twin):
+            e.insert_roi(points[:, 2] > 0.0)
+            e.create_handle_group(points[:, 2] > 0.8)
+        P, N = np.full_like(points, np.nan, order=layout), np.full_like(normals, np.nan, order=layout)
+        for degrees in (0, 10, 20, 30):
+            for e in (d, twin):
+                e.set_handle_transform(0, rotation_x(degrees), [0, 0.1 * degrees / 30, 0])
+                e.deform()
+            assert d.diffuse(P, N).points is P
+            fresh = twin.diffuse()
+            assert np.array_equal(P, fresh.points) and np.array_equal(N, fresh.normals), (rotations, degrees)
+        restored, fresh = d.restore_details(P, N), twin.restore_details()
+        assert restored.points is P
+        assert np.array_equal(P, fresh.points) and np.array_equal(N, fresh.normals), rotations
+
+
 @pytest.mark.parametrize("call, needle", [
     (lambda d: d.set_handle_transform(3, np.eye(3)), "no handle group 3"),
     (lambda d: d.set_handle_transform(-1, np.eye(3)), "no handle group -1"),

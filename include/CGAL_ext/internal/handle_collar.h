@@ -112,15 +112,31 @@ public:
   void apply(const Matrix_n3& positions, const Matrix_n3& normals, const std::vector<Eigen::Matrix3d>& rotations,
              const std::vector<Rigid_transform>& transforms, Matrix_n3& deformed_points, Matrix_n3& deformed_normals)
   {
+    apply_to<ConcurrencyTag>(positions, normals, rotations, transforms, deformed_points.data(), deformed_normals.data(),
+                             nullptr);
+  }
+
+  /// apply() on blends held elsewhere: row r's in row `destination_of_row[r]` of `out_points` and `out_normals`
+  /// (rows of three doubles).
+  template <typename ConcurrencyTag>
+  void apply_to(const Matrix_n3& positions, const Matrix_n3& normals, const std::vector<Eigen::Matrix3d>& rotations,
+                const std::vector<Rigid_transform>& transforms, double* out_points, double* out_normals,
+                const std::vector<int>* destination_of_row)
+  {
+    using Row = Eigen::Map<Eigen::RowVector3d>;
+    auto out = [&](double* base, Eigen::Index row) {
+      return Row(base + 3 * (destination_of_row ? (*destination_of_row)[std::size_t(row)] : row));
+    };
     for_range<ConcurrencyTag>(0, handle_rows.size(), [&](std::size_t h) {
       const Eigen::Index row = handle_rows[h];
       const std::size_t g = std::size_t(handle_groups[h]);
       const Eigen::RowVector3d exact = (rotations[g] * positions.row(row).transpose() + transforms[g].translation).transpose();
       const Eigen::RowVector3d exact_normal = (rotations[g] * normals.row(row).transpose()).transpose();
-      m_steps.row(Eigen::Index(h)) = exact - deformed_points.row(row);
-      m_normal_steps.row(Eigen::Index(h)) = exact_normal - deformed_normals.row(row);
-      deformed_points.row(row) = exact;
-      deformed_normals.row(row) = exact_normal;
+      Row point = out(out_points, row), normal = out(out_normals, row);
+      m_steps.row(Eigen::Index(h)) = exact - point;
+      m_normal_steps.row(Eigen::Index(h)) = exact_normal - normal;
+      point = exact;
+      normal = exact_normal;
     });
     for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t c) {
       const Eigen::Index row = rows[c];
@@ -131,8 +147,9 @@ public:
         normal_step += weight * m_normal_steps.row(entries.indices[std::size_t(e)]);
       }
       if(step.isZero(0) && normal_step.isZero(0)) return; // no step to take: bit for bit
-      deformed_points.row(row) += step;
-      deformed_normals.row(row) = (deformed_normals.row(row) + normal_step).normalized();
+      Row point = out(out_points, row), normal = out(out_normals, row);
+      point += step;
+      normal = (normal + normal_step).normalized();
     });
   }
 

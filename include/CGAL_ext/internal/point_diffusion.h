@@ -45,9 +45,12 @@ public:
                                            &samples.of_row);
     stencil.use_wide_vectors = !settings.portable_diffusion;
     moving_rows = internal::moving_rows(stencil, samples.labels, selection.labels, exact_handles);
+    m_movable_rows = moving_rows;
+    std::sort(m_movable_rows.begin(), m_movable_rows.end(),
+              [&](int a, int b) { return cloud.input_index[std::size_t(a)] < cloud.input_index[std::size_t(b)]; });
     movable_points.clear();
-    for(int row : moving_rows) movable_points.push_back(cloud.input_index[std::size_t(row)]);
-    std::sort(movable_points.begin(), movable_points.end());
+    for(int row : m_movable_rows) movable_points.push_back(cloud.input_index[std::size_t(row)]);
+    m_in_input_order = Stencil_in_input_order();
     collar.template setup<ConcurrencyTag>(cloud, selection.labels, selection.transforms.size(), exact_handles,
                                           settings.handle_collar, stencil, samples.positions, moving_rows);
     m_group_rotations.resize(selection.transforms.size());
@@ -80,8 +83,51 @@ public:
                                           deformed_normals);
   }
 
+  /// `apply` into arrays in input order (row i: input point i, three doubles; `cloud` and its rest `normals`), in
+  /// one pass over the movable points in input order: the same results bit for bit, written where the caller
+  /// keeps them instead of copied there. The first call after `setup` copies the movable points' rest positions,
+  /// normals and stencils into input order.
+  template <typename ConcurrencyTag>
+  void apply_in_input_order(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Matrix_n3& samples,
+                            const Matrix_n3& deformed_samples, Diffusion_origin origin,
+                            const std::vector<Rigid_transform>& transforms, double* out_points, double* out_normals)
+  {
+    Stencil_in_input_order& ordered = m_in_input_order;
+    if(!ordered.ready) {
+      const std::size_t count = m_movable_rows.size(), width = stencil.width();
+      ordered.points.resize(Eigen::Index(count), 3);
+      ordered.normals.resize(Eigen::Index(count), 3);
+      ordered.stencil.samples = fixed_degree_graph(count, width);
+      ordered.stencil.weights.resize(count * width);
+      for_range<ConcurrencyTag>(0, count, [&](std::size_t r) {
+        const std::size_t row = std::size_t(m_movable_rows[r]);
+        ordered.points.row(Eigen::Index(r)) = cloud.positions.row(Eigen::Index(row));
+        ordered.normals.row(Eigen::Index(r)) = normals.row(Eigen::Index(row));
+        stencil.copy_row(row, ordered.stencil.samples.indices.data() + r * width,
+                         ordered.stencil.weights.data() + r * width);
+      });
+      ordered.ready = true;
+    }
+    ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
+    ordered.stencil.copy_motions(stencil);
+    ordered.stencil.template move_points<ConcurrencyTag>(ordered.points, ordered.normals, samples, deformed_samples,
+                                                         origin, out_points, out_normals, nullptr, &movable_points);
+    collar.template apply_to<ConcurrencyTag>(cloud.positions, normals, m_group_rotations, transforms, out_points,
+                                             out_normals, &cloud.input_index);
+  }
+
 private:
+  // The movable points' rest positions, normals and stencils in input order, for apply_in_input_order().
+  struct Stencil_in_input_order
+  {
+    bool ready = false;
+    Matrix_n3 points, normals;
+    Diffusion_stencil stencil;
+  };
+
   std::vector<Eigen::Matrix3d> m_group_rotations; // the handle groups' rotations as matrices, per drag
+  std::vector<int> m_movable_rows;                // moving_rows in the order of their input indices
+  Stencil_in_input_order m_in_input_order;
 };
 
 } // namespace internal

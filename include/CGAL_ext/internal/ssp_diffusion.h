@@ -146,6 +146,17 @@ public:
   void set_motions(const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
                    const std::vector<Eigen::Matrix3d>& map);
 
+  /// Takes the motion records of `other`, a stencil over the same sample points.
+  void copy_motions(const Diffusion_stencil& other) { m_records = other.m_records; }
+
+  /// The second half of apply(), with the current records: moves the points listed in `active` (all when null)
+  /// and writes the a-th one's position and normal to row `destination[a]` of `out_points` and `out_normals`
+  /// (rows of three doubles; its own row when `destination` is null).
+  template <typename ConcurrencyTag>
+  void move_points(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
+                   const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
+                   double* out_normals, const std::vector<int>* active, const std::vector<int>* destination) const;
+
   /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `(A_j - I) p + c_j`
   /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
   /// stencil's records applied to `(p, 1)`.
@@ -214,12 +225,14 @@ private:
   }
 
   void apply_block(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-                   const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
-                   Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active) const;
+                   const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                   Diffusion_origin origin, double* out_points, double* out_normals, const std::vector<int>* active,
+                   const std::vector<int>* destination) const;
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
   void apply_block_wide(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-                        const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
-                        Matrix_n3& out_points, Matrix_n3& out_normals, const std::vector<int>* active) const;
+                        const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                        Diffusion_origin origin, double* out_points, double* out_normals,
+                        const std::vector<int>* active, const std::vector<int>* destination) const;
 #endif
 };
 
@@ -264,6 +277,16 @@ void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals,
                               const std::vector<int>* active)
 {
   set_motions<ConcurrencyTag>(sample_positions, deformed_sample_positions, map);
+  move_points<ConcurrencyTag>(points, normals, sample_positions, deformed_sample_positions, origin, out_points.data(),
+                              out_normals.data(), active, nullptr);
+}
+
+template <typename ConcurrencyTag>
+void Diffusion_stencil::move_points(const Matrix_n3& points, const Matrix_n3& normals,
+                                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                                    Diffusion_origin origin, double* out_points, double* out_normals,
+                                    const std::vector<int>* active, const std::vector<int>* destination) const
+{
   // Blocks of points: first every point's position and unnormalised normal, then the block's normalisations,
   // which are independent of each other and so overlap (one point's square root and division after another
   // left the processor waiting for each in turn: a third of the time).
@@ -274,13 +297,13 @@ void Diffusion_stencil::apply(const Matrix_n3& points, const Matrix_n3& normals,
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
     if(wide) {
       apply_block_wide(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
-                       out_normals, active);
+                       out_normals, active, destination);
       return;
     }
 #endif
     CGAL_USE(wide);
-    apply_block(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points, out_normals,
-                active);
+    apply_block(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
+                out_normals, active, destination);
   });
 }
 
@@ -303,27 +326,30 @@ void Diffusion_stencil::set_motions(const Matrix_n3& sample_positions, const Mat
 inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, const Matrix_n3& points,
                                            const Matrix_n3& normals, const Matrix_n3& sample_positions,
                                            const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
-                                           Matrix_n3& out_points, Matrix_n3& out_normals,
-                                           const std::vector<int>* active) const
+                                           double* out_points, double* out_normals, const std::vector<int>* active,
+                                           const std::vector<int>* destination) const
 {
+  using Row = Eigen::Map<Eigen::RowVector3d>;
   std::size_t turned[diffusion_block];
   std::size_t turned_count = 0;
   for(std::size_t a = first; a < last; ++a) {
     const std::size_t i = active ? std::size_t((*active)[a]) : a;
+    const std::size_t o = destination ? std::size_t((*destination)[a]) : i;
+    Row out_point(out_points + 3 * o), out_normal(out_normals + 3 * o);
     Eigen::Matrix3d turn;
     Eigen::Vector3d displacement;
     blend(i, points, sample_positions, deformed_sample_positions, origin, turn, displacement);
     if(turn.isZero(0) && displacement.isZero(0)) {
-      out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i));
-      out_normals.row(Eigen::Index(i)) = normals.row(Eigen::Index(i));
+      out_point = points.row(Eigen::Index(i));
+      out_normal = normals.row(Eigen::Index(i));
       continue;
     }
-    out_points.row(Eigen::Index(i)) = points.row(Eigen::Index(i)) + displacement.transpose();
-    out_normals.row(Eigen::Index(i)) =
+    out_point = points.row(Eigen::Index(i)) + displacement.transpose();
+    out_normal =
       cofactor_times(Eigen::Matrix3d::Identity() + turn, normals.row(Eigen::Index(i)).transpose()).transpose();
-    turned[turned_count++] = i;
+    turned[turned_count++] = o;
   }
-  for(std::size_t t = 0; t < turned_count; ++t) out_normals.row(Eigen::Index(turned[t])).normalize();
+  for(std::size_t t = 0; t < turned_count; ++t) Row(out_normals + 3 * turned[t]).normalize();
 }
 
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
@@ -349,11 +375,10 @@ __attribute__((target("avx2,fma"))) inline __m256d cross_wide(__m256d u, __m256d
 // apply_block() with one 4-wide register per column of the records: a stencil of 6 sample points blends in 24
 // fused multiply-adds instead of 96 multiplications and additions, and the cross products of the cofactor
 // matrix are two permutations and a multiply-subtract each.
-__attribute__((target("avx2,fma"))) inline void
-Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-                                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
-                                    Diffusion_origin origin, Matrix_n3& out_points, Matrix_n3& out_normals,
-                                    const std::vector<int>* active) const
+__attribute__((target("avx2,fma"))) inline void Diffusion_stencil::apply_block_wide(
+  std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
+  const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
+  double* out_points, double* out_normals, const std::vector<int>* active, const std::vector<int>* destination) const
 {
   const __m256d zero = _mm256_setzero_pd();
   std::size_t turned[diffusion_block];
@@ -382,8 +407,9 @@ Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const M
       displacement = column[3];
       for(int c = 0; c < 3; ++c) displacement = _mm256_fmadd_pd(_mm256_set1_pd(p[c]), column[c], displacement);
     }
-    double* out_p = out_points.data() + 3 * i;
-    double* out_n = out_normals.data() + 3 * i;
+    const std::size_t o = destination ? std::size_t((*destination)[a]) : i;
+    double* out_p = out_points + 3 * o;
+    double* out_n = out_normals + 3 * o;
     const double* n = normals.data() + 3 * i;
     // Still: a zero map (its fourth lanes are zero too) and a zero displacement (its fourth lane is not).
     const __m256d any = _mm256_or_pd(_mm256_or_pd(column[0], column[1]), column[2]);
@@ -403,7 +429,7 @@ Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const M
     _mm256_store_pd(normal, cofactor_n);
     for(int r = 0; r < 3; ++r) out_p[r] = moved_point[r];
     normal_x[turned_count] = normal[0], normal_y[turned_count] = normal[1], normal_z[turned_count] = normal[2];
-    turned[turned_count++] = i;
+    turned[turned_count++] = o;
   }
   // The block's normals normalised four at a time: one 4-wide square root and three 4-wide divisions for four
   // normals, where one at a time the divisions were a ninth of the kernel.
@@ -418,7 +444,7 @@ Diffusion_stencil::apply_block_wide(std::size_t first, std::size_t last, const M
     _mm256_store_pd(normal_y + t, _mm256_div_pd(y, length));
     _mm256_store_pd(normal_z + t, _mm256_div_pd(z, length));
     for(std::size_t u = t; u < std::min(t + 4, turned_count); ++u) {
-      double* out_n = out_normals.data() + 3 * turned[u];
+      double* out_n = out_normals + 3 * turned[u];
       out_n[0] = normal_x[u], out_n[1] = normal_y[u], out_n[2] = normal_z[u];
     }
   }
@@ -428,15 +454,17 @@ inline bool Diffusion_stencil::wide_vectors_available() { return false; }
 #endif
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
-#define CGAL_EXT_SSP_DIFFUSION_INSTANCES(EXTERN, Tag) \
-  EXTERN template void Diffusion_stencil::setup<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t, \
-                                                     const std::vector<int>*); \
-  EXTERN template void Diffusion_stencil::set_motions<Tag>(const Matrix_n3&, const Matrix_n3&, \
-                                                           const std::vector<Eigen::Matrix3d>&); \
-  EXTERN template void Diffusion_stencil::apply<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, \
-                                                     const Matrix_n3&, const std::vector<Eigen::Matrix3d>&, \
-                                                     Diffusion_origin, Matrix_n3&, Matrix_n3&, \
-                                                     const std::vector<int>*);
+#define CGAL_EXT_SSP_DIFFUSION_INSTANCES(EXTERN, Tag)                                                                  \
+  EXTERN template void Diffusion_stencil::setup<Tag>(const Matrix_n3&, const Matrix_n3&, std::size_t,                  \
+                                                     const std::vector<int>*);                                         \
+  EXTERN template void Diffusion_stencil::set_motions<Tag>(const Matrix_n3&, const Matrix_n3&,                         \
+                                                           const std::vector<Eigen::Matrix3d>&);                       \
+  EXTERN template void Diffusion_stencil::apply<Tag>(                                                                  \
+    const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const std::vector<Eigen::Matrix3d>&,       \
+    Diffusion_origin, Matrix_n3&, Matrix_n3&, const std::vector<int>*);                                                \
+  EXTERN template void Diffusion_stencil::move_points<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&,       \
+                                                           const Matrix_n3&, Diffusion_origin, double*, double*,       \
+                                                           const std::vector<int>*, const std::vector<int>*) const;
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SSP_DIFFUSION_INSTANCES)
 
 /// The rows that a drag can move: those with a region sample point in their stencil and, with `exact_handles`, the
