@@ -95,6 +95,9 @@ def main():
         scan = os.path.join(tmp, "armadillo.ply")
         subprocess.run([os.path.join(args.build, "benchmark", "sample_scan"),
                         os.path.join(args.data, "meshes", "armadillo.off"), str(n), scan], check=True)
+        # The scan just written is still being flushed to disk: let that finish before either reader is timed, or
+        # the first one (Python's) competes with the writeback.
+        os.sync()
 
         read = []
         for _ in range(reps):
