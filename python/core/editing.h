@@ -360,6 +360,7 @@ private:
   {
     m_written_points = py::object();
     m_written_normals = py::object();
+    m_diffused_in_place = false;
   }
   py::object m_written_points, m_written_normals;
   bool m_diffused_in_place = false; // the last diffuse() wrote the caller's arrays in place, not the library's
