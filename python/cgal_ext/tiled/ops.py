@@ -144,11 +144,8 @@ class Normals(Operation):
     name = "normals"
     function = _core.estimate_oriented_normals
 
-    def own_neighbors(self):
-        return int(self.settings["k"])
-
     def normal_neighbors(self):
-        return self.own_neighbors()
+        return self.own_neighbors()  # the values are the normals, fitted with the operation's own k
 
     def certify(self, neighborhoods, own, reach, estimate_normals):
         return plan.certify_directed(neighborhoods, self.own_neighbors(), own)  # the values are the normals
