@@ -6,7 +6,8 @@ one-process program on 1M points of the same model:
 - `cgal_ext.tiled.run("details", ...)` on a LocalCluster of one worker per core (one thread each) at 10M, 30M and
   100M points (--quick: 1M and 2M): wall time from the call to the renamed output (the cluster already started),
   points per second, the peak resident memory of every worker process (sampled every 0.1 s) and of the client;
-- the per-tile costs (read, certify, compute) the 10^9 estimate of doc/scaling.md is computed from.
+- the per-tile costs (read, neighbours and certificate, compute, save) the 10^9 estimate of doc/scaling.md is
+  computed from.
 
 Medians over the repetitions (5 at 1M, 3 at 10M, 1 above). Writes OUT/tiled_results.csv and OUT/tiled_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_tiled.py --out DIR [--build build] [--data data] [--quick]
@@ -118,6 +119,9 @@ def main():
             tile_seconds = report["seconds"]["tiles"] * workers / report["tiles"]
             rows.append(("tiled details: seconds per tile (one worker)", n, tile_seconds, "s",
                          f"{n // report['tiles']} own points per tile"))
+            for step, seconds in report["tile_seconds"].items():
+                rows.append((f"tiled details: per tile, step '{step}' (one worker)", n, seconds / report["tiles"], "s",
+                             ""))
             for stage, seconds in report["seconds"].items():
                 rows.append((f"tiled details: pass '{stage}'", n, seconds, "s", ""))
         client.close()

@@ -81,19 +81,46 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
             np.ascontiguousarray(table[:, 4:7]) if source.has_normals else None)
 
 
+def result_columns(operation, estimate_normals):
+    """The columns of a tile's result table: its own points' rows (in the file's order), the computed fields and,
+    when the tiles estimate them, the normals."""
+    return ["row", *operation.computed_fields(), *(("nx", "ny", "nz") if estimate_normals else ())]
+
+
+def _load_table(scratch, tile):
+    """A tile's result table, memory-mapped: one column after the other, so a column or a range of rows is read
+    without the rest."""
+    return np.load(scratch / f"tile_{tile}" / "table.npy", mmap_mode="r")
+
+
+class _Stopwatch:
+    """Seconds spent per step of a task, summed over its repetitions."""
+
+    def __init__(self):
+        self.seconds, self._last = {}, time.perf_counter()
+
+    def lap(self, step):
+        now = time.perf_counter()
+        self.seconds[step] = self.seconds.get(step, 0.0) + now - self._last
+        self._last = now
+
+
 def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals, tiling, chunk_starts, scratch,
              diagonal, threads_per_task):
     """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
-    spans the scan: then the tile read every point), and saves the own points' values under `scratch/tile_{tile}`.
-    Returns the tile's summary."""
+    spans the scan: then the tile read every point), and saves the own points' result table under
+    `scratch/tile_{tile}`. Returns the tile's summary, with the range of its table's rows in each chunk of the
+    file (`bounds`) and the seconds of each step."""
     with threads(threads_per_task):
         lo, hi = tiling.lo[tile], tiling.hi[tile]
         k = operation.neighbors(estimate_normals)
         attempts = []
+        watch = _Stopwatch()
         while True:
             try:
                 rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
                                                    chunk_starts)
+                watch.lap("read")
             except Exception as error:
                 raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
                                  f"{error}") from None
@@ -102,14 +129,17 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             normals = normals[order] if normals is not None else None
             own = plan.own_mask(points, lo, hi)
             if not own.any():
+                watch.lap("neighbours")
                 return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
-                        "reach": reach}
+                        "reach": reach, "bounds": np.zeros(len(chunk_starts) + 1, dtype=np.int64),
+                        "seconds": watch.seconds}
             border = plan.border_distance(points, lo - halo, hi + halo)
             neighborhoods = plan.Neighborhoods(points, k, border)
             kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
             tile_reach = max(reach, 1.25 * kth)
             certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
             needed = operation.required_halo(neighborhoods, own)
+            watch.lap("neighbours")
             if (certified.all() and halo >= needed) or halo > diagonal:
                 break
             attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
@@ -117,18 +147,23 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
         if estimate_normals:
             normals = operation.oriented_normals(points)
         values = operation.compute(points, normals)
+        watch.lap("compute")
         folder = scratch / f"tile_{tile}"
         partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
         partial.mkdir()
         own_rows = np.flatnonzero(own)
-        own_rows = own_rows[np.argsort(rows[own_rows])]  # the file's order, for the writers' searches
-        np.save(partial / "rows.npy", rows[own_rows])
-        for name, value in values.items():
-            np.save(partial / f"{name}.npy", np.asarray(value)[own_rows])
-        summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
-                   "kth": kth, "reach": tile_reach}
+        own_rows = own_rows[np.argsort(rows[own_rows])]  # the file's order: each chunk's rows are one range
+        table = np.empty((len(own_rows), len(result_columns(operation, estimate_normals))), order="F")
+        table[:, 0] = rows[own_rows]
+        for column, name in enumerate(operation.computed_fields(), start=1):
+            table[:, column] = np.asarray(values[name])[own_rows]
         if estimate_normals:
-            np.save(partial / "normals.npy", normals[own_rows])
+            table[:, -3:] = normals[own_rows]
+        np.save(partial / "table.npy", table)
+        summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
+                   "kth": kth, "reach": tile_reach,
+                   "bounds": np.searchsorted(rows[own_rows], [*chunk_starts, source.count]).astype(np.int64)}
+        if estimate_normals:
             # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
             shared = ~own & neighborhoods.exact(operation.normal_neighbors())
             shared = np.flatnonzero(shared)
@@ -141,6 +176,8 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             summary["largest"] = float(np.abs(values[operation.color_field][own_rows]).max())
         shutil.rmtree(folder, ignore_errors=True)  # a rerun of the task (its worker died) replaces the old result
         os.replace(partial, folder)
+        watch.lap("save")
+        summary["seconds"] = watch.seconds
         return summary
 
 
@@ -150,21 +187,23 @@ def orientation_votes(scratch, tile, neighbours):
     halo_normals = np.load(scratch / f"tile_{tile}" / "halo_normals.npy")
     votes = {}
     for other in neighbours:
-        rows = np.load(scratch / f"tile_{other}" / "rows.npy", mmap_mode="r")
+        table = _load_table(scratch, other)
+        rows = np.asarray(table[:, 0])
         at = np.searchsorted(rows, halo_rows)
         at = np.minimum(at, len(rows) - 1)
         shared = rows[at] == halo_rows
         if shared.any():
-            theirs = np.load(scratch / f"tile_{other}" / "normals.npy", mmap_mode="r")[at[shared]]
+            theirs = np.asarray(table[:, -3:])[at[shared]]
             dots = np.einsum("ij,ij->i", halo_normals[shared], theirs)
             votes[other] = int((dots > 0).sum()) - int((dots < 0).sum())
     return votes
 
 
-def magnitude_histogram(scratch, tile, field, largest, every, prefix, shift):
-    """Counts of the 16-bit digit at `shift` of the magnitudes (as ordered bit patterns) under `prefix`, and the
-    count of the magnitudes the colour map ranks (all when `every`, else those above 1e-12 of the largest)."""
-    magnitude = np.abs(np.load(scratch / f"tile_{tile}" / f"{field}.npy"))
+def magnitude_histogram(scratch, tile, column, largest, every, prefix, shift):
+    """Counts of the 16-bit digit at `shift` of the magnitudes (as ordered bit patterns) in the result table's
+    `column` under `prefix`, and the count of the magnitudes the colour map ranks (all when `every`, else those
+    above 1e-12 of the largest)."""
+    magnitude = np.abs(np.asarray(_load_table(scratch, tile)[:, column]))
     if not every:
         magnitude = magnitude[magnitude > 1e-12 * largest]
     bits = magnitude.view(np.int64)
@@ -173,8 +212,9 @@ def magnitude_histogram(scratch, tile, field, largest, every, prefix, shift):
     return len(magnitude), np.bincount((bits >> shift) & 0xFFFF, minlength=1 << 16)
 
 
-def write_rows(begin, end, source, sink, operation, estimate_normals, scratch, tiles, flips, color_limit):
-    """Assembles rows [begin, end) of the output from the tiles' results and writes them to the sink."""
+def write_rows(begin, end, pieces, source, sink, operation, estimate_normals, scratch, flips, color_limit):
+    """Assembles rows [begin, end) of the output from the tiles' results, rows [a, b) of the table of each
+    (tile, a, b) of `pieces`, and writes them to the sink."""
     count = end - begin
     columns = {name: np.empty(count, dtype=kind) for name, kind in operation.fields()}
     points = source.coordinates(begin, end)
@@ -185,22 +225,15 @@ def write_rows(begin, end, source, sink, operation, estimate_normals, scratch, t
         for axis, name in enumerate(("nx", "ny", "nz")):
             columns[name][:] = normals[:, axis]
     covered = np.zeros(count, dtype=np.int64)
-    for tile in tiles:
-        folder = scratch / f"tile_{tile}"
-        rows = np.load(folder / "rows.npy", mmap_mode="r")
-        a, b = np.searchsorted(rows, [begin, end])
-        if a == b:
-            continue
-        at = np.asarray(rows[a:b]) - begin
+    names = result_columns(operation, estimate_normals)
+    for tile, a, b in pieces:
+        table = np.asarray(_load_table(scratch, tile)[a:b])
+        at = table[:, 0].astype(np.int64) - begin
         covered[at] += 1
         sign = -1.0 if flips.get(tile) else 1.0
-        if estimate_normals:
-            own_normals = sign * np.load(folder / "normals.npy", mmap_mode="r")[a:b]
-            for axis, name in enumerate(("nx", "ny", "nz")):
-                columns[name][at] = own_normals[:, axis]
-        for name in operation.computed_fields():
-            value = np.load(folder / f"{name}.npy", mmap_mode="r")[a:b]
-            columns[name][at] = sign * value if name in operation.sign_fields else value
+        for column, name in enumerate(names[1:], start=1):
+            flipped = name in operation.sign_fields or name in ("nx", "ny", "nz")
+            columns[name][at] = sign * table[:, column] if flipped else table[:, column]
     if not (covered == 1).all():
         row = begin + int(np.argmax(covered != 1))
         raise TiledError(f"row {row} was computed by {int(covered[row - begin])} tiles, not exactly one")
@@ -292,9 +325,11 @@ class Run:
         sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
         sink.create()
         try:
-            tiles = [t for t in all_tiles if summaries[t]["own"] > 0]
-            self._map(write_rows, ranges, self.source, sink, self.operation, self.estimate_normals, self.scratch,
-                      tiles, flips, color_limit=limit, what="write")
+            bounds = np.stack([summaries[t]["bounds"] for t in all_tiles])
+            pieces = [[(t, int(bounds[t, c]), int(bounds[t, c + 1]))
+                       for t in np.flatnonzero(bounds[:, c + 1] > bounds[:, c])] for c in range(len(ranges))]
+            self._map(write_rows, [(*r, p) for r, p in zip(ranges, pieces)], self.source, sink, self.operation,
+                      self.estimate_normals, self.scratch, flips, color_limit=limit, what="write")
             sink.commit()
         except BaseException:
             sink.discard()
@@ -303,7 +338,11 @@ class Run:
         self.report.update(widened_tiles=len(widened), flipped_tiles=sum(1 for f in flips.values() if f),
                            largest_halo=max(s["halo"] for s in summaries.values()),
                            read_points=int(sum(s["read"] for s in summaries.values())),
-                           color_limit=limit, tile_summaries=[summaries[t] for t in all_tiles],
+                           color_limit=limit,
+                           tile_summaries=[{key: value for key, value in summaries[t].items() if key != "bounds"}
+                                           for t in all_tiles],
+                           tile_seconds={step: sum(s["seconds"].get(step, 0.0) for s in summaries.values())
+                                         for step in ("read", "neighbours", "compute", "save")},
                            tile_boxes=[[float(v) if np.isfinite(v) else None for v in (*tiling.lo[t], *tiling.hi[t])]
                                        for t in all_tiles])
         return self.report
@@ -402,11 +441,11 @@ class Run:
     def _color_limit(self, summaries):
         """The colour map's saturation over the whole scan, exactly as the one-process map computes it: the
         98th percentile of the magnitudes, found digit by digit from the tiles' histograms."""
-        field = self.operation.color_field
         live = [t for t, s in summaries.items() if s["own"] > 0]
         largest = max(summaries[t]["largest"] for t in live)
         n = sum(summaries[t]["own"] for t in live)
-        ranked = sum(c for c, _ in self._map(magnitude_histogram, [(self.scratch, t) for t in live], field,
+        column = result_columns(self.operation, self.estimate_normals).index(self.operation.color_field)
+        ranked = sum(c for c, _ in self._map(magnitude_histogram, [(self.scratch, t) for t in live], column,
                                              largest, False, 0, 48, what="colours"))
         every = 2 * ranked > n
         total = n if every else ranked
@@ -415,7 +454,7 @@ class Run:
         rank = min(total - 1, int(0.98 * (total - 1)))
         prefix = 0
         for shift in (48, 32, 16, 0):
-            histograms = self._map(magnitude_histogram, [(self.scratch, t) for t in live], field, largest, every,
+            histograms = self._map(magnitude_histogram, [(self.scratch, t) for t in live], column, largest, every,
                                    prefix, shift, what="colours")
             counts = np.sum([h for _, h in histograms], axis=0)
             cumulative = np.cumsum(counts)
