@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import zarr
 from distributed import Client, LocalCluster
+from scipy.spatial import cKDTree
 
 import cgal_ext
 from cgal_ext import tiled
@@ -267,6 +268,37 @@ def test_the_certificate_holds_exactly_where_it_says(scan, order):
     outside = plan.border_distance(points[read], lo - halo, hi + halo) < 1e-3
     assert not with_border[outside].any()
 
+
+
+@pytest.mark.parametrize("order", ["linear", "quadric", "cubic"])
+def test_the_banded_search_certifies_what_the_full_search_certifies(scan, order):
+    """Neighbours searched only in the band along the border: the same own points certified as with every point
+    searched, with a halo that certifies all and with one too narrow for some; the points left out have their k
+    nearest within the bound it reports and lie deeper than it says."""
+    from cgal_ext.tiled import ops, plan
+    points = scan.points[:400_000]
+    operation = ops.operation("details", order=order)
+    k = operation.own_neighbors()
+    spacing = float(np.percentile(cKDTree(points).query(points[::20], k + 1)[0][:, k], 90))  # as a run estimates it
+    lo, hi = np.array([-0.3, -np.inf, -np.inf]), np.array([0.4, np.inf, 0.5])
+    searched_fractions = []
+    for halo in (operation.halo(spacing), 1.2 * spacing):
+        read = points[plan.own_mask(points, lo - halo, hi + halo)]
+        own = plan.own_mask(read, lo, hi)
+        border = plan.border_distance(read, lo - halo, hi + halo)
+        reach = 2 * spacing
+        banded, interior = plan.banded_neighborhoods(read, k, border, reach, operation.rings(), halo, spacing)
+        full = plan.Neighborhoods(read, k, border)
+        certified = operation.certify(banded, own, reach, False)
+        assert np.array_equal(certified, operation.certify(full, own, reach, False))
+        assert interior is not None
+        bound, depth = interior
+        left_out = ~banded.searched
+        assert (full.kth_distance(k)[left_out] <= bound).all()
+        assert (plan.border_distance(read[left_out], lo, hi) > depth).all()
+        assert np.array_equal(banded.distances[banded.searched], full.distances[banded.searched])
+        searched_fractions.append(banded.searched.mean())
+    assert searched_fractions[0] < 0.6 and certified.mean() < 1
 
 
 def test_a_sparser_neighbour_tile_makes_a_tile_rerun(client, tmp_path):

@@ -40,6 +40,7 @@ class Operation:
     color_field: Optional[str] = None
     exact = True
     symmetric = False  # on the symmetrised kNN graph: the certificate assumes a reach, verified after the tiles
+    banded = True  # the certificate searches neighbours only near the read box's border (plan.banded_neighborhoods)
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 
@@ -172,6 +173,7 @@ class Enhance(Operation):
     extra_options = ("margin",)
     extra_defaults = {"margin": 80.0}
     exact = False
+    banded = False  # its halo follows the median k-th-neighbour distance of all its own points
 
     def __init__(self, **options):
         if "s" not in options:

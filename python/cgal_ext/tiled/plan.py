@@ -77,25 +77,6 @@ class Tiling:
             self._descend(points, rows[above], right, halo, visit)
 
 
-def _spread_bits(v):
-    """The 10 low bits of v spread to every third bit (for Morton codes)."""
-    v = v & 0x3FF
-    v = (v | (v << 16)) & 0x030000FF
-    v = (v | (v << 8)) & 0x0300F00F
-    v = (v | (v << 4)) & 0x030C30C3
-    return (v | (v << 2)) & 0x09249249
-
-
-def spatial_order(points):
-    """A permutation that puts nearby points together (Morton order on a 1024^3 grid): neighbour queries in this
-    order run several times faster than in the file's order."""
-    lo = points.min(axis=0)
-    extent = float((points.max(axis=0) - lo).max()) or 1.0
-    cells = ((points - lo) * (1023.0 / extent)).astype(np.int64)
-    return np.argsort(_spread_bits(cells[:, 0]) | (_spread_bits(cells[:, 1]) << 1) | (_spread_bits(cells[:, 2]) << 2),
-                      kind="stable")
-
-
 def read_box(lo, hi, halo):
     return lo - halo, hi + halo
 
@@ -112,27 +93,102 @@ def own_mask(points, lo, hi):
 
 
 class Neighborhoods:
-    """The k nearest neighbours of every point read (itself first), and whether they are the whole scan's."""
+    """The k nearest neighbours (itself not counted) of the points read that the certificate needs, and whether
+    they are the whole scan's.
 
-    def __init__(self, points, k, border):
-        count = min(k + 1, len(points))
-        tree = cKDTree(points, leafsize=32, balanced_tree=False, compact_nodes=False)
-        distances, indices = tree.query(points, count, workers=_core.get_num_threads())
-        self.distances, self.indices = distances.reshape(len(points), count), indices.reshape(len(points), count)
-        if count < k + 1:  # fewer points read than neighbours asked: nothing can be certified
-            self.distances = np.pad(self.distances, ((0, 0), (0, k + 1 - count)), constant_values=np.inf)
-        self.border = border
+    `search(mask)` finds them for the points of the mask (all by default). A point not searched must have its k
+    nearest closer than its border (see `banded_neighborhoods`): it reads as exact, at distance 0, with the
+    neighbour `len(points)` (a sentinel row).
+    """
+
+    def __init__(self, points, k, border, search_all=True):
+        m = len(points)
+        self.points, self.k, self.border = points, k, border
+        self.distances = np.zeros((m, k))
+        self.indices = np.full((m, k), m, dtype=np.int64)
+        self.searched = np.zeros(m, dtype=bool)
+        self._tree = cKDTree(points, leafsize=32, balanced_tree=False, compact_nodes=False) if m else None
+        if search_all:
+            self.search(np.ones(m, dtype=bool))
+
+    def search(self, mask):
+        """Finds the k nearest of the points of `mask` not searched yet."""
+        new = mask & ~self.searched
+        if not new.any():
+            return
+        rows = self._tree.indices[new[self._tree.indices]]  # in the tree's order: nearby queries run together
+        count = min(self.k + 1, len(self.points))
+        distances, indices = self._tree.query(self.points[rows], count, workers=_core.get_num_threads())
+        distances, indices = distances.reshape(len(rows), count), indices.reshape(len(rows), count)
+        # Leave the point itself out; where exact duplicates hide it beyond the k + 1 found, leave out the last.
+        keep = indices != rows[:, None]
+        keep[keep.all(axis=1), -1] = False
+        self.distances[rows, :count - 1] = distances[keep].reshape(len(rows), count - 1)
+        self.indices[rows, :count - 1] = indices[keep].reshape(len(rows), count - 1)
+        self.distances[rows, count - 1:] = np.inf  # fewer points read than neighbours asked: none of them exact
+        self.searched |= new
 
     def kth_distance(self, k):
-        return self.distances[:, k]
+        """Each point's distance to its k-th nearest (0 where not searched)."""
+        return self.distances[:, k - 1]
 
     def exact(self, k):
-        """Each point's k nearest (itself not counted) are its k nearest in the whole scan."""
-        return self.distances[:, k] < self.border
+        """Each point's k nearest are its k nearest in the whole scan."""
+        return self.distances[:, k - 1] < self.border
 
     def neighbors(self, k):
-        """Each point's k nearest, itself left out (m, k)."""
-        return self.indices[:, 1:k + 1]
+        """Each point's k nearest (m, k); the sentinel `m` where not searched."""
+        return self.indices[:, :k]
+
+
+def interior_bound(points, k, cell):
+    """An upper bound of each point's k-th-neighbour distance, inf where none is found: the extent of the points
+    sharing its cell of a grid of side `cell`, when the cell holds at least k + 1 points."""
+    if len(points) == 0:
+        return np.empty(0)
+    cells = np.floor(points / cell).astype(np.int64)
+    cells -= cells.min(axis=0)
+    dims = cells.max(axis=0) + 1
+    key = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
+    order = np.argsort(key)
+    first = np.flatnonzero(np.r_[True, key[order][1:] != key[order][:-1]])
+    sizes = np.diff(np.r_[first, len(points)])
+    inside = points[order]
+    extent = np.linalg.norm(np.maximum.reduceat(inside, first) - np.minimum.reduceat(inside, first), axis=1)
+    bound = np.empty(len(points))
+    bound[order] = np.repeat(np.where(sizes >= k + 1, extent, np.inf), sizes)
+    return bound
+
+
+def banded_neighborhoods(points, k, border, reach, rings, halo, spacing):
+    """Neighborhoods searched only where the certificate needs them: in a band along the read box's border, and
+    where no grid cell bounds the k-th-neighbour distance. Returns (neighborhoods, interior): `interior` is None
+    when every point was searched, else (D, L): the points not searched lie more than L inside the own box and
+    have their k nearest within D.
+
+    Why the band suffices: a point not searched has its k nearest within D, closer than its border: they are
+    exact. The symmetric certificate rejects first the inexact points, those within reach of the border and those
+    an inexact point holds, all within B = max(reach, 2 Dq) of the border (Dq the largest k-th-neighbour distance
+    searched); each of its rings - 1 hops adds the neighbours of a rejected point (within Dq) and the points that
+    hold one (within Dq if searched). A point not searched that holds one lies within D of it: the band, at least
+    B + (rings - 2) Dq + D wide, leaves none. It is also wider than D + 2 halo: the points not searched then
+    cannot hold a point of a neighbouring tile's read box unless that box is wider than this one's, which
+    `Run._verify_reach` checks."""
+    bound = interior_bound(points, k, 2.5 * spacing)
+    bounded = np.isfinite(bound)
+    D = float(bound[bounded].max()) if bounded.any() else 0.0
+    neighborhoods = Neighborhoods(points, k, border, search_all=False)
+    Dq = 2.0 * spacing  # a first guess, checked below
+    while True:
+        width = max(max(reach, 2.0 * Dq) + max(rings - 2, 0) * Dq + D, 1.01 * (D + 2.0 * halo))  # 1 %: rounding
+        band = ~bounded | (border <= width)
+        if band.mean() > 0.6:  # most of the tile: search it whole
+            neighborhoods.search(np.ones(len(points), dtype=bool))
+            return neighborhoods, None
+        neighborhoods.search(band)
+        if neighborhoods.kth_distance(k).max() <= Dq:
+            return neighborhoods, (D, width - halo)
+        Dq = float(neighborhoods.kth_distance(k).max())
 
 
 def certify_directed(neighborhoods, k, own):
@@ -150,14 +206,17 @@ def certify_symmetric(neighborhoods, k, own, reach, rings):
     """
     exact = neighborhoods.exact(k)
     neighbors = neighborhoods.neighbors(k)
-    pointed_by_inexact = np.zeros(len(exact), dtype=bool)
+    m = len(exact)
+    pointed_by_inexact = np.zeros(m + 1, dtype=bool)  # entry m: the sentinel neighbour of the rows not searched
     pointed_by_inexact[neighbors[~exact].reshape(-1)] = True
-    bad = ~(exact & (neighborhoods.border > reach) & ~pointed_by_inexact)
+    bad = np.append(~(exact & (neighborhoods.border > reach) & ~pointed_by_inexact[:m]), False)
     for _ in range(rings - 1):  # one hop of the symmetrised graph: a bad point's neighbours, and who has one
-        spread = bad | bad[neighbors].any(axis=1)
-        spread[neighbors[bad].reshape(-1)] = True
+        spread = bad.copy()
+        spread[:m] |= bad[neighbors].any(axis=1)
+        spread[neighbors[bad[:m]].reshape(-1)] = True
+        spread[m] = False
         bad = spread
-    return ~bad[own]
+    return ~bad[:m][own]
 
 
 def box_distances(lo, hi, los, his):

@@ -106,7 +106,7 @@ class _Stopwatch:
 
 
 def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals, tiling, chunk_starts, scratch,
-             diagonal, threads_per_task):
+             diagonal, spacing, threads_per_task):
     """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
     spans the scan: then the tile read every point), and saves the own points' result table under
     `scratch/tile_{tile}`. Returns the tile's summary, with the range of its table's rows in each chunk of the
@@ -124,9 +124,6 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             except Exception as error:
                 raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
                                  f"{error}") from None
-            order = plan.spatial_order(points) if len(points) else np.empty(0, dtype=np.int64)
-            rows, points = rows[order], points[order]
-            normals = normals[order] if normals is not None else None
             own = plan.own_mask(points, lo, hi)
             if not own.any():
                 watch.lap("neighbours")
@@ -134,7 +131,11 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
                         "reach": reach, "bounds": np.zeros(len(chunk_starts) + 1, dtype=np.int64),
                         "seconds": watch.seconds}
             border = plan.border_distance(points, lo - halo, hi + halo)
-            neighborhoods = plan.Neighborhoods(points, k, border)
+            if operation.banded:
+                neighborhoods, interior = plan.banded_neighborhoods(points, k, border, reach, operation.rings(), halo,
+                                                                    spacing)
+            else:
+                neighborhoods, interior = plan.Neighborhoods(points, k, border), None
             kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
             tile_reach = max(reach, 1.25 * kth)
             certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
@@ -161,7 +162,7 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             table[:, -3:] = normals[own_rows]
         np.save(partial / "table.npy", table)
         summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
-                   "kth": kth, "reach": tile_reach,
+                   "kth": kth, "interior": interior, "reach": tile_reach,
                    "bounds": np.searchsorted(rows[own_rows], [*chunk_starts, source.count]).astype(np.int64)}
         if estimate_normals:
             # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
@@ -359,7 +360,8 @@ class Run:
         """Runs the tiles {tile: (first halo, assumed reach)}."""
         items = [(t, halo, bucket_halo, reach) for t, (halo, reach) in tiles.items()]
         results = self._map(run_tile, items, self.source, self.operation, self.estimate_normals, tiling, starts,
-                            self.scratch, self.report["diagonal"], self.threads_per_task, what="tiles")
+                            self.scratch, self.report["diagonal"], self.report["spacing"], self.threads_per_task,
+                            what="tiles")
         return {s["tile"]: s for s in results}
 
     def _verify_reach(self, summaries, tiling, halo, starts):
@@ -371,11 +373,18 @@ class Run:
         for _ in range(8):
             rerun = {}
             kth = np.array([summaries[u]["kth"] for u in range(tiling.count)])
+            # A tile's points not searched (banded_neighborhoods): their bound, and the box they lie in.
+            bound = np.array([(summaries[u].get("interior") or (0.0, 0.0))[0] for u in range(tiling.count)])
+            depth = np.array([(summaries[u].get("interior") or (0.0, 0.0))[1] for u in range(tiling.count)])
+            inner_lo, inner_hi = lo + depth[:, None], hi - depth[:, None]
             for t, s in summaries.items():
                 read_lo, read_hi = plan.read_box(lo[t], hi[t], s["halo"])
                 reaching = (kth >= s["reach"]) & (plan.box_distances(read_lo, read_hi, lo, hi) <= kth)
-                if reaching.any():
-                    rerun[t] = 1.25 * float(kth[reaching].max())
+                inner = (bound >= s["reach"]) & np.all(inner_lo <= inner_hi, axis=1)
+                inner &= plan.box_distances(read_lo, read_hi, inner_lo, inner_hi) < bound
+                inner[t] = False  # its own points lie inside its read box
+                if reaching.any() or inner.any():
+                    rerun[t] = 1.25 * float(max(kth[reaching].max(initial=0.0), bound[inner].max(initial=0.0)))
             if not rerun:
                 return summaries
             self.log(f"{len(rerun)} tile(s) rerun with the k-th-neighbour distance their neighbours measured")
