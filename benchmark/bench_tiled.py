@@ -7,7 +7,7 @@ one-process program on 1M points of the same model:
   100M points (--quick: 1M and 2M): wall time from the call to the renamed output (the cluster already started),
   points per second, the peak resident memory of every worker process (sampled every 0.1 s) and of the client;
 - the per-tile costs (read, neighbours and certificate, compute, save) the 10^9 estimate of doc/scaling.md is
-  computed from.
+  computed from, and the scratch disk's sequential write throughput, which bounds the passes that write.
 
 Medians over the repetitions (5 at 1M, 3 at 10M, 1 above). Writes OUT/tiled_results.csv and OUT/tiled_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_tiled.py --out DIR [--build build] [--data data] [--quick]
@@ -61,6 +61,22 @@ def sample(args, tmp, n):
     return path
 
 
+def disk_write_throughput(folder, size=2 << 30):
+    """Bytes per second of a sequential write of `size` bytes to `folder`, flushed to the disk: what the passes
+    that write more than the page cache holds dirty are bound by."""
+    block = os.urandom(1 << 20) * 16
+    path = os.path.join(folder, "disk_probe.bin")
+    start = time.perf_counter()
+    with open(path, "wb") as f:
+        for _ in range(size // len(block)):
+            f.write(block)
+        f.flush()
+        os.fsync(f.fileno())
+    seconds = time.perf_counter() - start
+    os.remove(path)
+    return size / seconds
+
+
 def main():
     args = harness_arguments()
     sizes, reps = ([1_000_000, 2_000_000], {}) if args.quick else ([10_000_000, 30_000_000, 100_000_000],
@@ -89,6 +105,8 @@ def main():
         rows.append(("one process: compute_geometric_details alone", 1_000_000, median(compute), "s",
                      f"{workers} threads"))
         os.remove(scan)
+        rows.append(("scratch disk: sequential write, flushed (2 GiB)", 0,
+                     disk_write_throughput(tmp, (256 << 20) if args.quick else (2 << 30)) / 1e6, "MB/s", ""))
 
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit="3GiB",
                                dashboard_address=None, silence_logs=40)
