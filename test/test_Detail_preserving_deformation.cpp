@@ -292,30 +292,32 @@ TEST(DetailPreservingDeformation, ARendererRepeatsTheDiffusionFromTheSamplePoint
   for(auto rotations : both_rotations) {
     auto d = bend_tip_by_70_degrees(t, with_order(Detail_order::quadric, rotations));
     d->update_sample_motions();
-    const std::size_t m = d->stencil_size(), n = t.shape.points.size();
+    const Diffusion_view view = d->diffusion_view();
+    const std::size_t m = view.stencil_size(), n = t.shape.points.size();
     ASSERT_EQ(m, std::size_t(d->settings().diffusion_samples));
     std::vector<Eigen::Vector3d> moved(n), normals(n);
     std::vector<int> samples(m);
     std::vector<double> weights(m);
     for(std::size_t i = 0; i < n; ++i) {
-      d->stencil(i, samples.data(), weights.data());
+      view.stencil(i, samples.data(), weights.data());
       Eigen::Matrix4d blend = Eigen::Matrix4d::Zero();
-      for(std::size_t e = 0; e < m; ++e) blend += weights[e] * d->sample_motion(std::size_t(samples[e]));
+      for(std::size_t e = 0; e < m; ++e) blend += weights[e] * view.sample_motion(std::size_t(samples[e]));
       EXPECT_NEAR(blend(3, 3), 1.0, 1e-12); // the weights sum to 1
       const Eigen::Matrix3d map = Eigen::Matrix3d::Identity() + blend.topLeftCorner<3, 3>();
       moved[i] = t.point(i) + blend.topLeftCorner<3, 3>() * t.point(i) + blend.topRightCorner<3, 1>();
       normals[i] = (map.determinant() * map.inverse().transpose() * t.normal(i)).normalized();
-      if(d->is_exact_handle_point(i)) {
+      if(view.is_exact_handle_point(i)) {
         moved[i] = d->handle_target(0, t.point(i));
         normals[i] = d->handle_target(0, t.normal(i)) - d->handle_target(0, Eigen::Vector3d::Zero());
       }
     }
-    std::vector<Eigen::Vector3d> steps(d->collar_handle_points().size()), normal_steps(steps.size());
-    for(std::size_t c = 0; c < steps.size(); ++c) d->collar_handle_step(c, steps[c], normal_steps[c]);
+    std::vector<Eigen::Vector3d> steps(view.collar_handle_points().size()), normal_steps(steps.size());
+    for(std::size_t c = 0; c < steps.size(); ++c) view.collar_handle_step(c, steps[c], normal_steps[c]);
     std::size_t collar = 0;
-    d->for_each_collar_point([&](std::size_t i, const int* handles, const double* w, std::size_t count) {
+    view.for_each_collar_point([&](std::size_t i, const int* handles, const double* w, std::size_t count) {
       Eigen::Vector3d step = Eigen::Vector3d::Zero(), normal_step = Eigen::Vector3d::Zero();
-      for(std::size_t e = 0; e < count; ++e) step += w[e] * steps[std::size_t(handles[e])], normal_step += w[e] * normal_steps[std::size_t(handles[e])];
+      for(std::size_t e = 0; e < count; ++e)
+        step += w[e] * steps[std::size_t(handles[e])], normal_step += w[e] * normal_steps[std::size_t(handles[e])];
       moved[i] += step;
       normals[i] = (normals[i] + normal_step).normalized();
       collar += step.norm() > 1e-6 * t.diagonal;
@@ -369,7 +371,7 @@ TEST(DetailPreservingDeformation, CoincidentPointsStayTogether)
       apart += d.deformed_point(a) != d.deformed_point(b);
       farthest = std::max(farthest, (d.deformed_point(a) - d.deformed_point(b)).norm());
       moved += d.deformed_point(a) != t.point(a);
-      with_a_handle += d.is_exact_handle_point(a);
+      with_a_handle += d.diffusion_view().is_exact_handle_point(a);
     }
     EXPECT_EQ(apart, 0u) << "twins up to " << farthest / t.diagonal << " diagonals apart, rotations " << int(rotations);
     EXPECT_GT(moved, twins.size() / 4);
@@ -908,7 +910,7 @@ TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying
   for(CGAL_ext::Detail_rotation rotations : both_rotations) {
     auto d = t.edit(with_order(Detail_order::quadric, rotations));
     ASSERT_TRUE(d->preprocess());
-    ASSERT_FALSE(d->collar_handle_points().empty());
+    ASSERT_FALSE(d->diffusion_view().collar_handle_points().empty());
     std::vector<double> points(3 * n), normals(3 * n);
     d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
       std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));

@@ -4,10 +4,10 @@
 #define CGAL_EXT_DETAIL_PRESERVING_DEFORMATION_H
 
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
+#include <CGAL_ext/Diffusion_view.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/compiled_instances.h>
-#include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/mean_shift.h>
 #include <CGAL_ext/internal/oriented_normals.h>
@@ -18,16 +18,13 @@
 #include <CGAL_ext/internal/strength_field.h>
 
 #include <CGAL/Named_function_parameters.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/boost/graph/named_params_helper.h>
 #include <CGAL/tags.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -85,11 +82,10 @@ public:
                                          const NamedParameters& np = CGAL::parameters::default_values())
     : m_settings(settings)
   {
-    using CGAL::parameters::choose_parameter;
-    using CGAL::parameters::get_parameter;
     using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
     m_settings.validate();
-    m_callback = choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
+    m_callback = CGAL::parameters::choose_parameter(CGAL::parameters::get_parameter(np, CGAL::internal_np::callback),
+                                                    std::function<bool(double)>());
     m_cloud = internal::make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
     if(m_cloud.size() < 2) throw Invalid_input(std::string(who) + ": editing needs at least two points");
     m_row_of = m_cloud.spatial_index();
@@ -97,8 +93,7 @@ public:
     internal::given_or_estimated_normals<ConcurrencyTag>(points, np, m_cloud, default_normal_neighbors, progress,
                                                          m_normals, who);
     m_selection.clear(m_cloud.size());
-    m_deformed_points = m_cloud.positions;
-    m_deformed_normals = m_normals;
+    return_to_rest();
   }
 
   Detail_preserving_deformation(const Detail_preserving_deformation&) = delete;
@@ -125,7 +120,6 @@ public:
     m_selection.insert_handle(group, checked_row(i), i, who);
     m_preprocessed = false;
   }
-
   template <typename IndexRange>
   void insert_handle_points(std::size_t group, const IndexRange& indices)
   {
@@ -155,10 +149,9 @@ public:
     m_preprocessed = false;
     m_selection.check(m_cloud.input_index, who);
     internal::Progress progress(m_callback);
-    progress.stage(0.0, m_has_mean_shift ? 0.0 : 0.6);
-    if(!internal::cluster_edit_sample_points<ConcurrencyTag>(m_cloud, m_normals, m_settings.simplification,
-                                                             m_selection.labels, progress, m_mean_shift,
-                                                             m_has_mean_shift, m_sample_points))
+    progress.stage(0.0, m_mean_shift.analysed ? 0.0 : 0.6);
+    if(!internal::cluster_edit_sample_points<ConcurrencyTag>(
+         m_cloud, m_normals, m_settings.simplification, m_selection.labels, progress, m_mean_shift, m_sample_points))
       return false;
     m_statistics = Statistics();
     m_statistics.clustering_seconds = seconds_since(start);
@@ -173,7 +166,6 @@ public:
                                               m_settings.strength_distance == Strength_distance::geodesic);
     m_rigid_drag.setup(m_system, samples.positions, groups);
     m_diffusion.template setup<ConcurrencyTag>(m_cloud, samples, m_system.graph, m_system.roi, m_selection, m_settings);
-    m_has_relaxation = false;
     return_to_rest();
     if(!progress.report(1.0)) return false;
     m_statistics.points = m_cloud.size();
@@ -186,32 +178,27 @@ public:
     return m_preprocessed = true;
   }
 
-  /*!
-    Computes now the part of `preprocess()` that does not depend on the selection, the points' mean-shift modes
-    (the clustering's most costly part; nothing when the clustering does not use them), so that a program can
-    compute it while its user selects. `preprocess()` computes it when it has not been.
-    \return false if the callback cancelled.
-  */
+  /// Computes now what `preprocess()` needs whatever the selection, the points' mean-shift modes (when the
+  /// clustering uses them; its most costly part), so that a program can compute it while its user selects.
+  /// \return false if the callback cancelled.
   bool analyse_points()
   {
     internal::Progress progress(m_callback);
     return internal::analyse_modes_once<ConcurrencyTag>(m_cloud, m_normals, m_settings.simplification, progress,
-                                                        m_mean_shift, m_has_mean_shift);
+                                                        m_mean_shift);
   }
 
   /// The rigid transform `p -> R p + t` (world frame, the convention of the Botsch-Sorkine `.def` files) of a
   /// handle group. `R` must be a rotation (orthonormal within 1e-6, determinant +1).
   void set_handle_transform(std::size_t group, const Eigen::Matrix3d& R, const Eigen::Vector3d& t)
   {
-    check_group(group);
-    m_selection.transforms[group] = internal::checked_rigid_transform(R, t, group, who);
+    m_selection.transforms[m_selection.checked_group(group, who)] = internal::checked_rigid_transform(R, t, group, who);
   }
 
   /// As above with the rotation as a unit quaternion (norm within 1e-6 of 1).
   void set_handle_transform(std::size_t group, const Eigen::Quaterniond& q, const Eigen::Vector3d& t)
   {
-    check_group(group);
-    m_selection.transforms[group] = internal::checked_rigid_transform(q, t, group, who);
+    m_selection.transforms[m_selection.checked_group(group, who)] = internal::checked_rigid_transform(q, t, group, who);
   }
 
   /*!
@@ -251,6 +238,16 @@ public:
     m_statistics.diffuse_seconds = seconds_since(start);
   }
 
+  /// The first half of `diffuse()`: each sample point's motion for the last `deform()`, which `diffusion_view()`
+  /// gives a renderer that moves the points itself; moves no point. O(sample points).
+  void update_sample_motions()
+  {
+    check_preprocessed("update_sample_motions()");
+    m_diffusion.template update_motions<ConcurrencyTag>(
+      m_sample_points, m_deformed_samples, m_system.graph, m_system.roi, m_selection.transforms, m_detail_rotations,
+      m_settings.rotations == Detail_rotation::as_rigid_as_possible && m_rigid_drag.has_rotations());
+  }
+
   /*!
     `diffuse()`, then writes every point's deformed position through `point_map` and, when given, its
     normal through `normal_map` (`np`), in the order of `points`, which must have as many elements as the
@@ -259,18 +256,16 @@ public:
   template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
   void diffuse(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values())
   {
-    check_size(points, "diffuse()");
+    internal::check_same_size(points, m_cloud.size(), "diffuse()", who);
     diffuse();
     internal::write_points_and_normals(points, np, m_row_of, m_deformed_points, m_deformed_normals);
   }
 
-  /*!
-    `diffuse()` into arrays in input order (numpy's, a renderer's): writes each point a drag can move straight to
-    row `i` of `points` and `normals` (input point `i`, three doubles per row), walking them in input order; the
-    other rows must hold the input points (as after one `diffuse(points, np)`). The same bits as `diffuse()`, but
-    the internal arrays keep the last `diffuse()`'s: until the next one, `deformed_point()`,
-    `for_each_deformed_point()` and `restore_details()` throw Invalid_input.
-  */
+  /// `diffuse()` into arrays in input order (numpy's, a renderer's): writes each point a drag can move straight to row
+  /// `i` of `points` and `normals` (input point `i`, three doubles per row), walking them in input order; the other
+  /// rows must hold the input points (as after one `diffuse(points, np)`). The same bits as `diffuse()`, but the
+  /// internal arrays keep the last `diffuse()`'s: until the next one, `deformed_point()`, `for_each_deformed_point()`
+  /// and `restore_details()` throw Invalid_input.
   void diffuse_in_input_order(double* points, double* normals)
   {
     check_preprocessed("diffuse_in_input_order()");
@@ -300,18 +295,8 @@ public:
     if(!m_diffused)
       throw Invalid_input(std::string(who) + ": restore_details() works on the result of diffuse(); call diffuse() first");
     const auto start = Clock::now();
-    m_statistics.restore_iterations = 0;
-    m_statistics.restore_residual = 0;
-    const std::size_t neighbors = std::min<std::size_t>(10, m_cloud.size() - 1);
-    if(neighbors == 0 || m_settings.detail_iterations == 0) return;
-    if(!m_has_relaxation)
-      m_relaxation.template setup<ConcurrencyTag>(
-        m_cloud.positions,
-        internal::relaxed_rows(m_diffusion.moving_rows, m_selection.labels, m_diffusion.collar.handle_rows), neighbors);
-    m_has_relaxation = true;
-    const auto outcome = m_relaxation.template apply<ConcurrencyTag>(
-      m_cloud.positions, m_settings.detail_anchor, m_settings.detail_iterations, m_settings.detail_tolerance,
-      m_deformed_points);
+    const auto outcome = m_diffusion.template restore_details<ConcurrencyTag>(m_cloud.positions, m_selection.labels,
+                                                                              m_settings, m_deformed_points);
     m_statistics.restore_iterations = outcome.iterations;
     m_statistics.restore_residual = outcome.residual;
     m_statistics.restore_seconds = seconds_since(start);
@@ -321,7 +306,7 @@ public:
   template <typename PointRange, typename NamedParameters = CGAL::parameters::Default_named_parameters>
   void restore_details(PointRange& points, const NamedParameters& np = CGAL::parameters::default_values())
   {
-    check_size(points, "restore_details()");
+    internal::check_same_size(points, m_cloud.size(), "restore_details()", who);
     restore_details();
     internal::write_points_and_normals(points, np, m_row_of, m_deformed_points, m_deformed_normals);
   }
@@ -386,79 +371,21 @@ public:
   /// The target of a handle point under its group's current transform.
   Eigen::Vector3d handle_target(std::size_t group, const Eigen::Vector3d& p) const
   {
-    check_group(group);
-    return m_selection.transforms[group].rotation * p + m_selection.transforms[group].translation;
+    const internal::Rigid_transform& transform = m_selection.transforms[m_selection.checked_group(group, who)];
+    return transform.rotation * p + transform.translation;
   }
   const Settings& settings() const { return m_settings; }
-  /// @}
-
-  /// \name Moving the points elsewhere
-  /// A renderer that moves the points itself (a GPU's vertex shader, as the studio's) repeats `diffuse()` from
-  /// data fixed at preprocessing, each point's stencil and the collar, and per drag data proportional to the
-  /// sample points only: their motions and the collar's handle steps. With `Diffusion_origin::own_sample`, point
-  /// `p` (input index `i`) moves to `p + sum_e w_e M_{s_e} (p, 1)` over its stencil (`stencil(i, ...)`), `M_s` the
-  /// top three rows of `sample_motion(s)`; an exact handle point of group g to its transform; a collar point further
-  /// by `sum_e w_e step_e` over its entries (`for_each_collar_point()`, `collar_handle_step()`).
-  /// @{
-
-  /// The first half of `diffuse()`: each sample point's motion for the last `deform()`; moves no point.
-  /// O(sample points).
-  void update_sample_motions()
+  /// What `diffuse()` does to each point, for a renderer that moves the points itself (after `preprocess()`).
+  Diffusion_view diffusion_view() const
   {
-    check_preprocessed("update_sample_motions()");
-    m_diffusion.template update_motions<ConcurrencyTag>(
-      m_sample_points, m_deformed_samples, m_system.graph, m_system.roi, m_selection.transforms, m_detail_rotations,
-      m_settings.rotations == Detail_rotation::as_rigid_as_possible && m_rigid_drag.has_rotations());
-  }
-
-  /// Sample point `s`'s motion record from `update_sample_motions()` (or `diffuse()`): `[A_s - I, c_s; 0, 1]`,
-  /// so that a point it carries alone moves by `(A_s - I) p + c_s`.
-  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_diffusion.stencil.motion_record(s); }
-
-  /// The number of sample points that carry each point (the same for every point, after `preprocess()`).
-  std::size_t stencil_size() const { return m_diffusion.stencil.width(); }
-
-  /// Writes point `i`'s stencil: `stencil_size()` sample points and their weights (which sum to 1).
-  void stencil(std::size_t i, int* sample_points, double* weights) const
-  {
-    m_diffusion.stencil.copy_row(checked_row(i), sample_points, weights);
-  }
-
-  /// Whether point `i` follows its handle group's transform exactly (exact handles, `handle_weight` infinite).
-  bool is_exact_handle_point(std::size_t i) const
-  {
-    return std::isinf(m_settings.handle_weight) && internal::is_handle_label(m_selection.labels[checked_row(i)]);
-  }
-
-  /// The handle points whose steps the collar spreads (input indices); `collar_handle_step(c)` is the step of the
-  /// c-th.
-  const std::vector<int>& collar_handle_points() const { return m_diffusion.collar.stepping_handle_points; }
-
-  /// Calls `visit(i, handles, weights, count)` for each point `i` of the collar: it moves by the weighted sum of
-  /// the steps of `count` collar handle points (indices into `collar_handle_points()`).
-  template <typename Visitor>
-  void for_each_collar_point(const Visitor& visit) const { m_diffusion.collar.for_each_point(m_cloud.input_index, visit); }
-
-  /// The step of collar handle point `c` for the motions of `update_sample_motions()`: its transform's position
-  /// less its blended one, and the same for its normal.
-  void collar_handle_step(std::size_t c, Eigen::Vector3d& step, Eigen::Vector3d& normal_step) const
-  {
-    m_diffusion.collar.handle_step(c, m_diffusion.stencil, m_cloud.positions, m_normals, m_sample_points.positions,
-                                   m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms, step,
-                                   normal_step);
+    check_preprocessed("diffusion_view()");
+    return Diffusion_view(m_diffusion, m_cloud, m_row_of, m_normals, m_sample_points.positions, m_deformed_samples,
+                          m_selection, m_settings);
   }
   /// @}
 
 private:
-  void check_group(std::size_t group) const { m_selection.checked_group(group, who); }
-
   std::size_t checked_row(std::size_t i) const { return internal::checked_row(m_row_of, i, who); }
-  template <typename PointRange>
-  void check_size(const PointRange& points, const char* call) const
-  {
-    internal::check_same_size(points, m_cloud.size(), call, who);
-  }
-
   void check_preprocessed(const char* call) const
   {
     if(!m_preprocessed) throw Invalid_input(std::string(who) + ": " + call + " needs preprocess() or deform() first");
@@ -495,7 +422,6 @@ private:
   Matrix_n3 m_normals;
   internal::Edit_selection m_selection; // labels per row and the handle groups' transforms
   internal::Mean_shift_analysis m_mean_shift; // selection-independent: computed once
-  bool m_has_mean_shift = false;
   bool m_preprocessed = false;
 
   // Set up by preprocess(), per selection.
@@ -503,9 +429,7 @@ private:
   internal::Sample_system m_system; // the sample points' graph, Laplacian, region and factored least squares
   internal::Strength_field m_strength;
   internal::Rigid_drag m_rigid_drag;
-  internal::Point_diffusion m_diffusion; // the sample turns, the stencils, the movable points and the collar
-  internal::Detail_relaxation m_relaxation; // restore_details(): set up by its first call after preprocess()
-  bool m_has_relaxation = false;
+  internal::Point_diffusion m_diffusion; // the sample turns, stencils and movable points, the collar, the relaxation
 
   // The edit's state, per drag.
   Matrix_n3 m_deformed_samples;

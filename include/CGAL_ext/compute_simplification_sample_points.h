@@ -58,12 +58,11 @@ auto compute_simplification_sample_points_impl(const PointRange& points, LabelMa
   }
   progress.stage(given_normals ? 0.0 : 0.3, 1.0);
   Mean_shift_analysis analysis;
-  bool analysed = false;
   std::vector<int> order;
   if(!cluster_into_sample_points<Kernel, ConcurrencyTag>(cloud, normals, settings, labels.empty() ? nullptr : &labels,
-                                                         progress, analysis, analysed, order, result))
+                                                         progress, analysis, order, result))
     return Simplification_sample_points<Kernel>{};
-  if(analysed) result.mean_shift = summarize(analysis, settings.mean_shift);
+  if(analysis.analysed) result.mean_shift = summarize(analysis, settings.mean_shift);
 
   std::vector<std::size_t> sample_of(n);
   for(std::size_t s = 0; s < result.samples.size(); ++s)

@@ -136,12 +136,11 @@ public:
     return labels;
   }
 
-  /// What a renderer that moves the points itself needs once per preprocessing (Detail_preserving_deformation,
-  /// "Moving the points elsewhere"), in input order.
+  /// What a renderer that moves the points itself needs once per preprocessing (Diffusion_view), in input order.
   py::dict renderer_setup() const
   {
     if(!m_deformation->is_preprocessed()) throw py::value_error("renderer_setup() needs preprocess() first");
-    const Detail_preserving_deformation<>& d = *m_deformation;
+    const Diffusion_view d = m_deformation->diffusion_view();
     const std::size_t n = size(), m = d.stencil_size();
     if(m > 64) throw py::value_error("renderer_setup() takes at most 64 diffusion_samples, not " + std::to_string(m));
     py::array_t<std::int32_t> samples({py::ssize_t(n), py::ssize_t(m)});
@@ -179,9 +178,9 @@ public:
     return py::dict("stencil_samples"_a = samples, "stencil_weights"_a = weights, "exact_handle"_a = exact_handle,
                     "collar_points"_a = py::array_t<std::int32_t>(c, collar_points.data()),
                     "collar_handles"_a = py::array_t<std::int32_t>(py::ssize_t(d.collar_handle_points().size()),
-                                                                  d.collar_handle_points().data()),
+                                                                   d.collar_handle_points().data()),
                     "collar_slots"_a = slots, "collar_weights"_a = slot_weights,
-                    "sample_points"_a = d.number_of_sample_points());
+                    "sample_points"_a = m_deformation->number_of_sample_points());
   }
 
   /// Per drag, after deform(): the sample points' motions (3x4 each, row-major), the handle groups' transforms
@@ -190,13 +189,14 @@ public:
   {
     Detail_preserving_deformation<>& d = *m_deformation;
     if(!d.is_preprocessed()) throw py::value_error("renderer_frame() needs deform() first");
+    const Diffusion_view view = d.diffusion_view();
     const std::size_t samples = d.number_of_sample_points(), groups = d.number_of_handle_groups(),
-                      collar = d.collar_handle_points().size();
+                      collar = view.collar_handle_points().size();
     py::array_t<float> frame(py::ssize_t(12 * (samples + groups) + 6 * collar));
     without_gil([&, out = frame.mutable_data()] {
       d.update_sample_motions();
       for(std::size_t s = 0; s < samples; ++s) {
-        const Eigen::Matrix4d& record = d.sample_motion(s);
+        const Eigen::Matrix4d& record = view.sample_motion(s);
         for(int r = 0; r < 3; ++r)
           for(int c = 0; c < 4; ++c) out[12 * s + 4 * r + c] = float(record(r, c));
       }
@@ -212,7 +212,7 @@ public:
       float* collar_out = group_out + 12 * groups;
       tbb::parallel_for(std::size_t(0), collar, [&](std::size_t c) { // each a blend of the point's stencil
         Eigen::Vector3d step, normal_step;
-        d.collar_handle_step(c, step, normal_step);
+        view.collar_handle_step(c, step, normal_step);
         for(int r = 0; r < 3; ++r) collar_out[6 * c + r] = float(step(r)), collar_out[6 * c + 3 + r] = float(normal_step(r));
       });
       return 0;

@@ -56,3 +56,19 @@ def test_a_header_over_its_budget_fails(copy):
     assert "upsample_point_set.h has 451 lines, over its budget of 450" in result.stdout
     header.write_text(header.read_text().replace("// a line\n", "", 1))
     assert check(copy).returncode == 0, "450 lines are within the budget"
+
+
+def test_a_view_including_an_algorithm_or_included_by_an_internal_header_fails(copy):
+    add_include(copy / "include/CGAL_ext/Diffusion_view.h", "compute_geometric_details.h")
+    add_include(copy / "include/CGAL_ext/internal/point_diffusion.h", "Diffusion_view.h")
+    result = check(copy)
+    assert result.returncode == 1
+    assert "view Diffusion_view.h includes the algorithm header compute_geometric_details.h" in result.stdout
+    assert "internal header internal/point_diffusion.h includes the view Diffusion_view.h" in result.stdout
+
+
+def test_the_editing_class_includes_its_view_within_the_rules():
+    result = check(ROOT)
+    assert result.returncode == 0
+    report = subprocess.run([sys.executable, SCRIPT, str(ROOT)], capture_output=True, text=True).stdout
+    assert "- Detail_preserving_deformation.h: " in report and "Diffusion_view.h" in report.split("## views")[1]

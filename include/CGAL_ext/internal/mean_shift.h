@@ -190,6 +190,7 @@ bool mean_shift_modes(const Matrix_n7& features, const Neighbor_graph& graph, co
 /// scales and the modes (normalised units), all in the cloud's order.
 struct Mean_shift_analysis
 {
+  bool analysed = false; ///< whether the fields below hold a completed analysis (set by its callers)
   Neighbor_graph candidates;
   Eigen::VectorXd curvature;
   Mean_shift_scales scales;

@@ -6,6 +6,7 @@
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 #include <CGAL_ext/internal/Neighbor_graph.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/handle_collar.h>
 #include <CGAL_ext/internal/sample_points.h>
@@ -22,7 +23,8 @@ namespace internal {
 
 /// The editing's diffusion of the sample points' motions to every point (doc/editing_diffusion.md): the sample
 /// points' turns, each point's stencil, the rows a drag can move and the exact handles' collar, set up once per
-/// selection; per drag, `update_motions` (O(sample points)) then `apply` (the movable points).
+/// selection; per drag, `update_motions` (O(sample points)) then `apply` (the movable points); once a drag ends,
+/// `restore_details`.
 class Point_diffusion
 {
 public:
@@ -51,6 +53,7 @@ public:
     movable_points.clear();
     for(int row : m_movable_rows) movable_points.push_back(cloud.input_index[std::size_t(row)]);
     m_in_input_order = Stencil_in_input_order();
+    m_has_relaxation = false;
     collar.template setup<ConcurrencyTag>(cloud, selection.labels, selection.transforms.size(), exact_handles,
                                           settings.handle_collar, stencil, samples.positions, moving_rows);
     m_group_rotations.resize(selection.transforms.size());
@@ -116,6 +119,23 @@ public:
                                              out_normals, &cloud.input_index);
   }
 
+  /// Puts back the fine details of the region's moved rows of `deformed` (from their rest `points`) that the
+  /// blend smoothed out (Detail_relaxation), over each row's 10 nearest. The first call after `setup` sets it up.
+  template <typename ConcurrencyTag>
+  Detail_relaxation::Outcome restore_details(const Matrix_n3& points, const std::vector<int>& labels,
+                                             const Detail_preserving_deformation_settings& settings,
+                                             Matrix_n3& deformed)
+  {
+    const std::size_t neighbors = std::min<std::size_t>(10, std::size_t(points.rows()) - 1);
+    if(neighbors == 0 || settings.detail_iterations == 0) return {};
+    if(!m_has_relaxation)
+      m_relaxation.template setup<ConcurrencyTag>(points, relaxed_rows(moving_rows, labels, collar.handle_rows),
+                                                  neighbors);
+    m_has_relaxation = true;
+    return m_relaxation.template apply<ConcurrencyTag>(points, settings.detail_anchor, settings.detail_iterations,
+                                                       settings.detail_tolerance, deformed);
+  }
+
 private:
   // The movable points' rest positions, normals and stencils in input order, for apply_in_input_order().
   struct Stencil_in_input_order
@@ -128,6 +148,8 @@ private:
   std::vector<Eigen::Matrix3d> m_group_rotations; // the handle groups' rotations as matrices, per drag
   std::vector<int> m_movable_rows;                // moving_rows in the order of their input indices
   Stencil_in_input_order m_in_input_order;
+  Detail_relaxation m_relaxation;
+  bool m_has_relaxation = false;
 };
 
 } // namespace internal

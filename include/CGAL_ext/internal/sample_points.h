@@ -92,14 +92,14 @@ void make_surfels(const Spatial_point_cloud& cloud, const Matrix_n3& normals, co
 }
 
 /// The clustering of `compute_simplification_sample_points` on a cloud with its oriented normals: the split
-/// rule of `settings`, the mean-shift modes when the rule uses them (analysed into `analysis` unless `analysed`
-/// says it holds them already), the split and one surfel per cluster. `labels` (per row, or null) keep
+/// rule of `settings`, the mean-shift modes when the rule uses them (analysed into `analysis` unless it holds
+/// them already), the split and one surfel per cluster. `labels` (per row, or null) keep
 /// selections apart; `order` receives the rows cluster by cluster. Returns false when cancelled.
 template <typename Kernel, typename ConcurrencyTag>
 bool cluster_into_sample_points(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
                                 const Simplification_settings& settings, const std::vector<int>* labels,
-                                Progress& progress, Mean_shift_analysis& analysis, bool& analysed,
-                                std::vector<int>& order, Simplification_sample_points<Kernel>& out)
+                                Progress& progress, Mean_shift_analysis& analysis, std::vector<int>& order,
+                                Simplification_sample_points<Kernel>& out)
 {
   const std::size_t n = cloud.size();
   bool needs_modes = false;
@@ -107,11 +107,11 @@ bool cluster_into_sample_points(const Spatial_point_cloud& cloud, const Matrix_n
   rule.labels = labels;
   const Progress::Range whole = progress.range();
   if(needs_modes) {
-    if(!analysed) {
+    if(!analysis.analysed) {
       progress.stage(whole.begin, whole.at(0.9));
       const std::size_t k = std::min<std::size_t>(settings.mean_shift_neighbors, n - 1);
       if(!analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings.mean_shift, progress, analysis)) return false;
-      analysed = true;
+      analysis.analysed = true;
     }
     rule.modes = &analysis.modes;
   }
@@ -149,13 +149,13 @@ struct Edit_sample_points
 template <typename ConcurrencyTag>
 bool cluster_edit_sample_points(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
                                 const Simplification_settings& settings, const std::vector<int>& labels,
-                                Progress& progress, Mean_shift_analysis& analysis, bool& analysed, Edit_sample_points& out)
+                                Progress& progress, Mean_shift_analysis& analysis, Edit_sample_points& out)
 {
   using Kernel = CGAL::Simple_cartesian<double>;
   std::vector<int> order;
   Simplification_sample_points<Kernel> clusters;
-  if(!cluster_into_sample_points<Kernel, ConcurrencyTag>(cloud, normals, settings, &labels, progress, analysis, analysed,
-                                                         order, clusters))
+  if(!cluster_into_sample_points<Kernel, ConcurrencyTag>(cloud, normals, settings, &labels, progress, analysis, order,
+                                                         clusters))
     return false;
   const std::size_t count = clusters.size();
   out.requested_count = clusters.requested_count;
@@ -176,18 +176,18 @@ bool cluster_edit_sample_points(const Spatial_point_cloud& cloud, const Matrix_n
   return true;
 }
 
-/// The mean-shift modes that the clustering of `settings` uses, analysed into `analysis` unless `analysed` says it
-/// holds them already; nothing when the clustering uses none. Returns false when cancelled.
+/// The mean-shift modes that the clustering of `settings` uses, analysed into `analysis` unless it holds them
+/// already; nothing when the clustering uses none. Returns false when cancelled.
 template <typename ConcurrencyTag>
-bool analyse_modes_once(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Simplification_settings& settings,
-                        Progress& progress, Mean_shift_analysis& analysis, bool& analysed)
+bool analyse_modes_once(const Spatial_point_cloud& cloud, const Matrix_n3& normals,
+                        const Simplification_settings& settings, Progress& progress, Mean_shift_analysis& analysis)
 {
   bool needs_modes = false;
   split_rule_for(settings, cloud.size(), needs_modes);
-  if(!needs_modes || analysed) return true;
+  if(!needs_modes || analysis.analysed) return true;
   const std::size_t k = std::min<std::size_t>(settings.mean_shift_neighbors, cloud.size() - 1);
-  analysed = analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings.mean_shift, progress, analysis);
-  return analysed;
+  analysis.analysed = analyse_mean_shift<ConcurrencyTag>(cloud, normals, k, settings.mean_shift, progress, analysis);
+  return analysis.analysed;
 }
 
 } // namespace internal

@@ -1,0 +1,111 @@
+// Copyright (c) 2026 The CGAL_ext authors.
+// SPDX-License-Identifier: GPL-3.0-or-later
+#ifndef CGAL_EXT_DIFFUSION_VIEW_H
+#define CGAL_EXT_DIFFUSION_VIEW_H
+
+#include <CGAL_ext/Detail_preserving_deformation_settings.h>
+#include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/edit_selection.h>
+#include <CGAL_ext/internal/point_diffusion.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <vector>
+
+namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  What `Detail_preserving_deformation::diffuse()` does to each point, for a renderer that moves the points itself
+  (a GPU's vertex shader, as the studio's): from `Detail_preserving_deformation::diffusion_view()`. The renderer
+  repeats `diffuse()` from data fixed at preprocessing, each point's stencil and the collar, and per drag data
+  proportional to the sample points only: their motions and the collar's handle steps, as of the last
+  `Detail_preserving_deformation::update_sample_motions()`.
+
+  With `Diffusion_origin::own_sample`, point `p` (input index `i`) moves to `p + sum_e w_e M_{s_e} (p, 1)` over
+  its stencil (`stencil(i, ...)`), `M_s` the top three rows of `sample_motion(s)`; an exact handle point of group
+  g to its transform; a collar point further by `sum_e w_e step_e` over its entries (`for_each_collar_point()`,
+  `collar_handle_step()`).
+
+  A view: it reads the deformation object, which must outlive it, and holds until its next `preprocess()`.
+
+  \sa The manual's page of the editing studio, whose page moves the points this way:
+  <a href="../../../doc/studio.md">The editing studio</a> (`doc/studio.md`).
+*/
+class Diffusion_view
+{
+  using Matrix_n3 = internal::Matrix_n3;
+
+public:
+  /// Sample point `s`'s motion record: `[A_s - I, c_s; 0, 1]`, so that a point it carries alone moves by
+  /// `(A_s - I) p + c_s`.
+  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_diffusion.stencil.motion_record(s); }
+
+  /// The number of sample points that carry each point (the same for every point).
+  std::size_t stencil_size() const { return m_diffusion.stencil.width(); }
+
+  /// Writes point `i`'s stencil: `stencil_size()` sample points and their weights (which sum to 1).
+  void stencil(std::size_t i, int* sample_points, double* weights) const
+  {
+    m_diffusion.stencil.copy_row(checked_row(i), sample_points, weights);
+  }
+
+  /// Whether point `i` follows its handle group's transform exactly (exact handles, `handle_weight` infinite).
+  bool is_exact_handle_point(std::size_t i) const
+  {
+    return std::isinf(m_settings.handle_weight) && internal::is_handle_label(m_selection.labels[checked_row(i)]);
+  }
+
+  /// The handle points whose steps the collar spreads (input indices); `collar_handle_step(c)` is the step of the
+  /// c-th.
+  const std::vector<int>& collar_handle_points() const { return m_diffusion.collar.stepping_handle_points; }
+
+  /// Calls `visit(i, handles, weights, count)` for each point `i` of the collar: it moves by the weighted sum of
+  /// the steps of `count` collar handle points (indices into `collar_handle_points()`).
+  template <typename Visitor>
+  void for_each_collar_point(const Visitor& visit) const
+  {
+    m_diffusion.collar.for_each_point(m_cloud.input_index, visit);
+  }
+
+  /// The step of collar handle point `c` for the sample points' motions: its transform's position less its
+  /// blended one, and the same for its normal.
+  void collar_handle_step(std::size_t c, Eigen::Vector3d& step, Eigen::Vector3d& normal_step) const
+  {
+    m_diffusion.collar.handle_step(c, m_diffusion.stencil, m_cloud.positions, m_normals, m_sample_positions,
+                                   m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms, step,
+                                   normal_step);
+  }
+
+  /// \cond SKIP_IN_MANUAL
+  // Built by Detail_preserving_deformation::diffusion_view() over its parts.
+  Diffusion_view(const internal::Point_diffusion& diffusion, const internal::Spatial_point_cloud& cloud,
+                 const std::vector<int>& row_of, const Matrix_n3& normals, const Matrix_n3& sample_positions,
+                 const Matrix_n3& deformed_samples, const internal::Edit_selection& selection,
+                 const Detail_preserving_deformation_settings& settings)
+      : m_diffusion(diffusion), m_cloud(cloud), m_row_of(row_of), m_normals(normals),
+        m_sample_positions(sample_positions), m_deformed_samples(deformed_samples), m_selection(selection),
+        m_settings(settings)
+  {}
+  /// \endcond
+
+private:
+  std::size_t checked_row(std::size_t i) const
+  {
+    return internal::checked_row(m_row_of, i, "Detail_preserving_deformation::diffusion_view()");
+  }
+
+  const internal::Point_diffusion& m_diffusion;
+  const internal::Spatial_point_cloud& m_cloud;
+  const std::vector<int>& m_row_of;
+  const Matrix_n3& m_normals;
+  const Matrix_n3& m_sample_positions;
+  const Matrix_n3& m_deformed_samples;
+  const internal::Edit_selection& m_selection;
+  const Detail_preserving_deformation_settings& m_settings;
+};
+
+} // namespace CGAL_ext
+
+#endif // CGAL_EXT_DIFFUSION_VIEW_H
