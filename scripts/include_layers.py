@@ -7,8 +7,8 @@ algorithm header; an algorithm header includes no other algorithm header (what t
 internal/); and no public header is longer than its line budget, so that an algorithm stays a thin layer over
 its internal parts.
 
-Layers, bottom up: value types, internal, views, algorithms (every other public header). The report lists, for each
-header, the package headers it includes, then the edges between algorithm headers and the headers over
+Layers, bottom up: value types, internal, views, algorithms (every other public header). The report lists, for
+each header, the package headers it includes, then the edges between algorithm headers and the headers over
 budget.
 
 Usage: scripts/include_layers.py [--check] [REPOSITORY]   (--check: exit status 1 and the broken rules, no

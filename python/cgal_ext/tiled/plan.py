@@ -180,7 +180,8 @@ def banded_neighborhoods(points, k, border, reach, rings, halo, spacing):
     neighborhoods = Neighborhoods(points, k, border, search_all=False)
     Dq = 2.0 * spacing  # a first guess, checked below
     while True:
-        width = max(max(reach, 2.0 * Dq) + max(rings - 2, 0) * Dq + D, 1.01 * (D + 2.0 * halo))  # 1 %: rounding
+        # 1 % over D + 2 halo: the check after the tiles compares rounded box distances with D.
+        width = max(max(reach, 2.0 * Dq) + max(rings - 2, 0) * Dq + D, 1.01 * (D + 2.0 * halo))
         band = ~bounded | (border <= width)
         if band.mean() > 0.6:  # most of the tile: search it whole
             neighborhoods.search(np.ones(len(points), dtype=bool))
