@@ -102,6 +102,7 @@ public:
       ordered.normals.resize(Eigen::Index(count), 3);
       ordered.stencil.samples = fixed_degree_graph(count, width);
       ordered.stencil.weights.resize(count * width);
+      ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
       for_range<ConcurrencyTag>(0, count, [&](std::size_t r) {
         const std::size_t row = std::size_t(m_movable_rows[r]);
         ordered.points.row(Eigen::Index(r)) = cloud.positions.row(Eigen::Index(row));
@@ -111,7 +112,6 @@ public:
       });
       ordered.ready = true;
     }
-    ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
     ordered.stencil.copy_motions(stencil);
     ordered.stencil.template move_points<ConcurrencyTag>(ordered.points, ordered.normals, samples, deformed_samples,
                                                          origin, out_points, out_normals, nullptr, &movable_points);

@@ -151,7 +151,8 @@ def interior_bound(points, k, cell):
     dims = cells.max(axis=0) + 1
     key = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
     order = np.argsort(key)
-    first = np.flatnonzero(np.r_[True, key[order][1:] != key[order][:-1]])
+    key = key[order]
+    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
     sizes = np.diff(np.r_[first, len(points)])
     inside = points[order]
     extent = np.linalg.norm(np.maximum.reduceat(inside, first) - np.minimum.reduceat(inside, first), axis=1)

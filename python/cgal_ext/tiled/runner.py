@@ -226,14 +226,15 @@ def write_rows(begin, end, pieces, source, sink, operation, estimate_normals, sc
         for axis, name in enumerate(("nx", "ny", "nz")):
             columns[name][:] = normals[:, axis]
     covered = np.zeros(count, dtype=np.int64)
-    names = result_columns(operation, estimate_normals)
+    # The table's columns after the row, and whether each flips with its tile's normals.
+    fields = [(column, name, name in operation.sign_fields or name in ("nx", "ny", "nz"))
+              for column, name in enumerate(result_columns(operation, estimate_normals)[1:], start=1)]
     for tile, a, b in pieces:
         table = np.asarray(_load_table(scratch, tile)[a:b])
         at = table[:, 0].astype(np.int64) - begin
         covered[at] += 1
         sign = -1.0 if flips.get(tile) else 1.0
-        for column, name in enumerate(names[1:], start=1):
-            flipped = name in operation.sign_fields or name in ("nx", "ny", "nz")
+        for column, name, flipped in fields:
             columns[name][at] = sign * table[:, column] if flipped else table[:, column]
     if not (covered == 1).all():
         row = begin + int(np.argmax(covered != 1))
@@ -374,8 +375,7 @@ class Run:
             rerun = {}
             kth = np.array([summaries[u]["kth"] for u in range(tiling.count)])
             # A tile's points not searched (banded_neighborhoods): their bound, and the box they lie in.
-            bound = np.array([(summaries[u].get("interior") or (0.0, 0.0))[0] for u in range(tiling.count)])
-            depth = np.array([(summaries[u].get("interior") or (0.0, 0.0))[1] for u in range(tiling.count)])
+            bound, depth = np.array([summaries[u].get("interior") or (0.0, 0.0) for u in range(tiling.count)]).T
             inner_lo, inner_hi = lo + depth[:, None], hi - depth[:, None]
             for t, s in summaries.items():
                 read_lo, read_hi = plan.read_box(lo[t], hi[t], s["halo"])
