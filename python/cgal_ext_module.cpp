@@ -119,12 +119,15 @@ PYBIND11_MODULE(_core, m)
   const std::string default_order = setting_name(filter.order);
   const std::string default_weights = setting_name(Laplacian_weights().weighting);
 
-  m.def("compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(), py::kw_only(),
-        "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
-        "weights"_a = default_weights, "progress"_a = py::none(),
+  m.def("compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(),
+        py::kw_only(), "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
+        "weights"_a = default_weights, "progress"_a = py::none(), "neighbor_radius"_a = py::none(),
         doc("The detail vector delta = f(K) p of every point and its oriented magnitude +-|delta| (the sign of "
             "delta . n); K = I - W is the point-set Laplacian (doc/geometric_details.md).",
-            {points_doc, normals_doc, filter_doc, progress_doc},
+            {points_doc, normals_doc, filter_doc, progress_doc,
+             "neighbor_radius : numpy.ndarray, optional\n    A writable contiguous (n,) float64 array that receives "
+             "each point's distance to its k-th\n    nearest neighbour (the tiled runs check with it that a tile held "
+             "every neighbour used)."},
             "Details\n    (details (n, 3), magnitude (n,)), new float64 arrays.")
           .c_str());
   const std::string region_doc = R"(roi : array_like of int or bool

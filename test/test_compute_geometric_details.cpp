@@ -307,6 +307,44 @@ TEST(GeometricDetails, MeanShiftNeighborhoodsKeepACubeFacesDetailsInItsPlane)
   EXPECT_GT(double(same), 0.95 * double(interior));
 }
 
+TEST(GeometricDetails, NeighborRadiusMapReceivesEachPointsDistanceToItsKthNearest)
+{
+  // Brute force: the k-th smallest distance to the other points, on a noisy sampling (no ties to speak of).
+  const auto s = shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.05, 4.0);
+  const std::size_t n = s.points.size();
+  const unsigned k = 9;
+  std::vector<double> expected(n);
+  for(std::size_t i = 0; i < n; ++i) {
+    std::vector<double> d;
+    for(std::size_t j = 0; j < n; ++j)
+      if(j != i) d.push_back(std::sqrt(CGAL::squared_distance(s.points[i], s.points[j])));
+    std::nth_element(d.begin(), d.begin() + (k - 1), d.end());
+    expected[i] = d[k - 1];
+  }
+  const std::vector<std::size_t> indices(boost::counting_iterator<std::size_t>(0),
+                                         boost::counting_iterator<std::size_t>(n));
+  const auto points = CGAL::make_property_map(s.points);
+  for(const Laplacian_neighborhood neighborhood :
+      {Laplacian_neighborhood::k_nearest, Laplacian_neighborhood::mean_shift}) {
+    Detail_settings settings(Detail_filter{});
+    settings.neighborhood = neighborhood;
+    const Details reference = details_of(s, k, settings);
+    Details d;
+    d.vectors.resize(n);
+    d.magnitudes.resize(n);
+    std::vector<double> radius(n, -1.0);
+    ASSERT_TRUE(compute_geometric_details(
+      indices, k, settings, CGAL::make_property_map(d.vectors), CGAL::make_property_map(d.magnitudes),
+      parameters::neighbor_radius_map(CGAL::make_property_map(radius), CGAL::parameters::point_map(points).normal_map(
+                                                                         CGAL::make_property_map(s.normals)))));
+    for(std::size_t i = 0; i < n; ++i) {
+      ASSERT_NEAR(radius[i], expected[i], 1e-15) << setting_name(neighborhood) << " point " << i;
+      ASSERT_EQ(d.vectors[i], reference.vectors[i]); // asking for the radii changes nothing else
+      ASSERT_EQ(d.magnitudes[i], reference.magnitudes[i]);
+    }
+  }
+}
+
 TEST(GeometricDetails, BadInputThrowsAClearError)
 {
   std::vector<Point> pts = shapes::bumpy_sphere<Kernel>(50).points;

@@ -15,9 +15,41 @@
 #include <CGAL/tags.h>
 
 #include <functional>
+#include <type_traits>
 #include <vector>
 
 namespace CGAL_ext {
+
+/// \cond SKIP_IN_MANUAL
+namespace internal_np {
+enum neighbor_radius_map_t
+{
+  neighbor_radius_map
+};
+} // namespace internal_np
+/// \endcond
+
+namespace parameters {
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  The named parameter `neighbor_radius_map` of `compute_geometric_details()`: a `WritablePropertyMap` with value
+  type `geom_traits::FT` that receives each point's distance to its k-th nearest neighbour. It follows other named
+  parameters, `neighbor_radius_map(radii, CGAL::parameters::normal_map(normals))`, as CGAL 5.5's parameters
+  cannot be extended by a member function.
+*/
+template <typename RadiusMap, typename T = bool, typename Tag = CGAL::internal_np::all_default_t,
+          typename Base = CGAL::internal_np::No_property>
+CGAL::Named_function_parameters<RadiusMap, internal_np::neighbor_radius_map_t,
+                                CGAL::Named_function_parameters<T, Tag, Base>>
+neighbor_radius_map(const RadiusMap& radius_map,
+                    const CGAL::Named_function_parameters<T, Tag, Base>& np = CGAL::parameters::default_values())
+{
+  return {radius_map, np};
+}
+
+} // namespace parameters
+
 namespace internal {
 
 template <typename ConcurrencyTag, typename PointRange, typename DetailMap, typename MagnitudeMap,
@@ -48,8 +80,14 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
   if(!given_or_estimated_normals<ConcurrencyTag>(points, np, cloud, default_normal_neighbors, progress, normals, who))
     return false;
   progress.stage(laplacian_begin, 1.0);
+  using Radius_map = typename CGAL::internal_np::Get_param<typename NamedParameters::base,
+                                                           CGAL_ext::internal_np::neighbor_radius_map_t>::type;
+  constexpr bool radius_asked = !std::is_same<Radius_map, CGAL::internal_np::Param_not_found>::value;
   Matrix_n3 details;
-  if(!geometric_details<ConcurrencyTag>(cloud, k, settings, normals, progress, details, who)) return false;
+  std::vector<double> radius;
+  if(!geometric_details<ConcurrencyTag>(cloud, k, settings, normals, progress, details, who,
+                                        radius_asked ? &radius : nullptr))
+    return false;
 
   // Results exist only now: the caller's maps are untouched by a cancelled run.
   const std::vector<int> spatial_of = cloud.spatial_index();
@@ -59,6 +97,8 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
     const double norm = d.norm();
     put(detail_map, item, Vector(FT(d(0)), FT(d(1)), FT(d(2))));
     put(magnitude_map, item, FT(d.dot(normals.row(spatial_of[i])) < 0 ? -norm : norm));
+    if constexpr(radius_asked)
+      put(get_parameter(np, CGAL_ext::internal_np::neighbor_radius_map), item, FT(radius[spatial_of[i]]));
     ++i;
   }
   return true;
@@ -104,6 +144,13 @@ bool compute_geometric_details_impl(const PointRange& points, unsigned int k, co
     \cgalParamNBegin{callback}
       \cgalParamDescription{`std::function<bool(double)>` called with the progress in [0, 1] from the calling
                             thread; returning `false` cancels and leaves the output maps untouched}
+    \cgalParamNEnd
+    \cgalParamNBegin{neighbor_radius_map}
+      \cgalParamDescription{a `WritablePropertyMap` with value type `geom_traits::FT` that receives each point's
+                            distance to its k-th nearest neighbour, given by `CGAL_ext::parameters::neighbor_radius_map()`;
+                            with it a caller that computes a piece of a larger scan checks that the piece held every
+                            neighbour the Laplacian used (Python's tiled runs do)}
+      \cgalParamDefault{not computed}
     \cgalParamNEnd
     \cgalParamNBegin{geom_traits}
       \cgalParamDescription{an instance of a geometric traits class}

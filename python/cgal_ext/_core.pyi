@@ -30,7 +30,8 @@ class PointSet(NamedTuple):
 
 def compute_geometric_details(points: numpy.typing.ArrayLike, normals: Optional[numpy.typing.ArrayLike] = ..., *,
                               k: int = ..., order: str = ..., lam: float = ..., mu: float = ..., weights: str = ...,
-                              progress: _Progress = ...) -> Details: ...
+                              progress: _Progress = ...,
+                              neighbor_radius: Optional[numpy.ndarray] = ...) -> Details: ...
 def scale_geometric_details(points: numpy.typing.ArrayLike, normals: Optional[numpy.typing.ArrayLike] = ..., *,
                             roi: numpy.typing.ArrayLike, s: float, anchors: Optional[numpy.typing.ArrayLike] = ...,
                             k: int = ..., order: str = ..., lam: float = ..., mu: float = ..., weights: str = ...,

@@ -153,6 +153,26 @@ std::pair<py::array, Rows3> output_rows3(const py::object& object, const char* a
   return {array, view_of(array)};
 }
 
+/// The data of `object` when it is a writable contiguous (n,) float64 array (checked, ValueError naming
+/// `argument`); nullptr for None.
+double* output_values(const py::object& object, const char* argument, std::size_t n)
+{
+  if(object.is_none()) return nullptr;
+  if(!py::isinstance<py::array>(object))
+    throw py::value_error(std::string(argument) + " must be a numpy array of shape (" + std::to_string(n) +
+                          ",) and dtype float64");
+  auto array = py::reinterpret_borrow<py::array>(object);
+  if(array.ndim() != 1 || std::size_t(array.shape(0)) != n)
+    throw py::value_error(std::string(argument) + " must have shape (" + std::to_string(n) + ",), not " +
+                          shape_of(array));
+  if(!array.dtype().equal(py::dtype::of<double>()))
+    throw py::value_error(std::string(argument) + " must have dtype float64, not " + dtype_name(array));
+  if(!array.writeable()) throw py::value_error(std::string(argument) + " is not writable");
+  if(n > 1 && array.strides(0) != py::ssize_t(sizeof(double)))
+    throw py::value_error(std::string(argument) + " must be contiguous");
+  return static_cast<double*>(array.mutable_data());
+}
+
 /// Row i of a `Rows3` as a CGAL property map over indices: points, or vectors (normals, details).
 template <typename Value>
 struct Rows3_map

@@ -10,22 +10,30 @@ namespace {
 
 // ---- functions ----------------------------------------------------------------------------------------------
 
-Details_result bound_compute_geometric_details(const Array_like& points, const Optional_array_like& normals, long long k,
-                                         const std::string& order, double lam, double mu, const std::string& weights,
-                                         const Optional_progress& progress)
+Details_result bound_compute_geometric_details(const Array_like& points, const Optional_array_like& normals,
+                                               long long k, const std::string& order, double lam, double mu,
+                                               const std::string& weights, const Optional_progress& progress,
+                                               const py::object& neighbor_radius)
 {
   const Detail_settings settings = detail_settings(order, lam, mu, weights);
   const Point_input input(points, normals);
   const std::size_t n = input.size();
+  double* const radius = output_values(neighbor_radius, "neighbor_radius", n);
   auto [details, details_view] = new_rows3(n);
   py::array_t<double> magnitude(static_cast<py::ssize_t>(n));
   Python_progress reporter(progress);
   const Array_map<double> magnitude_map{magnitude.mutable_data()};
   const Rows3_map<Vector> detail_map{details_view};
+  const unsigned int neighbors = as_count(k, "k");
   const bool done = with_maps(input, [&](const auto& np) {
     return without_gil([&] {
-      return CGAL_ext::compute_geometric_details(all_points(n), as_count(k, "k"), settings, detail_map, magnitude_map,
-                                                 np.callback(reporter.callback()));
+      const auto with_callback = np.callback(reporter.callback());
+      if(radius)
+        return CGAL_ext::compute_geometric_details(
+          all_points(n), neighbors, settings, detail_map, magnitude_map,
+          CGAL_ext::parameters::neighbor_radius_map(Array_map<double>{radius}, with_callback));
+      return CGAL_ext::compute_geometric_details(all_points(n), neighbors, settings, detail_map, magnitude_map,
+                                                 with_callback);
     });
   });
   reporter.raise_if_cancelled(done);

@@ -40,6 +40,23 @@ def test_details_are_the_programs(sphere, sphere_file, tmp_path):
     assert np.array_equal(s_details, details)
 
 
+def test_details_report_each_points_kth_neighbour_distance(sphere):
+    """neighbor_radius receives the distance to the k-th nearest (as SciPy finds it) and changes no result."""
+    from scipy.spatial import cKDTree
+    points, normals = sphere
+    radius = np.full(len(points), -1.0)
+    details, magnitude = cgal_ext.compute_geometric_details(points, normals, k=12, neighbor_radius=radius)
+    expected = cKDTree(points).query(points, 13)[0][:, 12]
+    assert np.abs(radius - expected).max() <= 1e-15 * np.abs(points).max()
+    plain = cgal_ext.compute_geometric_details(points, normals, k=12)
+    assert np.array_equal(details, plain.details) and np.array_equal(magnitude, plain.magnitude)
+    frozen = np.zeros(len(points))
+    frozen.flags.writeable = False
+    with pytest.raises(ValueError, match="neighbor_radius is not writable"):
+        cgal_ext.compute_geometric_details(points, normals, neighbor_radius=frozen)
+    assert not frozen.any()
+
+
 def test_details_of_a_cgal_scan_are_the_programs(armadillo):
     points, normals, vertex = armadillo
     details, magnitude = cgal_ext.compute_geometric_details(points, normals)
@@ -155,6 +172,14 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     (lambda p, n: cgal_ext.compute_geometric_details(p, n[:10].copy()), ValueError, "as many rows"),
     (lambda p, n: cgal_ext.compute_geometric_details(p, n, order="quintic"), ValueError, "order"),
     (lambda p, n: cgal_ext.compute_geometric_details(p, n, lam=0.0), ValueError, "lambda"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, neighbor_radius=np.empty(len(p) - 1)), ValueError,
+     "neighbor_radius must have shape"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, neighbor_radius=np.empty(len(p), np.float32)),
+     ValueError, "neighbor_radius must have dtype float64"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, neighbor_radius=np.empty(2 * len(p))[::2]), ValueError,
+     "neighbor_radius must be contiguous"),
+    (lambda p, n: cgal_ext.compute_geometric_details(p, n, neighbor_radius=[0.0] * len(p)), ValueError,
+     "neighbor_radius must be a numpy array"),
     (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=[len(p)], s=2.0), ValueError, "not a point index"),
     (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=np.array([0.5]), s=2.0), ValueError, "integer point indices"),
     (lambda p, n: cgal_ext.scale_geometric_details(p, n, roi=np.ones(10, bool), s=2.0), ValueError, "one value per point"),

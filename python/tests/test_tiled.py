@@ -88,6 +88,8 @@ def no_leftovers(folder, name):
 def test_details_equal_the_one_process_call(scan, client):
     report = tiled.run("details", scan.ply, scan.folder / "details.ply", client=client, tiles=8)
     assert report["tiles"] == 8 and report["widened_tiles"] == 0
+    # The radii the library measured leave a thin band to search, if any (the lists alone search over a third).
+    assert max(s["searched"] for s in report["tile_summaries"]) < 0.2
     out = read_output(scan.folder / "details.ply")
     details, magnitude = cgal_ext.compute_geometric_details(scan.points, scan.normals)
     along_normal = np.einsum("ij,ij->i", details, scan.normals)
@@ -299,6 +301,37 @@ def test_the_banded_search_certifies_what_the_full_search_certifies(scan, order)
         assert np.array_equal(banded.distances[banded.searched], full.distances[banded.searched])
         searched_fractions.append(banded.searched.mean())
     assert searched_fractions[0] < 0.6 and certified.mean() < 1
+
+
+@pytest.mark.parametrize("order", ["linear", "quadric", "cubic"])
+def test_the_radii_certify_what_the_neighbour_lists_certify(scan, order):
+    """With the k-th-neighbour distances the library measures, the certificate searches a thin band (or nothing)
+    and certifies exactly the own points the lists of every point certify: all with the run's halo, some not with
+    narrow ones. Its depth bound holds: every point the lists reject lies within it."""
+    from cgal_ext.tiled import ops, plan
+    points, normals = scan.points[:400_000], scan.normals[:400_000]
+    operation = ops.operation("details", order=order)
+    k = operation.own_neighbors()
+    spacing = float(np.percentile(cKDTree(points).query(points[::20], k + 1)[0][:, k], 90))
+    lo, hi = np.array([-0.3, -np.inf, -np.inf]), np.array([0.4, np.inf, 0.5])
+    certified_fractions, searched_fractions = [], []
+    for halo in (operation.halo(spacing), 1.2 * spacing, 0.5 * spacing):
+        read = plan.own_mask(points, lo - halo, hi + halo)
+        own = plan.own_mask(points[read], lo, hi)
+        border = plan.border_distance(points[read], lo - halo, hi + halo)
+        radius = np.empty(read.sum())
+        operation.compute(points[read], normals[read], radius)
+        full = plan.Neighborhoods(points[read], k, border)
+        assert np.abs(radius - full.kth_distance(k)).max() <= 1e-15 * np.abs(points).max()
+        reach = max(2 * spacing, 1.25 * radius[own].max())
+        certified, searched = plan.certify_with_radius(points[read], radius, border, own, k, reach,
+                                                       operation.rings(), 0.0)
+        assert np.array_equal(certified, operation.certify(full, own, reach, False))
+        everyone = plan.certify_symmetric(full, k, np.ones(len(border), dtype=bool), reach, operation.rings())
+        assert (border[~everyone] <= plan.rejection_depth(radius, border, reach, operation.rings(), 0.0)).all()
+        certified_fractions.append(certified.mean())
+        searched_fractions.append(searched)
+    assert certified_fractions[0] == 1.0 and certified_fractions[-1] < 1.0 and searched_fractions[0] < 0.2
 
 
 def test_a_sparser_neighbour_tile_makes_a_tile_rerun(client, tmp_path):

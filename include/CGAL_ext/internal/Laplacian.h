@@ -117,16 +117,17 @@ Matrix_n3 apply_detail_filter(const Sparse_row_matrix& K, const Detail_filter& f
                                                      const Matrix_n3&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_LAPLACIAN_INSTANCES)
 
-/// Symmetrised kNN graph and Laplacian of a cloud, both in the cloud's (spatial) order.
-/// Progress runs over [0, 1] of the current stage. Returns false when cancelled.
+/// The Laplacian of a cloud on its symmetrised kNN graph, in the cloud's (spatial) order, and, when asked,
+/// each point's distance to its k-th nearest. Progress runs over [0, 1] of the current stage. Returns false when
+/// cancelled.
 template <typename ConcurrencyTag>
 bool build_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Laplacian_weights& weights,
-                     Progress& progress, Sparse_row_matrix& K, Neighbor_graph* graph_out = nullptr)
+                     Progress& progress, Sparse_row_matrix& K, std::vector<double>* neighbor_radius = nullptr)
 {
-  Neighbor_graph graph = symmetrize<ConcurrencyTag>(k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress));
+  const Neighbor_graph directed = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
   if(progress.cancelled()) return false;
-  K = laplacian_matrix<ConcurrencyTag>(cloud.positions, graph, weights);
-  if(graph_out) *graph_out = std::move(graph);
+  K = laplacian_matrix<ConcurrencyTag>(cloud.positions, symmetrize<ConcurrencyTag>(directed), weights);
+  if(neighbor_radius) *neighbor_radius = last_neighbor_distances(cloud.positions, directed);
   return progress.report(1.0);
 }
 
@@ -160,9 +161,9 @@ inline Sparse_row_matrix to_input_order(const Sparse_row_matrix& K, const Spatia
 }
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
-#define CGAL_EXT_BUILD_LAPLACIAN_INSTANCES(EXTERN, Tag) \
-  EXTERN template bool build_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Laplacian_weights&, \
-                                            Progress&, Sparse_row_matrix&, Neighbor_graph*);
+#define CGAL_EXT_BUILD_LAPLACIAN_INSTANCES(EXTERN, Tag)                                                                \
+  EXTERN template bool build_laplacian<Tag>(const Spatial_point_cloud&, std::size_t, const Laplacian_weights&,         \
+                                            Progress&, Sparse_row_matrix&, std::vector<double>*);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_BUILD_LAPLACIAN_INSTANCES)
 
 } // namespace internal

@@ -41,6 +41,7 @@ class Operation:
     exact = True
     symmetric = False  # on the symmetrised kNN graph: the certificate assumes a reach, verified after the tiles
     banded = True  # the certificate searches neighbours only near the read box's border (plan.banded_neighborhoods)
+    measures_radius = False  # compute() can report each point's k-th-neighbour distance (plan.certify_by_radius)
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 
@@ -123,8 +124,12 @@ class Details(Operation):
                              f"'{self.settings['color_by']}'")
         self.color_field = self.settings["color_by"]
 
-    def compute(self, points, normals):
-        details, magnitude = _core.compute_geometric_details(points, normals, **self.library_options())
+    measures_radius = True
+
+    def compute(self, points, normals, radius=None):
+        """The values; `radius`, an (n,) array, receives each point's k-th-neighbour distance."""
+        details, magnitude = _core.compute_geometric_details(points, normals, neighbor_radius=radius,
+                                                             **self.library_options())
         along_normal = np.einsum("ij,ij->i", details, normals) / np.linalg.norm(normals, axis=1)
         return {"detail_x": details[:, 0], "detail_y": details[:, 1], "detail_z": details[:, 2],
                 "detail_magnitude": magnitude, "detail_normal": along_normal}

@@ -221,6 +221,36 @@ def certify_symmetric(neighborhoods, k, own, reach, rings):
     return ~bad[:m][own]
 
 
+def rejection_depth(radius, border, reach, rings, tolerance):
+    """A depth below the read box's border beyond which `certify_symmetric` rejects no point, from each point's
+    k-th-neighbour distance among the points read (`radius`) alone.
+
+    The first rejections are the points within reach, the inexact points (radius >= border) and those an inexact
+    point q holds (within radius(q) of it). Each hop adds the neighbours of a rejected point b (at most
+    border(b) + radius(b) deep) and the points q that hold one (border(q) - radius(q) <= the depth so far; their
+    own depth counts). `tolerance` (a multiple of the coordinates' rounding) pads every step."""
+    inexact = radius >= border - tolerance
+    depth = max(reach, float((border + radius)[inexact].max(initial=0.0))) + tolerance
+    slack = border - radius
+    for _ in range(rings - 1):
+        depth = max(depth, float((border + radius)[border <= depth].max(initial=0.0)),
+                    float(border[slack <= depth].max(initial=0.0))) + tolerance
+    return depth
+
+
+def certify_with_radius(points, radius, border, own, k, reach, rings, tolerance):
+    """`certify_symmetric`'s answer when every point's k-th-neighbour distance among the points read is known
+    (`radius`, as the library measured it while computing): the k nearest are searched only for the points
+    within `rejection_depth` of the border, none when no own point lies that deep. Returns (certified, the
+    fraction of the points searched)."""
+    band = border <= rejection_depth(radius, border, reach, rings, tolerance)
+    if not (band & own).any():
+        return np.ones(int(own.sum()), dtype=bool), 0.0
+    neighborhoods = Neighborhoods(points, k, border, search_all=False)
+    neighborhoods.search(band)  # the points not searched read as exact, holding none: so they are
+    return certify_symmetric(neighborhoods, k, own, reach, rings), float(band.mean())
+
+
 def box_distances(lo, hi, los, his):
     """Euclidean distance from the box [lo, hi] to each box [los[i], his[i]] (0 where they meet)."""
     with np.errstate(invalid="ignore"):

@@ -110,10 +110,15 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
     """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
     spans the scan: then the tile read every point), and saves the own points' result table under
     `scratch/tile_{tile}`. Returns the tile's summary, with the range of its table's rows in each chunk of the
-    file (`bounds`) and the seconds of each step."""
+    file (`bounds`) and the seconds of each step.
+
+    An operation that measures its neighbourhoods' radii while computing (given normals) computes first and is
+    certified with them (plan.certify_with_radius); the others are certified before they compute. `searched` in
+    the summary: the fraction of the points read whose k nearest the certificate searched."""
     with threads(threads_per_task):
         lo, hi = tiling.lo[tile], tiling.hi[tile]
         k = operation.neighbors(estimate_normals)
+        compute_first = operation.measures_radius and not estimate_normals
         attempts = []
         watch = _Stopwatch()
         while True:
@@ -128,27 +133,39 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             if not own.any():
                 watch.lap("neighbours")
                 return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
-                        "reach": reach, "bounds": np.zeros(len(chunk_starts) + 1, dtype=np.int64),
+                        "reach": reach, "searched": 0.0, "bounds": np.zeros(len(chunk_starts) + 1, dtype=np.int64),
                         "seconds": watch.seconds}
             border = plan.border_distance(points, lo - halo, hi + halo)
-            if operation.banded:
-                neighborhoods, interior = plan.banded_neighborhoods(points, k, border, reach, operation.rings(), halo,
-                                                                    spacing)
+            neighborhoods = interior = values = None
+            if compute_first:
+                radius = np.empty(len(points))
+                values = operation.compute(points, normals, radius)
+                watch.lap("compute")
+                kth = float(radius[own].max())
+                tile_reach = max(reach, 1.25 * kth)
+                certified, searched = plan.certify_with_radius(points, radius, border, own, k, tile_reach,
+                                                               operation.rings(), 1e-12 * float(np.abs(points).max()))
             else:
-                neighborhoods, interior = plan.Neighborhoods(points, k, border), None
-            kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
-            tile_reach = max(reach, 1.25 * kth)
-            certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
+                if operation.banded:
+                    neighborhoods, interior = plan.banded_neighborhoods(points, k, border, reach, operation.rings(),
+                                                                        halo, spacing)
+                else:
+                    neighborhoods = plan.Neighborhoods(points, k, border)
+                kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
+                tile_reach = max(reach, 1.25 * kth)
+                certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
+                searched = float(neighborhoods.searched.mean())
             needed = operation.required_halo(neighborhoods, own)
             watch.lap("neighbours")
             if (certified.all() and halo >= needed) or halo > diagonal:
                 break
             attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
             halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
-        if estimate_normals:
-            normals = operation.oriented_normals(points)
-        values = operation.compute(points, normals)
-        watch.lap("compute")
+        if values is None:
+            if estimate_normals:
+                normals = operation.oriented_normals(points)
+            values = operation.compute(points, normals)
+            watch.lap("compute")
         folder = scratch / f"tile_{tile}"
         partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"
         partial.mkdir()
@@ -162,7 +179,7 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             table[:, -3:] = normals[own_rows]
         np.save(partial / "table.npy", table)
         summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
-                   "kth": kth, "interior": interior, "reach": tile_reach,
+                   "kth": kth, "interior": interior, "reach": tile_reach, "searched": searched,
                    "bounds": np.searchsorted(rows[own_rows], [*chunk_starts, source.count]).astype(np.int64)}
         if estimate_normals:
             # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
