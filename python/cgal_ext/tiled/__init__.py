@@ -12,6 +12,7 @@ The command line: `python3 -m cgal_ext.tiled --help`.
 import importlib.util
 import os
 import shutil
+import time
 import uuid
 from pathlib import Path
 
@@ -86,7 +87,11 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         if client is None:
             client, cluster = _connect(scheduler, workers, memory_limit, connect_timeout, log)
         folder.mkdir(parents=True)
-        return Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
+        report = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
+        started = time.perf_counter()
+        shutil.rmtree(folder)
+        report["client_seconds"]["remove scratch"] = time.perf_counter() - started
+        return report
     finally:
         shutil.rmtree(folder, ignore_errors=True)
         if own_client and client is not None:
