@@ -8,6 +8,7 @@ import os
 import shutil
 import time
 import uuid
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -340,12 +341,13 @@ class Run:
         all_tiles = list(range(tiling.count))
         summaries = self._run_tiles(tiling, halo, starts, {t: (halo, reach) for t in all_tiles})
         summaries = self._verify_reach(summaries, tiling, halo, starts)
-        started = time.perf_counter()
-        shutil.rmtree(self.scratch / "buckets")
-        self.report["client_seconds"]["remove buckets"] = time.perf_counter() - started
-
-        flips = self._orient(summaries, tiling) if self.estimate_normals else {}
-        limit = self._color_limit(summaries) if self.operation.color_field else None
+        with ThreadPoolExecutor(1) as remover:  # tens of thousands of files: removed while the next passes run
+            removed = remover.submit(shutil.rmtree, self.scratch / "buckets")
+            flips = self._orient(summaries, tiling) if self.estimate_normals else {}
+            limit = self._color_limit(summaries) if self.operation.color_field else None
+            started = time.perf_counter()
+            removed.result()
+            self.report["client_seconds"]["remove buckets"] = time.perf_counter() - started
 
         started = time.perf_counter()
         sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)

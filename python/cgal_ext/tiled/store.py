@@ -183,8 +183,8 @@ class PlySink:
     def write(self, begin, columns):
         rows = len(next(iter(columns.values())))
         # Records interleaved a block of rows at a time, which stays in the processor's cache while each field is
-        # filled in; a plain write, closed: in the page cache for this machine and, on a network file system, sent
-        # to the server on close (a mapping would need a synchronous flush for that).
+        # filled in. The range is on the disk (or the file server) when the task ends: a write pass far larger than
+        # memory whose pages are left for the kernel to write back runs slower on this package's test machine.
         block = np.empty(min(rows, self.BLOCK_ROWS), dtype=self.dtype)
         fd = os.open(self.temporary, os.O_WRONLY)
         try:
@@ -197,6 +197,7 @@ class PlySink:
                 while data:
                     written = os.pwrite(fd, data, offset)
                     data, offset = data[written:], offset + written
+            os.fdatasync(fd)
         finally:
             os.close(fd)
 
