@@ -247,7 +247,7 @@ def certify_with_radius(points, radius, border, own, k, reach, rings, tolerance)
     if not (band & own).any():
         return np.ones(int(own.sum()), dtype=bool), 0.0
     neighborhoods = Neighborhoods(points, k, border, search_all=False)
-    neighborhoods.search(band)  # the points not searched read as exact, holding none: so they are
+    neighborhoods.search(band)  # the others read as exact and are never rejected, as the depth shows
     return certify_symmetric(neighborhoods, k, own, reach, rings), float(band.mean())
 
 
