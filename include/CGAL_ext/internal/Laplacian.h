@@ -127,7 +127,7 @@ bool build_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Lapl
   const Neighbor_graph directed = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
   if(progress.cancelled()) return false;
   K = laplacian_matrix<ConcurrencyTag>(cloud.positions, symmetrize<ConcurrencyTag>(directed), weights);
-  if(neighbor_radius) *neighbor_radius = last_neighbor_distances(cloud.positions, directed);
+  if(neighbor_radius) *neighbor_radius = last_neighbor_distances(cloud.positions, cloud.positions, directed);
   return progress.report(1.0);
 }
 

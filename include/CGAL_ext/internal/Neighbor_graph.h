@@ -130,13 +130,15 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
   return graph;
 }
 
-/// Each row's distance to its last neighbour: in a graph of nearest-first rows, to its k-th nearest.
-inline std::vector<double> last_neighbor_distances(const Matrix_n3& positions, const Neighbor_graph& nearest_first)
+/// Each query row's distance to its last neighbour among the rows of `samples`: in a graph of nearest-first rows,
+/// to its k-th nearest.
+inline std::vector<double> last_neighbor_distances(const Matrix_n3& queries, const Matrix_n3& samples,
+                                                   const Neighbor_graph& nearest_first)
 {
   std::vector<double> distances(nearest_first.size(), 0.0);
   for(std::size_t i = 0; i < distances.size(); ++i)
     if(nearest_first.degree(i) > 0)
-      distances[i] = (positions.row(Eigen::Index(i)) - positions.row(*(nearest_first.end(i) - 1))).norm();
+      distances[i] = (queries.row(Eigen::Index(i)) - samples.row(*(nearest_first.end(i) - 1))).norm();
   return distances;
 }
 

@@ -133,9 +133,7 @@ Region region_surroundings(const Region& region, std::size_t k, double margin, s
   Matrix_n3 probes(Eigen::Index((m + stride - 1) / stride), 3);
   for(Eigen::Index q = 0; q < probes.rows(); ++q) probes.row(q) = roi_positions.row(q * Eigen::Index(stride));
   const Neighbor_graph probe_neighbors = k_nearest_samples<ConcurrencyTag>(roi_positions, probes, k + 1);
-  std::vector<double> radii(std::size_t(probes.rows()));
-  for(std::size_t q = 0; q < radii.size(); ++q)
-    radii[q] = (roi_positions.row(*(probe_neighbors.end(q) - 1)) - probes.row(Eigen::Index(q))).norm();
+  std::vector<double> radii = last_neighbor_distances(probes, roi_positions, probe_neighbors);
   std::nth_element(radii.begin(), radii.begin() + std::ptrdiff_t(radii.size() / 2), radii.end());
   const double reach = margin * radii[radii.size() / 2];
   if(!(reach > 0) || !std::isfinite(reach)) return whole_cloud();

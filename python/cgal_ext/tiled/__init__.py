@@ -12,12 +12,11 @@ The command line: `python3 -m cgal_ext.tiled --help`.
 import importlib.util
 import os
 import shutil
-import time
 import uuid
 from pathlib import Path
 
 from . import ops
-from .runner import Run
+from .runner import Run, timed
 from .store import TiledError, open_source
 
 __all__ = ["TiledError", "run", "OPERATIONS"]
@@ -88,9 +87,8 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             client, cluster = _connect(scheduler, workers, memory_limit, connect_timeout, log)
         folder.mkdir(parents=True)
         report = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
-        started = time.perf_counter()
-        shutil.rmtree(folder)
-        report["client_seconds"]["remove scratch"] = time.perf_counter() - started
+        with timed(report["client_seconds"], "remove scratch"):
+            shutil.rmtree(folder)
         return report
     finally:
         shutil.rmtree(folder, ignore_errors=True)

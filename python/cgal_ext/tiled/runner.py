@@ -9,6 +9,7 @@ import shutil
 import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -93,6 +94,14 @@ def _load_table(scratch, tile):
     """A tile's result table, memory-mapped: one column after the other, so a column or a range of rows is read
     without the rest."""
     return np.load(scratch / f"tile_{tile}" / "table.npy", mmap_mode="r")
+
+
+@contextmanager
+def timed(seconds, step):
+    """Adds the seconds the block takes to `seconds[step]` (when it completes)."""
+    started = time.perf_counter()
+    yield
+    seconds[step] = seconds.get(step, 0.0) + time.perf_counter() - started
 
 
 class _Stopwatch:
@@ -287,21 +296,19 @@ class Run:
                        "client_seconds": {}}
 
     def _gather(self, futures, what):
-        started = time.perf_counter()
-        if self.progress:
-            from distributed import progress
-            self.log(f"{what}:")
-            progress(futures)
-            print(flush=True)
-        try:
-            results = self.client.gather(futures)
-        except BaseException as error:
-            self.client.cancel(futures)
-            if isinstance(error, (TiledError, KeyboardInterrupt)):
-                raise
-            raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
-        self.report["seconds"][what] = self.report["seconds"].get(what, 0) + time.perf_counter() - started
-        return results
+        with timed(self.report["seconds"], what):
+            if self.progress:
+                from distributed import progress
+                self.log(f"{what}:")
+                progress(futures)
+                print(flush=True)
+            try:
+                return self.client.gather(futures)
+            except BaseException as error:
+                self.client.cancel(futures)
+                if isinstance(error, (TiledError, KeyboardInterrupt)):
+                    raise
+                raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
 
     def _map(self, function, items, *args, what, **kwargs):
         futures = [self.client.submit(function, *item, *args, pure=False, **kwargs) for item in items]
@@ -321,17 +328,16 @@ class Run:
         bad = [s["bad_row"] for s in scans if s["bad_row"] is not None]
         if bad:
             raise TiledError(f"{self.source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
-        started = time.perf_counter()
-        sample = np.concatenate([s["sample"] for s in scans])
-        lo = np.min([s["lo"] for s in scans], axis=0)
-        hi = np.max([s["hi"] for s in scans], axis=0)
-        tile_count = min(tile_count, max(1, len(sample) // 8))
-        tiling = plan.Tiling(sample, tile_count)
-        k = self.operation.neighbors(self.estimate_normals)
-        spacing = self._spacing(sample, stride, k)
-        halo = self.halo if self.halo is not None else self.operation.halo(spacing)
-        reach = 2.0 * spacing
-        self.report["client_seconds"]["plan"] = time.perf_counter() - started
+        with timed(self.report["client_seconds"], "plan"):
+            sample = np.concatenate([s["sample"] for s in scans])
+            lo = np.min([s["lo"] for s in scans], axis=0)
+            hi = np.max([s["hi"] for s in scans], axis=0)
+            tile_count = min(tile_count, max(1, len(sample) // 8))
+            tiling = plan.Tiling(sample, tile_count)
+            k = self.operation.neighbors(self.estimate_normals)
+            spacing = self._spacing(sample, stride, k)
+            halo = self.halo if self.halo is not None else self.operation.halo(spacing)
+            reach = 2.0 * spacing
         self.report.update(tiles=tiling.count, chunks=len(ranges), initial_halo=halo, spacing=spacing,
                            diagonal=float(np.linalg.norm(hi - lo)))
         self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})")
@@ -345,23 +351,20 @@ class Run:
             removed = remover.submit(shutil.rmtree, self.scratch / "buckets")
             flips = self._orient(summaries, tiling) if self.estimate_normals else {}
             limit = self._color_limit(summaries) if self.operation.color_field else None
-            started = time.perf_counter()
-            removed.result()
-            self.report["client_seconds"]["remove buckets"] = time.perf_counter() - started
+            with timed(self.report["client_seconds"], "remove buckets"):
+                removed.result()
 
-        started = time.perf_counter()
-        sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
-        sink.create()
-        self.report["client_seconds"]["create output"] = time.perf_counter() - started
+        with timed(self.report["client_seconds"], "create output"):
+            sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
+            sink.create()
         try:
             bounds = np.stack([summaries[t]["bounds"] for t in all_tiles])
             pieces = [[(t, int(bounds[t, c]), int(bounds[t, c + 1]))
                        for t in np.flatnonzero(bounds[:, c + 1] > bounds[:, c])] for c in range(len(ranges))]
             self._map(write_rows, [(*r, p) for r, p in zip(ranges, pieces)], self.source, sink, self.operation,
                       self.estimate_normals, self.scratch, flips, color_limit=limit, what="write")
-            started = time.perf_counter()
-            sink.commit()
-            self.report["client_seconds"]["commit output"] = time.perf_counter() - started
+            with timed(self.report["client_seconds"], "commit output"):
+                sink.commit()
         except BaseException:
             sink.discard()
             raise
