@@ -2,8 +2,8 @@
 bench_python.py (set_handle_transform, deform, diffuse into the arrays of the drag before) against the library's
 deform() + diffuse(), medians of 5 objects of 20 drags. A by-hand measurement beside the harness (doc/python.md,
 "Overhead"): a mesh's vertex order is what a user's figure has, neither the sampling's random order nor the
-harness's sorted one.
-Usage: PYTHONPATH=build/python python3 benchmark/python_drag_on_split_meshes.py MESH.off SPLITS
+harness's sorted one; with `shuffled`, the same points in a random order.
+Usage: PYTHONPATH=build/python python3 benchmark/python_drag_on_split_meshes.py MESH.off SPLITS [shuffled]
 """
 import os
 import sys
@@ -45,5 +45,10 @@ fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
 for k in range(3):
     np.add.at(n, f[:, k], fn)
 n /= np.linalg.norm(n, axis=1)[:, None]
+shuffled = sys.argv[3:] == ["shuffled"]
+if shuffled:
+    order = np.random.default_rng(1).permutation(len(v))
+    v, n = v[order], n[order]
 w, l, m = drag_times(np.ascontiguousarray(v), np.ascontiguousarray(n), 20, 5)
-print("%s split %s: %d points, %d in the region: python %.2f ms, library %.2f ms, ratio %.2f" % (sys.argv[1].split('/')[-1], sys.argv[2], len(v), m, 1e3 * w, 1e3 * l, w / l))
+print("%s split %s%s: %d points, %d in the region: python %.2f ms, library %.2f ms, ratio %.2f" % (
+    sys.argv[1].split('/')[-1], sys.argv[2], ", shuffled" if shuffled else "", len(v), m, 1e3 * w, 1e3 * l, w / l))

@@ -12,11 +12,12 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <numeric>
 #include <random>
+#include <set>
 #include <tuple>
 #include <vector>
 
@@ -34,7 +35,23 @@ struct Tentacle
   std::vector<std::size_t> roi, tip;
   double diagonal = 0;
 
-  explicit Tentacle(std::size_t n) : shape(CGAL_ext::shapes::bumpy_tube<Kernel>(n))
+  explicit Tentacle(std::size_t n) : shape(CGAL_ext::shapes::bumpy_tube<Kernel>(n)) { select(); }
+
+  /// The same points in a random order (a random sampling's, where a scan's points come in sweeps).
+  void shuffle(unsigned seed)
+  {
+    std::vector<std::size_t> order = all();
+    std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+    auto points = shape.points;
+    auto normals = shape.normals;
+    for(std::size_t i = 0; i < order.size(); ++i)
+      shape.points[i] = points[order[i]], shape.normals[i] = normals[order[i]];
+    roi.clear();
+    tip.clear();
+    select();
+  }
+
+  void select()
   {
     Eigen::AlignedBox3d box;
     for(std::size_t i = 0; i < shape.points.size(); ++i) {
@@ -903,35 +920,62 @@ TEST(DetailPreservingDeformation, DeformedPointsAreWrittenInInputOrderAndTheUnmo
 TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying)
 {
   // diffuse_in_input_order() writes the caller's arrays in place: the bits of diffuse() followed by the copy of
-  // for_each_deformed_point(), drag after drag, with the exact handle and its collar, in both rotation modes.
-  // Until the next diffuse(), the internal results it did not write are refused.
-  const Tentacle t(2500);
-  const std::size_t n = t.shape.points.size();
-  for(CGAL_ext::Detail_rotation rotations : both_rotations) {
-    auto d = t.edit(with_order(Detail_order::quadric, rotations));
-    ASSERT_TRUE(d->preprocess());
-    ASSERT_FALSE(d->diffusion_view().collar_handle_points().empty());
-    std::vector<double> points(3 * n), normals(3 * n);
-    d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
-      std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
-      std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
-    });
-    for(int step = 1; step <= 3; ++step) {
-      const auto [R, shift] =
-        turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.3 * step, Eigen::Vector3d(0, 0.05, 0));
-      d->set_handle_transform(0, R, shift);
-      ASSERT_TRUE(d->deform());
-      d->diffuse_in_input_order(points.data(), normals.data());
-      EXPECT_THROW(d->deformed_point(0), CGAL_ext::Invalid_input);
-      EXPECT_THROW(d->restore_details(), CGAL_ext::Invalid_input);
-      d->diffuse();
-      for(std::size_t i = 0; i < n; ++i) {
-        ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&points[3 * i])), d->deformed_point(i))
-          << "step " << step << ", point " << i;
-        ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&normals[3 * i])), d->deformed_normal(i))
-          << "step " << step << ", point " << i;
+  // for_each_deformed_point(), drag after drag, in both rotation modes, with the exact handle and its collar, with
+  // a second exact group with a collar of its own, with soft handles, and with every point an exact handle; in the
+  // generator's order and in a random one. Until the next diffuse(), the internal results it did not write are
+  // refused.
+  for(unsigned order : {0u, 1u}) {
+    Tentacle t(2500);
+    if(order == 1) t.shuffle(7);
+    const std::size_t n = t.shape.points.size();
+    for(CGAL_ext::Detail_rotation rotations : both_rotations)
+      for(int handles : {0, 1, 2, 3}) { // one exact group, two exact groups, one soft group, everything one exact group
+        Settings settings = with_order(Detail_order::quadric, rotations);
+        if(handles == 2) settings.handle_weight = 1e3;
+        auto d = handles == 3 ? std::make_unique<Deformation>(t.all(), settings, t.np()) : t.edit(settings);
+        if(handles == 3) {
+          d->insert_roi_points(t.all());
+          d->insert_handle_points(d->create_handle_group(), t.all());
+        }
+        std::vector<std::size_t> ring;
+        for(std::size_t i : t.roi)
+          if(std::abs(t.shape.points[i].z() - 0.55) < 0.04 && t.shape.points[i].x() > -0.6) ring.push_back(i);
+        if(handles == 1) d->insert_handle_points(d->create_handle_group(), ring);
+        ASSERT_TRUE(d->preprocess());
+        const std::vector<int>& stepping = d->diffusion_view().collar_handle_points();
+        ASSERT_EQ(stepping.empty(), handles >= 2);
+        if(handles == 1) { // both groups step the collar
+          std::set<std::size_t> groups;
+          for(int i : stepping)
+            groups.insert(std::find(ring.begin(), ring.end(), std::size_t(i)) == ring.end() ? 0 : 1);
+          ASSERT_EQ(groups.size(), 2u);
+        }
+        std::vector<double> points(3 * n), normals(3 * n);
+        d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
+          std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
+          std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
+        });
+        for(int step = 1; step <= 3; ++step) {
+          const auto [R, shift] =
+            turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.3 * step, Eigen::Vector3d(0, 0.05, 0));
+          d->set_handle_transform(0, R, shift);
+          if(handles == 1) {
+            const auto [R1, shift1] = turn_about(Eigen::Vector3d(-0.2, 0, 0.55), Eigen::Vector3d(1, 0, 0), -0.1 * step);
+            d->set_handle_transform(1, R1, shift1);
+          }
+          ASSERT_TRUE(d->deform());
+          d->diffuse_in_input_order(points.data(), normals.data());
+          EXPECT_THROW(d->deformed_point(0), CGAL_ext::Invalid_input);
+          EXPECT_THROW(d->restore_details(), CGAL_ext::Invalid_input);
+          d->diffuse();
+          for(std::size_t i = 0; i < n; ++i) {
+            ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&points[3 * i])), d->deformed_point(i))
+              << "order " << order << ", handles " << handles << ", step " << step << ", point " << i;
+            ASSERT_EQ(Eigen::Vector3d(Eigen::Vector3d::Map(&normals[3 * i])), d->deformed_normal(i))
+              << "order " << order << ", handles " << handles << ", step " << step << ", point " << i;
+          }
+        }
       }
-    }
   }
 }
 

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <numeric>
 #include <vector>
 
 namespace CGAL_ext {
@@ -112,45 +113,117 @@ public:
   void apply(const Matrix_n3& positions, const Matrix_n3& normals, const std::vector<Eigen::Matrix3d>& rotations,
              const std::vector<Rigid_transform>& transforms, Matrix_n3& deformed_points, Matrix_n3& deformed_normals)
   {
-    apply_to<ConcurrencyTag>(positions, normals, rotations, transforms, deformed_points.data(), deformed_normals.data(),
-                             nullptr);
-  }
-
-  /// apply() on blends held elsewhere: row r's in row `destination_of_row[r]` of `out_points` and `out_normals`
-  /// (rows of three doubles).
-  template <typename ConcurrencyTag>
-  void apply_to(const Matrix_n3& positions, const Matrix_n3& normals, const std::vector<Eigen::Matrix3d>& rotations,
-                const std::vector<Rigid_transform>& transforms, double* out_points, double* out_normals,
-                const std::vector<int>* destination_of_row)
-  {
-    using Row = Eigen::Map<Eigen::RowVector3d>;
-    auto out = [&](double* base, Eigen::Index row) {
-      return Row(base + 3 * (destination_of_row ? (*destination_of_row)[std::size_t(row)] : row));
-    };
     for_range<ConcurrencyTag>(0, handle_rows.size(), [&](std::size_t h) {
-      const Eigen::Index row = handle_rows[h];
+      const Eigen::Index row = handle_rows[h], at = Eigen::Index(h);
       const std::size_t g = std::size_t(handle_groups[h]);
-      const Eigen::RowVector3d exact = (rotations[g] * positions.row(row).transpose() + transforms[g].translation).transpose();
-      const Eigen::RowVector3d exact_normal = (rotations[g] * normals.row(row).transpose()).transpose();
-      Row point = out(out_points, row), normal = out(out_normals, row);
-      m_steps.row(Eigen::Index(h)) = exact - point;
-      m_normal_steps.row(Eigen::Index(h)) = exact_normal - normal;
-      point = exact;
-      normal = exact_normal;
+      Eigen::RowVector3d exact, exact_normal;
+      on_transform(rotations[g], transforms[g], positions.row(row), normals.row(row), exact, exact_normal);
+      m_steps.row(at) = exact - deformed_points.row(row);
+      m_normal_steps.row(at) = exact_normal - deformed_normals.row(row);
+      deformed_points.row(row) = exact;
+      deformed_normals.row(row) = exact_normal;
     });
     for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t c) {
-      const Eigen::Index row = rows[c];
-      Eigen::RowVector3d step = Eigen::RowVector3d::Zero(), normal_step = Eigen::RowVector3d::Zero();
-      for(int e = entries.offsets[c]; e < entries.offsets[c + 1]; ++e) {
-        const double weight = weights[std::size_t(e)];
-        step += weight * m_steps.row(entries.indices[std::size_t(e)]);
-        normal_step += weight * m_normal_steps.row(entries.indices[std::size_t(e)]);
-      }
-      if(step.isZero(0) && normal_step.isZero(0)) return; // no step to take: bit for bit
-      Row point = out(out_points, row), normal = out(out_normals, row);
-      point += step;
-      normal = (normal + normal_step).normalized();
+      const int first = entries.offsets[c];
+      take_steps(entries.indices.data() + first, weights.data() + first, entries.degree(c), m_steps, m_normal_steps,
+                 deformed_points.data() + 3 * rows[c], deformed_normals.data() + 3 * rows[c]);
     });
+  }
+
+  /// For apply() during a walk in input order over the other moving rows (`walk_rows`, in the order of their input
+  /// indices `input_index`): copies the handle points' rest `positions` and `normals` in input order and finds
+  /// where the collar points lie in the walk. Once per selection.
+  void index_walk(const std::vector<int>& walk_rows, const Matrix_n3& positions, const Matrix_n3& normals,
+                  const std::vector<int>& input_index)
+  {
+    Walk& walk = m_walk;
+    walk = Walk();
+    std::vector<int> order(handle_rows.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return input_index[std::size_t(handle_rows[std::size_t(a)])] <
+             input_index[std::size_t(handle_rows[std::size_t(b)])];
+    });
+    walk.handle_positions.resize(Eigen::Index(order.size()), 3);
+    walk.handle_normals.resize(Eigen::Index(order.size()), 3);
+    for(std::size_t h = 0; h < order.size(); ++h) {
+      const Eigen::Index row = handle_rows[std::size_t(order[h])];
+      walk.handle_positions.row(Eigen::Index(h)) = positions.row(row);
+      walk.handle_normals.row(Eigen::Index(h)) = normals.row(row);
+      walk.handle_points.push_back(input_index[std::size_t(row)]);
+      walk.handle_groups.push_back(handle_groups[std::size_t(order[h])]);
+    }
+    for(std::size_t w = 0; w < walk_rows.size(); ++w) {
+      const auto collar = std::lower_bound(rows.begin(), rows.end(), walk_rows[w]); // sorted by row
+      if(collar == rows.end() || *collar != walk_rows[w]) continue;
+      const std::size_t c = std::size_t(collar - rows.begin());
+      walk.collar.push_back(int(w));
+      for(int e = entries.offsets[c]; e < entries.offsets[c + 1]; ++e) {
+        walk.collar_entries.indices.push_back(slots[std::size_t(e)]);
+        walk.collar_weights.push_back(weights[std::size_t(e)]);
+      }
+      walk.collar_entries.offsets.push_back(int(walk.collar_entries.indices.size()));
+    }
+    for(int h : stepping_handles) walk.stepping_rows.push_back(handle_rows[std::size_t(h)]);
+    walk.stepping_slots.resize(stepping_handles.size());
+    std::iota(walk.stepping_slots.begin(), walk.stepping_slots.end(), 0);
+    walk.steps.resize(Eigen::Index(stepping_handles.size()), 3);
+    walk.normal_steps.resize(Eigen::Index(stepping_handles.size()), 3);
+  }
+
+  /// Per drag, before the walk: the stepping handles' steps, their blends computed by `stencil`'s kernel (the one
+  /// that blends the walk, so the steps have apply()'s bits).
+  template <typename ConcurrencyTag>
+  void set_walk_steps(const Diffusion_stencil& stencil, const Matrix_n3& positions, const Matrix_n3& normals,
+                      const Matrix_n3& samples, const Matrix_n3& deformed_samples, Diffusion_origin origin,
+                      const std::vector<Eigen::Matrix3d>& rotations, const std::vector<Rigid_transform>& transforms)
+  {
+    Walk& walk = m_walk;
+    if(walk.stepping_rows.empty()) return;
+    stencil.template move_points<ConcurrencyTag>(positions, normals, samples, deformed_samples, origin,
+                                                 walk.steps.data(), walk.normal_steps.data(), &walk.stepping_rows,
+                                                 &walk.stepping_slots);
+    for(std::size_t c = 0; c < stepping_handles.size(); ++c) {
+      const std::size_t g = std::size_t(handle_groups[std::size_t(stepping_handles[c])]);
+      const Eigen::Index row = walk.stepping_rows[c], slot = Eigen::Index(c);
+      Eigen::RowVector3d exact, exact_normal;
+      on_transform(rotations[g], transforms[g], positions.row(row), normals.row(row), exact, exact_normal);
+      walk.steps.row(slot) = exact - walk.steps.row(slot);
+      walk.normal_steps.row(slot) = exact_normal - walk.normal_steps.row(slot);
+    }
+  }
+
+  /// apply()'s handle points, in input order, into arrays in input order (row i: input point i, three doubles).
+  template <typename ConcurrencyTag>
+  void apply_to_handle_points(const std::vector<Eigen::Matrix3d>& rotations,
+                              const std::vector<Rigid_transform>& transforms, double* out_points,
+                              double* out_normals) const
+  {
+    using Row = Eigen::Map<Eigen::RowVector3d>;
+    const Walk& walk = m_walk;
+    for_range<ConcurrencyTag>(0, walk.handle_points.size(), [&](std::size_t h) {
+      const std::size_t g = std::size_t(walk.handle_groups[h]), i = std::size_t(walk.handle_points[h]);
+      Eigen::RowVector3d exact, exact_normal;
+      on_transform(rotations[g], transforms[g], walk.handle_positions.row(Eigen::Index(h)),
+                   walk.handle_normals.row(Eigen::Index(h)), exact, exact_normal);
+      Row(out_points + 3 * i) = exact;
+      Row(out_normals + 3 * i) = exact_normal;
+    });
+  }
+
+  /// apply()'s collar points among the walk's rows `[begin, end)`, once they hold their blends: row
+  /// `destination[w]` of `out_points` and `out_normals` (rows of three doubles) for the walk's row w.
+  void apply_to_walk_collar(std::size_t begin, std::size_t end, const std::vector<int>& destination, double* out_points,
+                            double* out_normals) const
+  {
+    const Walk& walk = m_walk;
+    const auto first = std::lower_bound(walk.collar.begin(), walk.collar.end(), int(begin)) - walk.collar.begin();
+    for(std::size_t c = std::size_t(first); c < walk.collar.size() && std::size_t(walk.collar[c]) < end; ++c) {
+      const int entry = walk.collar_entries.offsets[c];
+      const std::size_t i = std::size_t(destination[std::size_t(walk.collar[c])]);
+      take_steps(walk.collar_entries.indices.data() + entry, walk.collar_weights.data() + entry,
+                 walk.collar_entries.degree(c), walk.steps, walk.normal_steps, out_points + 3 * i, out_normals + 3 * i);
+    }
   }
 
   /// Calls `visit(i, slots, weights, count)` for each collar point (`input_index` per row): its `count` entries'
@@ -181,6 +254,31 @@ public:
   }
 
 private:
+  // A handle point's rest `position` and `normal` on its group's transform `T` (`R`: its rotation as a matrix).
+  template <typename Position, typename Normal>
+  static void on_transform(const Eigen::Matrix3d& R, const Rigid_transform& T, const Position& position,
+                           const Normal& normal, Eigen::RowVector3d& exact, Eigen::RowVector3d& exact_normal)
+  {
+    exact = (R * position.transpose() + T.translation).transpose();
+    exact_normal = (R * normal.transpose()).transpose();
+  }
+
+  // Moves a collar point's blend (`point`, `normal`: three doubles each) by the weighted steps of its `count`
+  // entries (rows `handles` of `steps` and `normal_steps`); without a step it keeps its blend bit for bit.
+  static void take_steps(const int* handles, const double* weights, int count, const Matrix_n3& steps,
+                         const Matrix_n3& normal_steps, double* point, double* normal)
+  {
+    Eigen::RowVector3d step = Eigen::RowVector3d::Zero(), normal_step = Eigen::RowVector3d::Zero();
+    for(int e = 0; e < count; ++e) {
+      step += weights[e] * steps.row(handles[e]);
+      normal_step += weights[e] * normal_steps.row(handles[e]);
+    }
+    if(step.isZero(0) && normal_step.isZero(0)) return;
+    Eigen::Map<Eigen::RowVector3d> moved(point), turned(normal);
+    moved += step;
+    turned = (turned + normal_step).normalized();
+  }
+
   /// The median distance from a handle point to the farthest sample point of its stencil.
   double median_stencil_reach(const Matrix_n3& positions, const Diffusion_stencil& stencil, const Matrix_n3& samples) const
   {
@@ -193,7 +291,20 @@ private:
     return reach[reach.size() / 2];
   }
 
+  // The handle points in input order and where the collar points lie in a walk (index_walk()); the steps.
+  struct Walk
+  {
+    Matrix_n3 handle_positions, handle_normals;     // the handle points' rest positions and normals...
+    std::vector<int> handle_points, handle_groups;  // ... their input indices, increasing, and groups
+    std::vector<int> collar;                        // walk positions, increasing
+    Neighbor_graph collar_entries;                  // their entries as places in stepping_handles...
+    std::vector<double> collar_weights;             // ... and their weights
+    std::vector<int> stepping_rows, stepping_slots; // the stepping handles' rows, and 0, 1, ...
+    Matrix_n3 steps, normal_steps;                  // per stepping handle, per drag
+  };
+
   Matrix_n3 m_steps, m_normal_steps; // per handle row, its transform's position less the blend's
+  Walk m_walk;
 };
 
 } // namespace internal

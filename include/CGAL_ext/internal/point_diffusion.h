@@ -87,36 +87,27 @@ public:
   }
 
   /// `apply` into arrays in input order (row i: input point i, three doubles; `cloud` and its rest `normals`), in
-  /// one pass over the movable points in input order: the same results bit for bit, written where the caller
-  /// keeps them instead of copied there. The first call after `setup` copies the movable points' rest positions,
-  /// normals and stencils into input order.
+  /// input order: the exact handles put on their transforms, then the other movable points blended a block at a
+  /// time, the block's collar points stepped while it is in cache. The same results bit for bit, written where
+  /// the caller keeps them instead of copied there. The first call after `setup` copies the points' rest
+  /// positions, normals and stencils into input order.
   template <typename ConcurrencyTag>
   void apply_in_input_order(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Matrix_n3& samples,
                             const Matrix_n3& deformed_samples, Diffusion_origin origin,
                             const std::vector<Rigid_transform>& transforms, double* out_points, double* out_normals)
   {
     Stencil_in_input_order& ordered = m_in_input_order;
-    if(!ordered.ready) {
-      const std::size_t count = m_movable_rows.size(), width = stencil.width();
-      ordered.points.resize(Eigen::Index(count), 3);
-      ordered.normals.resize(Eigen::Index(count), 3);
-      ordered.stencil.samples = fixed_degree_graph(count, width);
-      ordered.stencil.weights.resize(count * width);
-      ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
-      for_range<ConcurrencyTag>(0, count, [&](std::size_t r) {
-        const std::size_t row = std::size_t(m_movable_rows[r]);
-        ordered.points.row(Eigen::Index(r)) = cloud.positions.row(Eigen::Index(row));
-        ordered.normals.row(Eigen::Index(r)) = normals.row(Eigen::Index(row));
-        stencil.copy_row(row, ordered.stencil.samples.indices.data() + r * width,
-                         ordered.stencil.weights.data() + r * width);
-      });
-      ordered.ready = true;
-    }
+    if(!ordered.ready) copy_in_input_order<ConcurrencyTag>(cloud, normals);
     ordered.stencil.copy_motions(stencil);
-    ordered.stencil.template move_points<ConcurrencyTag>(ordered.points, ordered.normals, samples, deformed_samples,
-                                                         origin, out_points, out_normals, nullptr, &movable_points);
-    collar.template apply_to<ConcurrencyTag>(cloud.positions, normals, m_group_rotations, transforms, out_points,
-                                             out_normals, &cloud.input_index);
+    collar.template set_walk_steps<ConcurrencyTag>(stencil, cloud.positions, normals, samples, deformed_samples, origin,
+                                                   m_group_rotations, transforms);
+    collar.template apply_to_handle_points<ConcurrencyTag>(m_group_rotations, transforms, out_points, out_normals);
+    const Diffusion_stencil::Block_visitor collar_of_block = [&](std::size_t first, std::size_t last) {
+      collar.apply_to_walk_collar(first, last, ordered.destinations, out_points, out_normals);
+    };
+    ordered.stencil.template move_points<ConcurrencyTag>(
+      ordered.points, ordered.normals, samples, deformed_samples, origin, out_points, out_normals, nullptr,
+      &ordered.destinations, collar.rows.empty() ? nullptr : &collar_of_block);
   }
 
   /// Puts back the fine details of the region's moved rows of `deformed` (from their rest `points`) that the
@@ -137,13 +128,41 @@ public:
   }
 
 private:
-  // The movable points' rest positions, normals and stencils in input order, for apply_in_input_order().
+  // The movable points other than exact handles, in input order for apply_in_input_order(): their rest positions,
+  // normals and stencils, and their input indices.
   struct Stencil_in_input_order
   {
     bool ready = false;
     Matrix_n3 points, normals;
     Diffusion_stencil stencil;
+    std::vector<int> destinations;
   };
+
+  template <typename ConcurrencyTag>
+  void copy_in_input_order(const Spatial_point_cloud& cloud, const Matrix_n3& normals)
+  {
+    Stencil_in_input_order& ordered = m_in_input_order;
+    std::vector<int> blended_rows; // an exact handle's blend would be overwritten
+    for(int row : m_movable_rows)
+      if(!std::binary_search(collar.handle_rows.begin(), collar.handle_rows.end(), row)) blended_rows.push_back(row);
+    const std::size_t count = blended_rows.size(), width = stencil.width();
+    ordered.points.resize(Eigen::Index(count), 3);
+    ordered.normals.resize(Eigen::Index(count), 3);
+    ordered.stencil.samples = fixed_degree_graph(count, width);
+    ordered.stencil.weights.resize(count * width);
+    ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
+    ordered.destinations.resize(count);
+    for_range<ConcurrencyTag>(0, count, [&](std::size_t r) {
+      const std::size_t row = std::size_t(blended_rows[r]);
+      ordered.points.row(Eigen::Index(r)) = cloud.positions.row(Eigen::Index(row));
+      ordered.normals.row(Eigen::Index(r)) = normals.row(Eigen::Index(row));
+      stencil.copy_row(row, ordered.stencil.samples.indices.data() + r * width,
+                       ordered.stencil.weights.data() + r * width);
+      ordered.destinations[r] = cloud.input_index[row];
+    });
+    collar.index_walk(blended_rows, cloud.positions, normals, cloud.input_index);
+    ordered.ready = true;
+  }
 
   std::vector<Eigen::Matrix3d> m_group_rotations; // the handle groups' rotations as matrices, per drag
   std::vector<int> m_movable_rows;                // moving_rows in the order of their input indices

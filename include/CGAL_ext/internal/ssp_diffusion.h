@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -149,13 +150,18 @@ public:
   /// Takes the motion records of `other`, a stencil over the same sample points.
   void copy_motions(const Diffusion_stencil& other) { m_records = other.m_records; }
 
+  /// Called after each block of moved points, `[first, last)` of the points listed (of `active`, or of all rows),
+  /// while its rows are still in cache; blocks may run in parallel.
+  using Block_visitor = std::function<void(std::size_t first, std::size_t last)>;
+
   /// The second half of apply(), with the current records: moves the points listed in `active` (all when null)
   /// and writes the a-th one's position and normal to row `destination[a]` of `out_points` and `out_normals`
-  /// (rows of three doubles; its own row when `destination` is null).
+  /// (rows of three doubles; its own row when `destination` is null), then calls `after_block` when given.
   template <typename ConcurrencyTag>
   void move_points(const Matrix_n3& points, const Matrix_n3& normals, const Matrix_n3& sample_positions,
                    const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
-                   double* out_normals, const std::vector<int>* active, const std::vector<int>* destination) const;
+                   double* out_normals, const std::vector<int>* active, const std::vector<int>* destination,
+                   const Block_visitor* after_block = nullptr) const;
 
   /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `(A_j - I) p + c_j`
   /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
@@ -285,7 +291,8 @@ template <typename ConcurrencyTag>
 void Diffusion_stencil::move_points(const Matrix_n3& points, const Matrix_n3& normals,
                                     const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
                                     Diffusion_origin origin, double* out_points, double* out_normals,
-                                    const std::vector<int>* active, const std::vector<int>* destination) const
+                                    const std::vector<int>* active, const std::vector<int>* destination,
+                                    const Block_visitor* after_block) const
 {
   // Blocks of points: first every point's position and unnormalised normal, then the block's normalisations,
   // which are independent of each other and so overlap (one point's square root and division after another
@@ -295,15 +302,15 @@ void Diffusion_stencil::move_points(const Matrix_n3& points, const Matrix_n3& no
   for_range<ConcurrencyTag>(0, (total + diffusion_block - 1) / diffusion_block, [&](std::size_t b) {
     const std::size_t first = b * diffusion_block, last = std::min(total, first + diffusion_block);
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
-    if(wide) {
+    if(wide)
       apply_block_wide(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
                        out_normals, active, destination);
-      return;
-    }
+    else
 #endif
+      apply_block(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
+                  out_normals, active, destination);
     CGAL_USE(wide);
-    apply_block(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
-                out_normals, active, destination);
+    if(after_block) (*after_block)(first, last);
   });
 }
 
@@ -462,9 +469,9 @@ inline bool Diffusion_stencil::wide_vectors_available() { return false; }
   EXTERN template void Diffusion_stencil::apply<Tag>(                                                                  \
     const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const std::vector<Eigen::Matrix3d>&,       \
     Diffusion_origin, Matrix_n3&, Matrix_n3&, const std::vector<int>*);                                                \
-  EXTERN template void Diffusion_stencil::move_points<Tag>(const Matrix_n3&, const Matrix_n3&, const Matrix_n3&,       \
-                                                           const Matrix_n3&, Diffusion_origin, double*, double*,       \
-                                                           const std::vector<int>*, const std::vector<int>*) const;
+  EXTERN template void Diffusion_stencil::move_points<Tag>(                                                            \
+    const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, Diffusion_origin, double*, double*,        \
+    const std::vector<int>*, const std::vector<int>*, const Block_visitor*) const;
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SSP_DIFFUSION_INSTANCES)
 
 /// The rows that a drag can move: those with a region sample point in their stencil and, with `exact_handles`, the
