@@ -46,9 +46,10 @@ def turn(step):
 
 
 def drag_times(points, normals, drags, reps):
-    """One drag as a Python user gets it (into reused arrays in the caller's order) and the library's own
-    deform() + diffuse() for the same drags (statistics), medians over every repetition's drags."""
-    wall, library = [], []
+    """One drag as a Python user gets it (into reused arrays in the caller's order), the C++ time of the same calls
+    (deform() + diffuse_in_input_order(), their statistics) and the library's own deform() + diffuse() for the same
+    drags (statistics), medians over every repetition's drags; and the number of points in the region."""
+    wall, inside, library = [], [], []
     up = points[:, 1]
     region, top = up > np.quantile(up, 0.5), up > np.quantile(up, 0.9)
     for _ in range(reps):
@@ -65,13 +66,15 @@ def drag_times(points, normals, drags, reps):
             d.diffuse(P, N)
             if step:  # the first writes every point; the drags after it only what the edit can move
                 wall.append(time.perf_counter() - start)
+                s = d.statistics()
+                inside.append(s["deform_seconds"] + s["diffuse_seconds"])
         for step in range(drags):
             d.set_handle_transform(g, turn(step), pivot=pivot)
             d.deform()
             d.diffuse()
             s = d.statistics()
             library.append(s["deform_seconds"] + s["diffuse_seconds"])
-    return median(wall), median(library), int(np.sum(region))
+    return median(wall), median(inside), median(library), int(np.sum(region))
 
 
 def harness_arguments():
@@ -121,15 +124,18 @@ def main():
 
         # The sampling's own order is random; a scanner writes its points in sweeps, close in space: the same
         # points in a coherent order (sorted by a coarse grid along one axis, then the next).
-        wall, library, movable = drag_times(points, normals, drags, reps)
-        rows.append(("one drag, points in random order (%d in the region)" % movable, n, wall, library,
-                     "the library's deform() + diffuse()"))
+        random_drag = drag_times(points, normals, drags, reps)
+        rows.append(("one drag, points in random order (%d in the region)" % random_drag[3], n, random_drag[0],
+                     random_drag[2], "the library's deform() + diffuse()"))
         cell = np.floor((points - points.min(axis=0)) / (np.ptp(points, axis=0).max() / 64)).astype(np.int64)
         order = np.lexsort((cell[:, 0], cell[:, 2], cell[:, 1]))
-        wall, library, movable = drag_times(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]),
-                                            drags, reps)
-        rows.append(("one drag, points in scan-like order (%d in the region)" % movable, n, wall, library,
-                     "the library's deform() + diffuse()"))
+        scan_drag = drag_times(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]), drags, reps)
+        rows.append(("one drag, points in scan-like order (%d in the region)" % scan_drag[3], n, scan_drag[0],
+                     scan_drag[2], "the library's deform() + diffuse()"))
+        # The binding's own overhead on a drag: the same calls' time inside C++.
+        for name, drag in (("random", random_drag), ("scan-like", scan_drag)):
+            rows.append(("one drag, points in %s order: the binding's overhead" % name, n, drag[0], drag[1],
+                         "the same calls in C++ (deform() + diffuse_in_input_order(), not set_handle_transform)"))
 
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "python_results.csv"), "w", newline="") as f:
