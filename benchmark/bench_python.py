@@ -148,8 +148,8 @@ def main():
              "Written by `benchmark/bench_python.py`%s (%d threads, GLIBC_TUNABLES=%s as point-detail sets it): medians of "
              "%d repetitions; a sampling of CGAL's "
              "armadillo with normals; a drag is `set_handle_transform`, `deform` and `diffuse(P, N)` into arrays reused "
-             "from drag to drag, in the caller's order, against the library's own `deform()` + `diffuse()` (its "
-             "statistics)." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(), os.environ["GLIBC_TUNABLES"], reps),
+             "from drag to drag, in the caller's order. Each row's reference is named in its last column; the library's "
+             "times are its statistics." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(), os.environ["GLIBC_TUNABLES"], reps),
              "",
              "| measure | points | Python | reference | ratio | reference is |", "|---|---|---|---|---|---|"]
     for measure, points_n, python_s, reference_s, reference in rows:

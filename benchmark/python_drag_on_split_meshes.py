@@ -37,6 +37,9 @@ def split(v, f):
                          np.stack([m[:, 2], m[:, 1], c], 1), np.stack([m[:, 0], m[:, 1], m[:, 2]], 1)])
     return np.vstack([v, mid]), nf
 
+if sys.argv[3:] not in ([], ["shuffled"]):
+    sys.exit("usage: python_drag_on_split_meshes.py MESH.off SPLITS [shuffled]")
+shuffled = sys.argv[3:] == ["shuffled"]
 v, f = read_off(sys.argv[1])
 for _ in range(int(sys.argv[2])):
     v, f = split(v, f)
@@ -45,7 +48,6 @@ fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
 for k in range(3):
     np.add.at(n, f[:, k], fn)
 n /= np.linalg.norm(n, axis=1)[:, None]
-shuffled = sys.argv[3:] == ["shuffled"]
 if shuffled:
     order = np.random.default_rng(1).permutation(len(v))
     v, n = v[order], n[order]

@@ -929,9 +929,11 @@ TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying
     if(order == 1) t.shuffle(7);
     const std::size_t n = t.shape.points.size();
     for(CGAL_ext::Detail_rotation rotations : both_rotations)
-      for(int handles : {0, 1, 2, 3}) { // one exact group, two exact groups, one soft group, everything one exact group
+      // One exact group, two, one soft group, every point one exact group, one exact group without a collar.
+      for(int handles : {0, 1, 2, 3, 4}) {
         Settings settings = with_order(Detail_order::quadric, rotations);
         if(handles == 2) settings.handle_weight = 1e3;
+        if(handles == 4) settings.handle_collar = false;
         auto d = handles == 3 ? std::make_unique<Deformation>(t.all(), settings, t.np()) : t.edit(settings);
         if(handles == 3) {
           d->insert_roi_points(t.all());
@@ -944,6 +946,22 @@ TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying
         ASSERT_TRUE(d->preprocess());
         const std::vector<int>& stepping = d->diffusion_view().collar_handle_points();
         ASSERT_EQ(stepping.empty(), handles >= 2);
+        if(handles == 0) { // a selection set up before this one leaves nothing behind
+          d->insert_handle_points(d->create_handle_group(), ring);
+          ASSERT_TRUE(d->preprocess());
+          std::vector<double> points(3 * n), normals(3 * n);
+          d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
+            std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
+            std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
+          });
+          d->set_handle_transform(1, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0.1, 0));
+          ASSERT_TRUE(d->deform());
+          d->diffuse_in_input_order(points.data(), normals.data());
+          d->clear_selection();
+          d->insert_roi_points(t.roi);
+          d->insert_handle_points(d->create_handle_group(), t.tip);
+          ASSERT_TRUE(d->preprocess());
+        }
         if(handles == 1) { // both groups step the collar
           std::set<std::size_t> groups;
           for(int i : stepping)

@@ -320,8 +320,8 @@ private:
   /// Runs `step`, then writes every point's and normal's deformed position in the caller's order: the whole
   /// arrays, or, when they are the very arrays written whole since the last preprocessing, only the points the
   /// edit can move (Detail_preserving_deformation::for_each_deformed_point). A diffusion (`is_diffusion`) into
-  /// such arrays, when they are C-contiguous, writes them in place instead, in one pass in the caller's order
-  /// (Detail_preserving_deformation::diffuse_in_input_order): the same results, without their copy.
+  /// such arrays, when they are C-contiguous, writes them in place instead, walking the points in the caller's
+  /// order (Detail_preserving_deformation::diffuse_in_input_order): the same results, without their copy.
   template <typename Step>
   Deformed_result results(const Step& step, const Optional_array_like& points_out,
                           const Optional_array_like& normals_out, bool is_diffusion = false)

@@ -30,7 +30,7 @@ namespace internal {
 class Handle_collar
 {
 public:
-  std::vector<int> handle_rows;   ///< with exact handles: the rows that follow their group's transform exactly
+  std::vector<int> handle_rows;   ///< with exact handles: the rows that follow their group's transform, increasing
   std::vector<int> handle_groups; ///< their handle groups
   std::vector<int> rows;          ///< the collar: the region's rows within reach of a handle
   /// Per collar row, the nearest handle point of each group that reaches it (an index into `handle_rows`)...
@@ -133,8 +133,8 @@ public:
   /// For apply() during a walk in input order over the other moving rows (`walk_rows`, in the order of their input
   /// indices `input_index`): copies the handle points' rest `positions` and `normals` in input order and finds
   /// where the collar points lie in the walk. Once per selection.
-  void index_walk(const std::vector<int>& walk_rows, const Matrix_n3& positions, const Matrix_n3& normals,
-                  const std::vector<int>& input_index)
+  void prepare_walk(const std::vector<int>& walk_rows, const Matrix_n3& positions, const Matrix_n3& normals,
+                    const std::vector<int>& input_index)
   {
     Walk& walk = m_walk;
     walk = Walk();
@@ -171,8 +171,8 @@ public:
     walk.normal_steps.resize(Eigen::Index(stepping_handles.size()), 3);
   }
 
-  /// Per drag, before the walk: the stepping handles' steps, their blends computed by `stencil`'s kernel (the one
-  /// that blends the walk, so the steps have apply()'s bits).
+  /// Per drag, before the walk: the stepping handles' steps, their blends by `stencil`, the stencil whose blends
+  /// apply() steps from, with the same kernel: the steps have apply()'s bits.
   template <typename ConcurrencyTag>
   void set_walk_steps(const Diffusion_stencil& stencil, const Matrix_n3& positions, const Matrix_n3& normals,
                       const Matrix_n3& samples, const Matrix_n3& deformed_samples, Diffusion_origin origin,
@@ -249,8 +249,10 @@ public:
     const Eigen::Matrix3d R = T.rotation.toRotationMatrix();
     Eigen::Vector3d blended, blended_normal;
     stencil.move_point(row, positions, normals, samples, deformed_samples, origin, blended, blended_normal);
-    step = R * positions.row(Eigen::Index(row)).transpose() + T.translation - blended;
-    normal_step = R * normals.row(Eigen::Index(row)).transpose() - blended_normal;
+    Eigen::RowVector3d exact, exact_normal;
+    on_transform(R, T, positions.row(Eigen::Index(row)), normals.row(Eigen::Index(row)), exact, exact_normal);
+    step = exact.transpose() - blended;
+    normal_step = exact_normal.transpose() - blended_normal;
   }
 
 private:
@@ -291,7 +293,7 @@ private:
     return reach[reach.size() / 2];
   }
 
-  // The handle points in input order and where the collar points lie in a walk (index_walk()); the steps.
+  // The handle points in input order and where the collar points lie in a walk (prepare_walk()); the steps.
   struct Walk
   {
     Matrix_n3 handle_positions, handle_normals;     // the handle points' rest positions and normals...

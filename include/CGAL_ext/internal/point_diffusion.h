@@ -102,12 +102,14 @@ public:
     collar.template set_walk_steps<ConcurrencyTag>(stencil, cloud.positions, normals, samples, deformed_samples, origin,
                                                    m_group_rotations, transforms);
     collar.template apply_to_handle_points<ConcurrencyTag>(m_group_rotations, transforms, out_points, out_normals);
-    const Diffusion_stencil::Block_visitor collar_of_block = [&](std::size_t first, std::size_t last) {
-      collar.apply_to_walk_collar(first, last, ordered.destinations, out_points, out_normals);
-    };
+    Diffusion_stencil::Block_visitor collar_of_block;
+    if(!collar.rows.empty())
+      collar_of_block = [&](std::size_t first, std::size_t last) {
+        collar.apply_to_walk_collar(first, last, ordered.destinations, out_points, out_normals);
+      };
     ordered.stencil.template move_points<ConcurrencyTag>(
       ordered.points, ordered.normals, samples, deformed_samples, origin, out_points, out_normals, nullptr,
-      &ordered.destinations, collar.rows.empty() ? nullptr : &collar_of_block);
+      &ordered.destinations, collar_of_block ? &collar_of_block : nullptr);
   }
 
   /// Puts back the fine details of the region's moved rows of `deformed` (from their rest `points`) that the
@@ -160,7 +162,7 @@ private:
                        ordered.stencil.weights.data() + r * width);
       ordered.destinations[r] = cloud.input_index[row];
     });
-    collar.index_walk(blended_rows, cloud.positions, normals, cloud.input_index);
+    collar.prepare_walk(blended_rows, cloud.positions, normals, cloud.input_index);
     ordered.ready = true;
   }
 
