@@ -157,7 +157,9 @@ def render(value, scale, like):
     value *= float(scale)
     if "e" in like:
         mantissa, _, power = f"{value:.{decimals}e}".partition("e")
-        return f"{mantissa}e{int(power)}"
+        written = like.replace(",", "").partition("e")[2]  # "-5", "3" or "+03": its sign and width kept
+        sign = "-" if int(power) < 0 else "+" if written.startswith("+") else ""
+        return f"{mantissa}e{sign}{abs(int(power)):0{len(written.lstrip('+-'))}d}"
     return f"{value:,.{decimals}f}" if "," in like else f"{value:.{decimals}f}"
 
 

@@ -68,6 +68,14 @@ def test_a_result_measured_again_fails_the_text_that_quotes_it(copy):
     assert run(copy).returncode == 0
 
 
+def test_update_leaves_figures_that_match_as_they_are_written(copy):
+    # Nothing measured again: --update rewrites no page, whatever the form of its figures ("1.28e+03", "6.8e-5").
+    pages = sorted((copy / "doc").glob("*.md")) + [copy / "README.md"]
+    before = [p.read_text() for p in pages]
+    assert run(copy, "--update").returncode == 0
+    assert [p.name for p, text in zip(pages, before) if p.read_text() != text] == []
+
+
 def test_a_figure_added_without_a_source_fails(copy):
     replace_in(copy / "README.md", "| 2.04 s |", "| 2.04 s (2.17 s the run before) |")
     result = run(copy)
