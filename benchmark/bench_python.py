@@ -11,6 +11,7 @@ set by re-executing itself unless GLIBC_TUNABLES is set): a fresh array's first 
 Usage: PYTHONPATH=build/python benchmark/bench_python.py --out DIR [--build build] [--data data] [--quick]
 """
 import argparse
+import collections
 import csv
 import json
 import os
@@ -45,6 +46,9 @@ def turn(step):
     return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
 
 
+Drag = collections.namedtuple("Drag", "wall inside library movable")
+
+
 def drag_times(points, normals, drags, reps):
     """One drag as a Python user gets it (into reused arrays in the caller's order), the C++ time of the same calls
     (deform() + diffuse_in_input_order(), their statistics) and the library's own deform() + diffuse() for the same
@@ -74,7 +78,7 @@ def drag_times(points, normals, drags, reps):
             d.diffuse()
             s = d.statistics()
             library.append(s["deform_seconds"] + s["diffuse_seconds"])
-    return median(wall), median(inside), median(library), int(np.sum(region))
+    return Drag(median(wall), median(inside), median(library), int(np.sum(region)))
 
 
 def harness_arguments():
@@ -125,16 +129,16 @@ def main():
         # The sampling's own order is random; a scanner writes its points in sweeps, close in space: the same
         # points in a coherent order (sorted by a coarse grid along one axis, then the next).
         random_drag = drag_times(points, normals, drags, reps)
-        rows.append(("one drag, points in random order (%d in the region)" % random_drag[3], n, random_drag[0],
-                     random_drag[2], "the library's deform() + diffuse()"))
+        rows.append(("one drag, points in random order (%d in the region)" % random_drag.movable, n, random_drag.wall,
+                     random_drag.library, "the library's deform() + diffuse()"))
         cell = np.floor((points - points.min(axis=0)) / (np.ptp(points, axis=0).max() / 64)).astype(np.int64)
         order = np.lexsort((cell[:, 0], cell[:, 2], cell[:, 1]))
         scan_drag = drag_times(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]), drags, reps)
-        rows.append(("one drag, points in scan-like order (%d in the region)" % scan_drag[3], n, scan_drag[0],
-                     scan_drag[2], "the library's deform() + diffuse()"))
+        rows.append(("one drag, points in scan-like order (%d in the region)" % scan_drag.movable, n, scan_drag.wall,
+                     scan_drag.library, "the library's deform() + diffuse()"))
         # The binding's own overhead on a drag: the same calls' time inside C++.
         for name, drag in (("random", random_drag), ("scan-like", scan_drag)):
-            rows.append(("one drag, points in %s order: the binding's overhead" % name, n, drag[0], drag[1],
+            rows.append(("one drag, points in %s order: the binding's overhead" % name, n, drag.wall, drag.inside,
                          "the same calls in C++ (deform() + diffuse_in_input_order(), not set_handle_transform)"))
 
     os.makedirs(args.out, exist_ok=True)

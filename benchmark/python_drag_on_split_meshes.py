@@ -51,6 +51,7 @@ n /= np.linalg.norm(n, axis=1)[:, None]
 if shuffled:
     order = np.random.default_rng(1).permutation(len(v))
     v, n = v[order], n[order]
-w, _, l, m = drag_times(np.ascontiguousarray(v), np.ascontiguousarray(n), 20, 5)
+drag = drag_times(np.ascontiguousarray(v), np.ascontiguousarray(n), 20, 5)
 print("%s split %s%s: %d points, %d in the region: python %.2f ms, library %.2f ms, ratio %.2f" % (
-    sys.argv[1].split('/')[-1], sys.argv[2], ", shuffled" if shuffled else "", len(v), m, 1e3 * w, 1e3 * l, w / l))
+    sys.argv[1].split('/')[-1], sys.argv[2], ", shuffled" if shuffled else "", len(v), drag.movable, 1e3 * drag.wall,
+    1e3 * drag.library, drag.wall / drag.library))

@@ -946,14 +946,17 @@ TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying
         ASSERT_TRUE(d->preprocess());
         const std::vector<int>& stepping = d->diffusion_view().collar_handle_points();
         ASSERT_EQ(stepping.empty(), handles >= 2);
-        if(handles == 0) { // a selection set up before this one leaves nothing behind
-          d->insert_handle_points(d->create_handle_group(), ring);
-          ASSERT_TRUE(d->preprocess());
-          std::vector<double> points(3 * n), normals(3 * n);
+        std::vector<double> points(3 * n), normals(3 * n);
+        const auto copy_every_point = [&] {
           d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
             std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
             std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
           });
+        };
+        if(handles == 0) { // a selection set up before this one leaves nothing behind
+          d->insert_handle_points(d->create_handle_group(), ring);
+          ASSERT_TRUE(d->preprocess());
+          copy_every_point();
           d->set_handle_transform(1, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0.1, 0));
           ASSERT_TRUE(d->deform());
           d->diffuse_in_input_order(points.data(), normals.data());
@@ -968,11 +971,7 @@ TEST(DetailPreservingDeformation, DiffusingInInputOrderEqualsDiffusingAndCopying
             groups.insert(std::find(ring.begin(), ring.end(), std::size_t(i)) == ring.end() ? 0 : 1);
           ASSERT_EQ(groups.size(), 2u);
         }
-        std::vector<double> points(3 * n), normals(3 * n);
-        d->for_each_deformed_point([&](std::size_t i, const double* p, const double* v) {
-          std::copy(p, p + 3, points.begin() + std::ptrdiff_t(3 * i));
-          std::copy(v, v + 3, normals.begin() + std::ptrdiff_t(3 * i));
-        });
+        copy_every_point();
         for(int step = 1; step <= 3; ++step) {
           const auto [R, shift] =
             turn_about(t.tip_centre(), Eigen::Vector3d(0, 1, 0), 0.3 * step, Eigen::Vector3d(0, 0.05, 0));

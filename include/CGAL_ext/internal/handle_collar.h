@@ -130,28 +130,23 @@ public:
     });
   }
 
-  /// For apply() during a walk in input order over the other moving rows (`walk_rows`, in the order of their input
-  /// indices `input_index`): copies the handle points' rest `positions` and `normals` in input order and finds
-  /// where the collar points lie in the walk. Once per selection.
-  void prepare_walk(const std::vector<int>& walk_rows, const Matrix_n3& positions, const Matrix_n3& normals,
-                    const std::vector<int>& input_index)
+  /// For apply() during a walk in input order over the other moving rows (`walk_rows`; `handles_in_order`, the
+  /// handle rows in that order, `input_index` per row): copies the handle points' rest `positions` and `normals`
+  /// in input order and finds where the collar points lie in the walk. Once per selection.
+  void prepare_walk(const std::vector<int>& walk_rows, const std::vector<int>& handles_in_order,
+                    const Matrix_n3& positions, const Matrix_n3& normals, const std::vector<int>& input_index)
   {
     Walk& walk = m_walk;
     walk = Walk();
-    std::vector<int> order(handle_rows.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-      return input_index[std::size_t(handle_rows[std::size_t(a)])] <
-             input_index[std::size_t(handle_rows[std::size_t(b)])];
-    });
-    walk.handle_positions.resize(Eigen::Index(order.size()), 3);
-    walk.handle_normals.resize(Eigen::Index(order.size()), 3);
-    for(std::size_t h = 0; h < order.size(); ++h) {
-      const Eigen::Index row = handle_rows[std::size_t(order[h])];
+    walk.handle_positions.resize(Eigen::Index(handles_in_order.size()), 3);
+    walk.handle_normals.resize(Eigen::Index(handles_in_order.size()), 3);
+    for(std::size_t h = 0; h < handles_in_order.size(); ++h) {
+      const int row = handles_in_order[h];
       walk.handle_positions.row(Eigen::Index(h)) = positions.row(row);
       walk.handle_normals.row(Eigen::Index(h)) = normals.row(row);
       walk.handle_points.push_back(input_index[std::size_t(row)]);
-      walk.handle_groups.push_back(handle_groups[std::size_t(order[h])]);
+      const auto place = std::lower_bound(handle_rows.begin(), handle_rows.end(), row); // sorted by row
+      walk.handle_groups.push_back(handle_groups[std::size_t(place - handle_rows.begin())]);
     }
     for(std::size_t w = 0; w < walk_rows.size(); ++w) {
       const auto collar = std::lower_bound(rows.begin(), rows.end(), walk_rows[w]); // sorted by row

@@ -144,9 +144,10 @@ private:
   void copy_in_input_order(const Spatial_point_cloud& cloud, const Matrix_n3& normals)
   {
     Stencil_in_input_order& ordered = m_in_input_order;
-    std::vector<int> blended_rows; // an exact handle's blend would be overwritten
-    for(int row : m_movable_rows)
-      if(!std::binary_search(collar.handle_rows.begin(), collar.handle_rows.end(), row)) blended_rows.push_back(row);
+    std::vector<int> blended_rows, handle_rows; // an exact handle's blend would be overwritten: not blended
+    for(int row : m_movable_rows)               // every handle row among them
+      (std::binary_search(collar.handle_rows.begin(), collar.handle_rows.end(), row) ? handle_rows : blended_rows)
+        .push_back(row);
     const std::size_t count = blended_rows.size(), width = stencil.width();
     ordered.points.resize(Eigen::Index(count), 3);
     ordered.normals.resize(Eigen::Index(count), 3);
@@ -162,7 +163,7 @@ private:
                        ordered.stencil.weights.data() + r * width);
       ordered.destinations[r] = cloud.input_index[row];
     });
-    collar.prepare_walk(blended_rows, cloud.positions, normals, cloud.input_index);
+    collar.prepare_walk(blended_rows, handle_rows, cloud.positions, normals, cloud.input_index);
     ordered.ready = true;
   }
 
