@@ -4,7 +4,9 @@
 import asyncio
 import json
 import os
+import pathlib
 import struct
+import threading
 import time
 
 import numpy as np
@@ -12,6 +14,7 @@ import pytest
 from aiohttp import ClientOSError, ClientSession, WSCloseCode, WSMsgType, WSServerHandshakeError
 
 import cgal_ext
+from cgal_ext.studio.session import Session, StudioError
 from conftest import bumpy_sphere
 from studio_support import Server
 
@@ -25,6 +28,8 @@ def server(tmp_path_factory):
     cgal_ext.write_ply(folder / "sphere.ply", points, normals)
     (folder / "inner").mkdir()
     os.symlink("/etc/hostname", folder / "outside.ply")
+    for name, edit in MALFORMED_EDITS.items():
+        (folder / name).write_text(edit if isinstance(edit, str) else json.dumps(edit))
     studio = Server(folder / "sphere.ply")
     yield studio
     status, err = studio.stop()
@@ -91,10 +96,23 @@ class Client:
         return await self.until(*(replies or ("state",)))
 
     async def snapshot(self):
+        """The session's state, its selection and the folder's files (hidden ones too) with their sizes and times."""
         state = await self.command({"type": "state"})
         labels = await self.command({"type": "labels"}, "labels")
         state.pop("files")
-        return state, labels["labels"].tobytes()
+        return state, labels["labels"].tobytes(), listing(folder_of(self.server))
+
+
+def folder_of(server):
+    return pathlib.Path(server_scan(server)).parent
+
+
+def listing(folder):
+    files = {}
+    for path in sorted(pathlib.Path(folder).rglob("*")):
+        entry = path.lstat()
+        files[str(path.relative_to(folder))] = (entry.st_size, entry.st_mtime_ns, entry.st_ino)
+    return files
 
 
 def run(coroutine):
@@ -140,6 +158,19 @@ def test_a_second_tab_is_refused(server):
     run(scenario())
 
 
+# Edit JSONs that Load selection refuses as not the studio's.
+MALFORMED_EDITS = {
+    "filter_list.json": {"roi": [], "handles": [], "filter": []},
+    "handles_numbers.json": {"roi": [], "handles": [5]},
+    "handles_object.json": {"roi": [], "handles": {"select": []}},
+    "select_string.json": {"roi": [], "handles": [{"select": "indices:a.txt"}]},
+    "roi_string.json": {"roi": "indices:a.txt", "handles": []},
+    "roi_numbers.json": {"roi": [1, 2], "handles": []},
+    "no_roi.json": {"handles": []},
+    "top_list.json": [],
+    "nested.json": "[" * 100000,
+}
+
 BAD_BEFORE_EDITING = [
     ("{", "not JSON"),
     ("[1, 2]", "JSON object with a type"),
@@ -175,6 +206,7 @@ BAD_BEFORE_EDITING = [
     ({"type": "colors", "by": "mood"}, "colour by"),
     ({"type": "colors", "by": "clusters"}, "once the edit is preprocessed"),
     ({"type": "load_edit", "path": "sphere.ply"}, "not an edit the studio saved"),
+    *[({"type": "load_edit", "path": name}, "not an edit the studio saved") for name in MALFORMED_EDITS],
     (json.dumps({"type": "state", "pad": "x" * (2 << 20)}), "at most"),
 ]
 
@@ -291,3 +323,55 @@ def test_ctrl_c_with_a_tab_open_stops_at_once_and_tells_the_tab(tmp_path):
         assert closed["code"] == WSCloseCode.GOING_AWAY
         await client.close()
     run(scenario())
+
+
+# ---- the session's files, in-process ----------------------------------------------------------------------------
+
+def test_a_link_swapped_while_the_session_reads_never_reads_outside(tmp_path):
+    root, outside = tmp_path / "studio", tmp_path / "outside"
+    root.mkdir()
+    outside.mkdir()
+    cgal_ext.write_ply(root / "inside.ply", *bumpy_sphere(100, seed=1))
+    cgal_ext.write_ply(outside / "outside.ply", *bumpy_sphere(150, seed=2))
+    (root / "good.txt").write_text("3\n")
+    (outside / "secret.txt").write_text("SECRET-LINE\n7\n")
+    (outside / "index.txt").write_text("7\n")
+    (root / "pick.json").write_text(json.dumps({"roi": ["indices:flip.txt"], "handles": []}))
+    links = [(root / "flip.ply", "inside.ply", str(outside / "outside.ply")),
+             (root / "flip.txt", "good.txt", str(outside / "secret.txt")),
+             (root / "flip.txt", "good.txt", str(outside / "index.txt"))]
+    for link, inside, _ in links:
+        if not link.is_symlink():
+            os.symlink(inside, link)
+    stop = threading.Event()
+
+    def swap():
+        k = 0
+        while not stop.is_set():
+            link, inside, away = links[k % 3]
+            for target in (away, inside):
+                os.symlink(target, root / ".swap")
+                os.replace(root / ".swap", link)
+            k += 1
+    session = Session(root)
+    swapper = threading.Thread(target=swap)
+    swapper.start()
+    loaded = edits = 0
+    try:
+        for _ in range(200):
+            try:
+                session.load("flip.ply")
+                assert len(session.points) == 100
+                loaded += 1
+            except StudioError as error:
+                assert "SECRET" not in str(error)
+            try:
+                session.load_edit("pick.json")
+                assert np.flatnonzero(session.labels).tolist() == [3]
+                edits += 1
+            except StudioError as error:
+                assert "SECRET" not in str(error), error
+    finally:
+        stop.set()
+        swapper.join()
+    assert loaded > 0 and edits > 0  # reads through the link while it pointed inside are served

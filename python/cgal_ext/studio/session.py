@@ -9,6 +9,7 @@ import json
 import math
 import os
 import pathlib
+import stat
 import tempfile
 
 import numpy as np
@@ -41,6 +42,8 @@ class Session:
         self.root = pathlib.Path(root).resolve()
         if not self.root.is_dir():
             raise StudioError("%s is not a folder" % root)
+        # The folder held open: files are reached from it one name at a time, following no link (_open).
+        self._root_fd = os.open(self.root, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
         self.scan = None  # path relative to root
         self.points = self.normals = None
         self.settings = {"order": "cubic", "rotations": "propagate", "strength_distance": "euclidean"}
@@ -55,18 +58,88 @@ class Session:
 
     def inside(self, name, must_exist=True):
         """The path `name` (relative, inside the root, no link out of it) or StudioError."""
+        return self._checked(name, must_exist)[0]
+
+    def _checked(self, name, must_exist=True):
+        """inside()'s path and the resolved path it checked."""
         if not isinstance(name, str) or not name or "\0" in name:
             raise StudioError("a file name must be a non-empty string")
         relative = pathlib.PurePosixPath(name)
         if relative.is_absolute() or ".." in relative.parts:
             raise StudioError("%r: give a path inside the studio's folder, without '..'" % name)
         path = self.root / relative
-        resolved = path.resolve()
+        try:
+            resolved = path.resolve()
+        except (OSError, RuntimeError):  # a loop of links
+            raise StudioError("%r: a link that leads nowhere" % name)
         if resolved != self.root and self.root not in resolved.parents:
             raise StudioError("%r leads out of the studio's folder" % name)
         if must_exist and not resolved.is_file():
             raise StudioError("%r: no such file in the studio's folder" % name)
-        return path
+        return path, resolved
+
+    def _open(self, name):
+        """The file `name` opened for reading as inside() checked it: its resolved path walked from the folder's
+        descriptor one name at a time, following no link, so that a link swapped in after the check makes the
+        open fail instead of reading elsewhere. Returns the descriptor, its stat and the resolved path."""
+        resolved = self._checked(name)[1]
+        parts = resolved.relative_to(self.root).parts
+        if not parts:
+            raise StudioError("%r: no such file in the studio's folder" % name)
+        folder = self._root_fd
+        try:
+            for part in parts[:-1]:
+                inner = os.open(part, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW | os.O_CLOEXEC, dir_fd=folder)
+                if folder != self._root_fd:
+                    os.close(folder)
+                folder = inner
+            # O_NONBLOCK: a FIFO swapped in does not block the open (it is refused below).
+            fd = os.open(parts[-1], os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC, dir_fd=folder)
+        except OSError as error:
+            raise StudioError("%r could not be opened as checked (%s); did it change meanwhile?" %
+                              (name, error.strerror))
+        finally:
+            if folder != self._root_fd:
+                os.close(folder)
+        status = os.fstat(fd)
+        if not stat.S_ISREG(status.st_mode):
+            os.close(fd)
+            raise StudioError("%r: no such file in the studio's folder" % name)
+        return fd, status, resolved
+
+    def _read_bytes(self, name):
+        fd, _, _ = self._open(name)
+        with os.fdopen(fd, "rb") as file:
+            return file.read()
+
+    def _read_text(self, name):
+        try:
+            return self._read_bytes(name).decode("utf-8")
+        except UnicodeDecodeError:
+            raise StudioError("%s is not UTF-8 text" % name)
+
+    def _read_points(self, name):
+        """cgal_ext.read_points of the file `name` as _open checked it. The library reads by path and tells the
+        format by the extension: it is given a link in a private folder to the open descriptor (Linux's
+        /proc/self/fd), or a copy of the file where there is none."""
+        fd, status, resolved = self._open(name)
+        try:
+            with tempfile.TemporaryDirectory(prefix="cgal_ext_studio.") as private:
+                alias = os.path.join(private, "scan" + resolved.suffix.lower())
+                descriptor = "/proc/self/fd/%d" % fd
+                if os.path.exists(descriptor):
+                    os.symlink(descriptor, alias)
+                else:
+                    with open(alias, "wb") as copy:
+                        while chunk := os.read(fd, 1 << 20):
+                            copy.write(chunk)
+                try:
+                    cloud = cgal_ext.read_points(alias)
+                except (OSError, ValueError, RuntimeError) as error:
+                    raise StudioError(str(error).replace(alias, name))
+        finally:
+            os.close(fd)
+        return cloud, status, resolved
 
     def files(self):
         """The scans the page may open: point files under the root, relative paths."""
@@ -82,11 +155,7 @@ class Session:
 
     def load(self, name, progress=None):
         """Reads a scan (normals estimated when it has none, as the program does) and starts a new edit."""
-        path = self.inside(name)
-        try:
-            cloud = cgal_ext.read_points(path)
-        except (OSError, ValueError) as error:
-            raise StudioError(str(error))
+        cloud = self._read_points(name)[0]
         points = cloud.points
         if len(points) < 20:
             raise StudioError("%s has %d points; editing needs at least 20" % (name, len(points)))
@@ -193,8 +262,8 @@ class Session:
             allowed = {"order": ORDERS, "rotations": ROTATIONS, "strength_distance": STRENGTHS}.get(key)
             if allowed is None:
                 raise StudioError("unknown setting %r (order, rotations, strength_distance)" % key)
-            if value not in allowed:
-                raise StudioError("%s must be one of %s, not %r" % (key, ", ".join(allowed), value))
+            if not isinstance(value, str) or value not in allowed:
+                raise StudioError("%s must be one of %s, not %s" % (key, ", ".join(allowed), repr(value)[:40]))
             new[key] = value
         return new
 
@@ -403,46 +472,73 @@ class Session:
         """Loads a selection (and settings) from an edit JSON the studio saved: indices files beside it."""
         self._require_scan()
         self._require_undeformed("loading a selection")
-        path = self.inside(name)
-        try:
-            edit = json.loads(path.read_text())
-            roi_files = edit["roi"]
-            handle_files = [h["select"] for h in edit["handles"]]
-        except (OSError, ValueError, KeyError, TypeError) as error:
-            raise StudioError("%s is not an edit the studio saved: %s" % (name, error))
+        roi_files, handle_files, settings = self._read_edit(name)
         n = len(self.points)
 
         def indices(specs):
             chosen = []
             for spec in specs:
-                if not isinstance(spec, str) or not spec.startswith("indices:"):
-                    raise StudioError("%s: the studio loads index-file selections (indices:FILE), not %r" % (name, spec))
-                file = self.inside(str(pathlib.PurePosixPath(name).parent / spec[len("indices:"):]))
-                try:
-                    values = np.array([int(line.split("#")[0]) for line in file.read_text().splitlines()
-                                       if line.split("#")[0].strip()], dtype=np.int64)
-                except ValueError as error:
-                    raise StudioError("%s: %s" % (file.name, error))
-                if len(values) and (values.min() < 0 or values.max() >= n):
-                    raise StudioError("%s: an index is out of range (%d points)" % (file.name, n))
-                chosen.append(values)
+                if not spec.startswith("indices:"):
+                    raise StudioError("%s: the studio loads index-file selections (indices:FILE), not %r" %
+                                      (name, spec[:60]))
+                file_name = str(pathlib.PurePosixPath(name).parent / spec[len("indices:"):])
+                values = []
+                for number, line in enumerate(self._read_text(file_name).splitlines(), 1):
+                    word = line.split("#")[0]
+                    if word.strip():
+                        try:
+                            values.append(int(word))
+                        except ValueError:  # the line's number, not its text: errors never show a file's content
+                            raise StudioError("%s, line %d: not a point index" % (file_name, number))
+                if values and (min(values) < 0 or max(values) >= n):
+                    raise StudioError("%s: an index is out of range (%d points)" % (file_name, n))
+                chosen.append(np.array(values, np.int64))
             return np.concatenate(chosen) if chosen else np.zeros(0, np.int64)
 
         labels = np.zeros(n, np.int8)
         labels[indices(roi_files)] = ROI
-        if len(handle_files) > MAX_GROUPS:
-            raise StudioError("%s has %d handle groups; the studio holds %d" % (name, len(handle_files), MAX_GROUPS))
         for g, specs in enumerate(handle_files):
             labels[indices(specs)] = FIRST_HANDLE + g
-        settings = self._checked_settings({"order": edit.get("filter", {}).get("order", self.settings["order"]),
-                                           "rotations": edit.get("rotations", self.settings["rotations"]),
-                                           "strength_distance": edit.get("strength_distance",
-                                                                         self.settings["strength_distance"])})
         self.labels, self.groups = labels, len(handle_files)
         self.transforms = [_identity() for _ in range(self.groups)]
         self.history, self.step = [[_identity() for _ in range(self.groups)]], 0
         self._drop_deformation()
         self._use_settings(settings)
+
+    def _read_edit(self, name):
+        """The selections (roi, per handle group) and settings of an edit JSON the studio saved, checked."""
+        def refuse(why):
+            return StudioError("%s is not an edit the studio saved: %s" % (name, why))
+        try:
+            edit = json.loads(self._read_bytes(name))
+        except UnicodeDecodeError:
+            raise refuse("not UTF-8 text")
+        except ValueError as error:
+            raise refuse("not JSON (%s)" % error)
+        except RecursionError:
+            raise refuse("JSON nested too deeply")
+
+        def selections(value, what):
+            if not isinstance(value, list) or not all(isinstance(spec, str) for spec in value):
+                raise refuse("%s is not a list of selections" % what)
+            return value
+        if not isinstance(edit, dict):
+            raise refuse("not a JSON object")
+        roi = selections(edit.get("roi"), "roi")
+        handles = edit.get("handles")
+        if not isinstance(handles, list) or not all(isinstance(h, dict) for h in handles):
+            raise refuse("handles is not a list of objects")
+        if len(handles) > MAX_GROUPS:
+            raise StudioError("%s has %d handle groups; the studio holds %d" % (name, len(handles), MAX_GROUPS))
+        handle_files = [selections(h.get("select"), "handles[%d].select" % g) for g, h in enumerate(handles)]
+        detail_filter = edit.get("filter", {})
+        if not isinstance(detail_filter, dict):
+            raise refuse("filter is not an object")
+        settings = self._checked_settings({"order": detail_filter.get("order", self.settings["order"]),
+                                           "rotations": edit.get("rotations", self.settings["rotations"]),
+                                           "strength_distance": edit.get("strength_distance",
+                                                                         self.settings["strength_distance"])})
+        return roi, handle_files, settings
 
     # ---- what the page shows ----------------------------------------------------------------------------------
 
