@@ -95,6 +95,13 @@ class Client:
             await self.ws.send_str(json.dumps(command))
         return await self.until(*(replies or ("state",)))
 
+    async def ready(self):
+        """Waits for the scan: the first state once the studio's scan is open (its load's state, when the tab
+        opening is what opens it), so that the next reply is the next command's."""
+        while (await self.until("state"))["scan"] is None:
+            pass
+        return self
+
     async def snapshot(self):
         """The session's state, its selection and the folder's files (hidden ones too) with their sizes and times."""
         state = await self.command({"type": "state"})
@@ -278,6 +285,60 @@ def test_bad_messages_while_editing_change_nothing(server):
 
 def server_scan(server):
     return server.process.args[3]
+
+
+async def prepared_edit(client, points):
+    """The upper half as the region, its top as handle group 0, preprocessed."""
+    await client.command(frame({"type": "select", "target": "roi", "mode": "add"}, np.flatnonzero(points[:, 2] > 0)))
+    await client.command({"type": "new_group"})
+    await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 0},
+                               np.flatnonzero(points[:, 2] > 0.9)))
+    assert (await client.command({"type": "preprocess"}))["preprocessed"]
+
+
+async def save(client, **fields):
+    """A save's reply, and the state after it if it saved."""
+    reply = await client.command(dict(fields, type="save"), "saved")
+    if reply["type"] == "saved":
+        assert (await client.until("state"))["type"] == "state"
+    return reply
+
+
+async def start_over(client):
+    """Back to the bare scan: every drag undone, the selection cleared."""
+    state = await client.command({"type": "release"})
+    while state["step"] > 0:
+        state = await client.command({"type": "undo"})
+    cleared = await client.command({"type": "clear"})
+    assert cleared["type"] == "state" and cleared["region"] == 0, cleared
+
+
+def test_a_drag_whose_solve_fails_leaves_the_edit_as_it_was(server):
+    folder = folder_of(server)
+
+    async def scenario():
+        client = await (await Client.open(server)).ready()
+        await prepared_edit(client, cgal_ext.read_points(server_scan(server)).points)
+        T = np.eye(4)
+        T[:3, 3] = (0.1, 0, 0.2)
+        drag = {"type": "drag", "group": 0, "matrix": T.reshape(-1).tolist()}
+        assert (await client.command(drag, "frame"))["type"] == "frame"
+        before = await client.snapshot()
+        huge = np.eye(4)
+        huge[0, 3] = 1e308
+        reply = await client.command({"type": "drag", "group": 0, "matrix": huge.reshape(-1).tolist()}, "frame")
+        assert reply["type"] == "error", reply
+        assert await client.snapshot() == before  # the transform before, not 1e308
+        assert "refused" in reply["message"], reply
+        # The drag ends (the release solves the transform before) and the edit is saved with that transform.
+        assert (await client.command({"type": "release"}))["step"] == 1
+        assert (await save(client, name="after_a_failed_drag"))["type"] == "saved"
+        saved = json.loads((folder / "after_a_failed_drag.json").read_text())
+        assert np.abs(np.array(saved["handles"][0]["translation"]) - T[:3, 3]).max() < 1e-12
+        assert np.all(np.isfinite(cgal_ext.read_points(folder / "after_a_failed_drag.ply").points))
+        await start_over(client)
+        await client.close()
+    run(scenario())
 
 
 def test_soak_2000_drags_keep_memory_flat(server):

@@ -333,14 +333,36 @@ class Session:
         return T
 
     def drag(self, group, matrix):
-        """One frame of a drag: the handle group's transform (from the rest pose); returns the frame's motions."""
+        """One frame of a drag: the handle group's transform (from the rest pose); returns the frame's motions. A
+        transform whose solve fails is refused and the edit stays on the transforms before it."""
         if self.deformation is None:
             raise StudioError("a drag needs the edit preprocessed: paint a region and a handle, then edit")
         T = self._transform(matrix, group)
-        self.deformation.set_handle_transform(group, transform=T)
+        d = self.deformation
+        try:
+            d.set_handle_transform(group, transform=T)
+            d.deform()
+            frame = d.renderer_frame()
+            if not np.isfinite(frame).all():
+                raise ValueError("the sample points' motions are not finite")
+        except (ValueError, RuntimeError) as error:
+            self._restore_deformation()
+            raise StudioError("the drag was refused, the handle stays where it was: %s" % error)
         self.transforms[group] = T
-        self.deformation.deform()
-        return self.deformation.renderer_frame()
+        return frame
+
+    def _restore_deformation(self):
+        """The deformation back on the session's transforms after a solve that failed."""
+        d = self.deformation
+        try:
+            for g, T in enumerate(self.transforms):
+                d.set_handle_transform(g, transform=T)
+            d.deform()
+        except (ValueError, RuntimeError):  # what the failed solve left behind: solved again from the rest pose
+            d.reset()
+            for g, T in enumerate(self.transforms):
+                d.set_handle_transform(g, transform=T)
+            d.deform()
 
     def release(self):
         """The end of a drag: the full diffusion and restore_details become the shown state (a step of history)."""
@@ -352,31 +374,37 @@ class Session:
         self.step += 1
 
     def _show(self, transforms):
+        """Shows the edit under `transforms`, or raises StudioError with the session unchanged."""
         d = self.deformation
-        for g, T in enumerate(transforms):
-            d.set_handle_transform(g, transform=T)
-        if all(np.array_equal(T, _identity()) for T in transforms):
-            d.reset()
-            self.shown_points, self.shown_normals = self.points.copy(), self.normals.copy()
-            return
-        d.deform()
-        self.shown_normals = d.diffuse().normals
-        self.shown_points = d.restore_details().points
+        try:
+            for g, T in enumerate(transforms):
+                d.set_handle_transform(g, transform=T)
+            if all(np.array_equal(T, _identity()) for T in transforms):
+                d.reset()
+                points, normals = self.points.copy(), self.normals.copy()
+            else:
+                d.deform()
+                normals = d.diffuse().normals
+                points = d.restore_details().points
+            if not (np.isfinite(points).all() and np.isfinite(normals).all()):
+                raise ValueError("the deformed points are not finite")
+        except (ValueError, RuntimeError) as error:
+            self._restore_deformation()
+            raise StudioError("the edit could not be shown: %s" % error)
+        self.shown_points, self.shown_normals = points, normals
         self.transforms = [t.copy() for t in transforms]
 
     def undo(self):
         if self.step == 0:
             raise StudioError("nothing to undo")
+        self._show(self.history[self.step - 1])
         self.step -= 1
-        self.transforms = [t.copy() for t in self.history[self.step]]
-        self._show(self.transforms)
 
     def redo(self):
         if self.step + 1 >= len(self.history):
             raise StudioError("nothing to redo")
+        self._show(self.history[self.step + 1])
         self.step += 1
-        self.transforms = [t.copy() for t in self.history[self.step]]
-        self._show(self.transforms)
 
     # ---- details ----------------------------------------------------------------------------------------------
 
@@ -395,7 +423,7 @@ class Session:
         function = cgal_ext.scale_geometric_details if mode == "scale" else cgal_ext.enhance_geometric_details
         try:
             result = function(self.points, self.normals, roi=roi, s=float(s))
-        except ValueError as error:
+        except (ValueError, RuntimeError) as error:
             raise StudioError(str(error))
         if apply:
             self.points = result
