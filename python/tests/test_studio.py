@@ -167,6 +167,31 @@ def _rigid(rows):
     return T
 
 
+def test_saving_over_a_file_the_session_did_not_write_asks_first(page, scan):
+    from selenium.webdriver.support import expected_conditions
+    from selenium.webdriver.support.ui import WebDriverWait
+    server, driver = page
+    idle(driver)
+    taken = scan.parent / "taken.ply"
+    taken.write_bytes(b"another program's file\n")
+    driver.execute_script("studio.lastSaved = null")
+    driver.find_element("id", "save-name").clear()
+    driver.find_element("id", "save-name").send_keys("taken")
+    # Declined: nothing written.
+    click(driver, "save")
+    question = WebDriverWait(driver, 60).until(expected_conditions.alert_is_present())
+    assert "taken.ply" in question.text and "Replace?" in question.text
+    question.dismiss()
+    wait_for(driver, "document.getElementById('error').textContent.includes('not saved')", what="the refusal")
+    assert taken.read_bytes() == b"another program's file\n" and not (scan.parent / "taken.json").exists()
+    # Accepted: saved with overwrite.
+    click(driver, "save")
+    WebDriverWait(driver, 60).until(expected_conditions.alert_is_present()).accept()
+    saved = wait_for(driver, "studio.lastSaved", what="the save")
+    assert "taken.ply" in saved
+    assert cgal_ext.read_points(taken).points.shape == cgal_ext.read_points(scan).points.shape
+
+
 def test_the_page_logged_no_error(page):
     server, driver = page
     severe = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]

@@ -2,6 +2,7 @@
 # origin, a second tab, paths out of its folder, and malformed, unknown, out-of-order or oversized messages,
 # each refused with an error while the session stays as it was; then a soak of 2,000 drags.
 import asyncio
+import errno
 import json
 import os
 import pathlib
@@ -27,6 +28,7 @@ def server(tmp_path_factory):
     points, normals = bumpy_sphere(6000)
     cgal_ext.write_ply(folder / "sphere.ply", points, normals)
     (folder / "inner").mkdir()
+    (folder / "d.ply").mkdir()
     os.symlink("/etc/hostname", folder / "outside.ply")
     for name, edit in MALFORMED_EDITS.items():
         (folder / name).write_text(edit if isinstance(edit, str) else json.dumps(edit))
@@ -214,6 +216,13 @@ BAD_BEFORE_EDITING = [
     ({"type": "colors", "by": "clusters"}, "once the edit is preprocessed"),
     ({"type": "load_edit", "path": "sphere.ply"}, "not an edit the studio saved"),
     *[({"type": "load_edit", "path": name}, "not an edit the studio saved") for name in MALFORMED_EDITS],
+    ({"type": "save", "name": " edited"}, "spaces at its start or end"),
+    ({"type": "save", "name": "edited "}, "spaces at its start or end"),
+    ({"type": "save", "name": "edi\nted"}, "control characters"),
+    ({"type": "save", "name": "edi\u202eted"}, "control characters"),
+    ({"type": "save", "name": "e" * 201}, "at most 200 bytes"),
+    ({"type": "save", "name": "edited", "overwrite": "yes"}, "overwrite is true or false"),
+    ({"type": "save", "name": "d"}, "d.ply exists and is not a file"),
     (json.dumps({"type": "state", "pad": "x" * (2 << 20)}), "at most"),
 ]
 
@@ -313,6 +322,31 @@ async def start_over(client):
     assert cleared["type"] == "state" and cleared["region"] == 0, cleared
 
 
+def test_a_save_replaces_a_file_this_session_did_not_write_only_when_told(server):
+    folder = folder_of(server)
+
+    async def scenario():
+        client = await (await Client.open(server)).ready()
+        (folder / "other.ply").write_bytes(b"another program's file\n")
+        before = await client.snapshot()
+        refused = await save(client, name="other")
+        assert refused["type"] == "error" and refused["replace"] == ["other.ply"] and refused["name"] == "other"
+        assert "overwrite" in refused["message"]
+        assert await client.snapshot() == before
+        assert (folder / "other.ply").read_bytes() == b"another program's file\n"
+        # Told to: replaced. Saved again by the same session: no question.
+        assert (await save(client, name="other", overwrite=True))["files"] == ["other.ply"]
+        assert len(cgal_ext.read_points(folder / "other.ply").points) == 6000
+        assert (await save(client, name="other"))["type"] == "saved"
+        # Replaced by someone else meanwhile (another inode at that name): asked again.
+        (folder / "other.tmp").write_bytes(b"changed by hand\n")
+        os.replace(folder / "other.tmp", folder / "other.ply")
+        assert (await save(client, name="other"))["replace"] == ["other.ply"]
+        assert (folder / "other.ply").read_bytes() == b"changed by hand\n"
+        await client.close()
+    run(scenario())
+
+
 def test_a_drag_whose_solve_fails_leaves_the_edit_as_it_was(server):
     folder = folder_of(server)
 
@@ -387,6 +421,83 @@ def test_ctrl_c_with_a_tab_open_stops_at_once_and_tells_the_tab(tmp_path):
 
 
 # ---- the session's files, in-process ----------------------------------------------------------------------------
+
+def open_session(folder, name, n=2000, groups=1):
+    """A Session on a bumpy sphere written as folder/name, its upper half the region, `groups` handle groups."""
+    points, normals = bumpy_sphere(n)
+    cgal_ext.write_ply(folder / name, points, normals)
+    session = Session(folder)
+    session.load(name)
+    session.select("roi", "add", np.flatnonzero(points[:, 2] > 0))
+    for g in range(groups):
+        session.new_group()
+        session.select("handle", "add", np.flatnonzero(points[:, 2] > 0.9 - 0.05 * g), g)
+    return session
+
+
+def test_a_save_never_writes_over_the_scan_under_any_name(tmp_path):
+    session = open_session(tmp_path, "scan.base.ply")
+    session.details("scale", 2.0, apply=True)  # a save now writes NAME.base.ply, the scaled input
+    os.link(tmp_path / "scan.base.ply", tmp_path / "hard.base.ply")
+    os.symlink("scan.base.ply", tmp_path / "soft.base.ply")
+    scan = (tmp_path / "scan.base.ply").read_bytes()
+    before = listing(tmp_path)
+    for name, file in (("scan", "scan.base.ply"), ("hard", "hard.base.ply"), ("soft", "soft.base.ply"),
+                       ("scan.base", "scan.base.ply")):
+        with pytest.raises(StudioError, match="%s is the scan itself" % file):
+            session.save(name, overwrite=True)
+        assert listing(tmp_path) == before and (tmp_path / "scan.base.ply").read_bytes() == scan
+    assert session.save("scaled") == ["scaled.base.ply", "scaled.handle0.txt", "scaled.json", "scaled.ply",
+                                      "scaled.roi.txt"]
+
+
+def test_a_rename_failing_half_way_through_a_save_restores_every_file(tmp_path, monkeypatch):
+    session = open_session(tmp_path, "sphere.ply")
+    first = session.save("edit")
+    saved = {name: (tmp_path / name).read_bytes() for name in first}
+    before = listing(tmp_path)
+    # The second save writes other selections and one more file (handle group 1).
+    session.select("roi", "add", np.arange(100))
+    session.new_group()
+    session.select("handle", "add", np.arange(10), 1)
+    replace, placed = os.replace, []
+
+    def replace_failing_on_the_second_file(source, target, *args, **kwargs):
+        if not os.path.basename(target).startswith("."):  # a file put in place (not one put aside)
+            placed.append(os.path.basename(target))
+            if len(placed) == 2:
+                raise OSError(errno.EIO, "simulated failure", target)
+        return replace(source, target, *args, **kwargs)
+    monkeypatch.setattr(os, "replace", replace_failing_on_the_second_file)
+    with pytest.raises(StudioError, match="save failed, nothing written: .*simulated failure"):
+        session.save("edit")
+    assert placed[:2] == ["edit.roi.txt", "edit.handle0.txt"]  # the first file was in place when the second failed
+    assert listing(tmp_path) == before
+    assert {name: (tmp_path / name).read_bytes() for name in first} == saved
+    monkeypatch.undo()
+    assert "edit.handle1.txt" in session.save("edit")
+    assert (tmp_path / "edit.roi.txt").read_bytes() != saved["edit.roi.txt"]
+
+
+def test_a_refused_or_failed_save_leaves_no_file_behind(tmp_path, monkeypatch):
+    session = open_session(tmp_path, "sphere.ply")
+    (tmp_path / "d.ply").mkdir()
+    os.symlink("/etc/hostname", tmp_path / "e.handle0.txt")
+    before = listing(tmp_path)
+    with pytest.raises(StudioError, match="d.ply exists and is not a file"):
+        session.save("d")
+    assert listing(tmp_path) == before  # no d.json nor index files
+    with pytest.raises(StudioError, match="leads out of the studio's folder"):
+        session.save("e")
+    assert listing(tmp_path) == before  # no temporary of e.roi.txt
+
+    def failing_write(path, *args, **kwargs):
+        raise RuntimeError("simulated failure")
+    monkeypatch.setattr(cgal_ext, "write_ply", failing_write)
+    with pytest.raises(StudioError, match="save failed, nothing written: simulated failure"):
+        session.save("f")
+    assert listing(tmp_path) == before
+
 
 def test_a_link_swapped_while_the_session_reads_never_reads_outside(tmp_path):
     root, outside = tmp_path / "studio", tmp_path / "outside"

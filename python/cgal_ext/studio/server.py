@@ -145,8 +145,8 @@ class Studio:
                 self.socket = None
         return ws
 
-    async def error(self, ws, text):
-        await ws.send_json({"type": "error", "message": text})
+    async def error(self, ws, text, **details):
+        await ws.send_json(dict(details, type="error", message=text))
 
     async def send_state(self, ws):
         await ws.send_json(dict(self.session.state(), type="state", files=self.session.files()))
@@ -179,7 +179,7 @@ class Studio:
             try:
                 await handler(ws, command)
             except StudioError as error:
-                await self.error(ws, str(error))
+                await self.error(ws, str(error), **error.details)
             except (TypeError, KeyError, ValueError) as error:
                 await self.error(ws, "%s: malformed command (%s)" % (kind, error))
             except ConnectionResetError:
@@ -310,7 +310,7 @@ class Studio:
         await ws.send_bytes(pack({"type": "colors", "by": by}, [("colors", colors)]))
 
     async def on_save(self, ws, command):
-        written = await self.run(self.session.save, command.get("name"))
+        written = await self.run(self.session.save, command.get("name"), command.get("overwrite", False))
         await ws.send_json({"type": "saved", "files": written})
         await self.send_state(ws)
 

@@ -11,6 +11,7 @@ import os
 import pathlib
 import stat
 import tempfile
+import unicodedata
 
 import numpy as np
 
@@ -24,7 +25,12 @@ STRENGTHS = ("euclidean", "geodesic")
 
 
 class StudioError(Exception):
-    """A request the session refuses; its message is shown in the page."""
+    """A request the session refuses; its message is shown in the page, `details` go with it in the reply (the
+    files a save would replace, for the page's question)."""
+
+    def __init__(self, message, **details):
+        super().__init__(message)
+        self.details = details
 
 
 def _identity():
@@ -45,6 +51,8 @@ class Session:
         # The folder held open: files are reached from it one name at a time, following no link (_open).
         self._root_fd = os.open(self.root, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
         self.scan = None  # path relative to root
+        self._scan_file = None  # the scan as read: its resolved path and (st_dev, st_ino)
+        self._written = {}  # file name -> (st_dev, st_ino) of each file this session saved
         self.points = self.normals = None
         self.settings = {"order": "cubic", "rotations": "propagate", "strength_distance": "euclidean"}
         self.deformation = None
@@ -155,7 +163,7 @@ class Session:
 
     def load(self, name, progress=None):
         """Reads a scan (normals estimated when it has none, as the program does) and starts a new edit."""
-        cloud = self._read_points(name)[0]
+        cloud, status, resolved = self._read_points(name)
         points = cloud.points
         if len(points) < 20:
             raise StudioError("%s has %d points; editing needs at least 20" % (name, len(points)))
@@ -165,6 +173,7 @@ class Session:
                 raise StudioError("%s has missing or zero normals; give all or none" % name)
             normals = cgal_ext.estimate_oriented_normals(points, k=min(18, len(points)), progress=progress)
         self.scan, self.points, self.normals = name, points, normals
+        self._scan_file = (resolved, (status.st_dev, status.st_ino))
         self.base_changed = False
         self._new_edit()
         self._start_editor()
@@ -446,55 +455,145 @@ class Session:
                 "filter": {"order": self.settings["order"]}, "rotations": self.settings["rotations"],
                 "strength_distance": self.settings["strength_distance"]}
 
-    def save(self, name):
-        """Writes NAME.ply (the shown state with the program's fields) and NAME.json (+ index files) such that
-        `point-detail edit -i SCAN --edit NAME.json` reproduces NAME.ply; the scan itself is never written."""
-        self._require_scan()
+    @staticmethod
+    def _check_save_name(name):
         if not isinstance(name, str) or not name or "/" in name or "\\" in name or name.startswith("."):
             raise StudioError("save: give a file name without folders, e.g. 'edited'")
-        target = self.inside(name + ".ply", must_exist=False)
-        if target.resolve() == self.inside(self.scan).resolve():
-            raise StudioError("save: %s.ply is the scan itself; the input is never overwritten" % name)
+        if any(unicodedata.category(c) in ("Cc", "Cf", "Cs", "Zl", "Zp") for c in name):
+            raise StudioError("save: a file name without control characters")
+        if name != name.strip():
+            raise StudioError("save: a file name without spaces at its start or end")
+        if len(name.encode()) > 200:
+            raise StudioError("save: a file name of at most 200 bytes")
+
+    def _outputs(self, name):
+        """The files a save as `name` writes, in the order they are put in place: (file name, writer of a path)."""
+        outputs = []
+
+        def text(content):
+            return lambda path: pathlib.Path(path).write_text(content)
+        if self.groups and (self.labels != FIXED).any():
+            outputs.append((name + ".roi.txt", text("".join("%d\n" % i for i in np.flatnonzero(self.labels != FIXED)))))
+            for g in range(self.groups):
+                outputs.append(("%s.handle%d.txt" % (name, g), text(
+                    "".join("%d\n" % i for i in np.flatnonzero(self.labels == FIRST_HANDLE + g)))))
+            outputs.append((name + ".json", text(json.dumps(self.edit_json(name), indent=2) + "\n")))
+        if self.base_changed:  # the scaled input the edit starts from
+            outputs.append((name + ".base.ply", lambda path: cgal_ext.write_ply(path, self.points, self.normals)))
         moved = np.linalg.norm(self.shown_points - self.points, axis=1)
         sample = (self.deformation.sample_point_of(np.ones(len(self.points), bool)).astype(float)
                   if self.deformation is not None else np.zeros(len(self.points)))
         status = np.minimum(self.labels, 2).astype(float)
-        files = {}
-        if self.groups and (self.labels != FIXED).any():
-            files[name + ".roi.txt"] = "".join("%d\n" % i for i in np.flatnonzero(self.labels != FIXED))
-            for g in range(self.groups):
-                files["%s.handle%d.txt" % (name, g)] = "".join(
-                    "%d\n" % i for i in np.flatnonzero(self.labels == FIRST_HANDLE + g))
-            files[name + ".json"] = json.dumps(self.edit_json(name), indent=2) + "\n"
-        if self.base_changed:
-            files[name + ".base.ply"] = None  # the scaled input the edit starts from
-        # Every file to a temporary name first, renamed once all are whole.
-        temporaries = []
+        outputs.append((name + ".ply", lambda path: cgal_ext.write_ply(
+            path, self.shown_points, self.shown_normals, colors=cgal_ext.sequential_colors(moved),
+            displacement=moved, status=status, ssp_index=sample)))
+        return outputs
+
+    def _is_scan(self, path):
+        """Whether `path` is the scan's file: the same resolved path, or the same file through another name."""
+        resolved, identity = self._scan_file
+        if path.resolve() == resolved:
+            return True
         try:
-            for file_name, text in files.items():
-                path = self.inside(file_name, must_exist=False)
-                fd, temporary = tempfile.mkstemp(prefix="." + file_name + ".", dir=path.parent)
-                os.close(fd)
-                temporaries.append((temporary, path))
-                if text is None:
-                    cgal_ext.write_ply(temporary, self.points, self.normals)
-                else:
-                    with open(temporary, "w") as out:
-                        out.write(text)
-            fd, temporary = tempfile.mkstemp(prefix="." + name + ".ply.", dir=target.parent)
-            os.close(fd)
-            temporaries.append((temporary, target))
-            cgal_ext.write_ply(temporary, self.shown_points, self.shown_normals,
-                               colors=cgal_ext.sequential_colors(moved), displacement=moved, status=status,
-                               ssp_index=sample)
-            for temporary, path in temporaries:
+            status = os.stat(path)
+        except OSError:
+            return False
+        return (status.st_dev, status.st_ino) == identity
+
+    def save(self, name, overwrite=False):
+        """Writes NAME.ply (the shown state with the program's fields) and NAME.json (+ index files) such that
+        `point-detail edit -i SCAN --edit NAME.json` reproduces NAME.ply: all of them or, on any failure, none
+        (the files they replace restored). Never the scan itself; a file this session did not write only with
+        `overwrite` (StudioError with details `replace` otherwise, for the page to ask)."""
+        self._require_scan()
+        self._check_save_name(name)
+        if not isinstance(overwrite, bool):
+            raise StudioError("save: overwrite is true or false")
+        outputs = self._outputs(name)
+        targets, replaced = [], []
+        for file_name, _ in outputs:
+            path = self.inside(file_name, must_exist=False)
+            if self._is_scan(path):
+                raise StudioError("save: %s is the scan itself; the input is never overwritten" % file_name)
+            try:
+                entry = os.lstat(path)
+            except FileNotFoundError:
+                entry = None
+            if entry is not None:
+                if not path.is_file():
+                    raise StudioError("save: %s exists and is not a file" % file_name)
+                if self._written.get(file_name) != (entry.st_dev, entry.st_ino):
+                    replaced.append(file_name)
+            targets.append(path)
+        if replaced and not overwrite:
+            exist, them = ("exists", "it") if len(replaced) == 1 else ("exist", "them")
+            raise StudioError("save: %s already %s and this session did not write %s; saving with overwrite replaces "
+                              "%s" % (", ".join(replaced), exist, them, them), name=name, replace=replaced)
+        # Every file to a temporary name first; once all are whole, each old file is moved aside and the new one
+        # renamed into its place; on a failure the steps done are undone in reverse.
+        temporaries, done = [], []  # done: ("aside", path, backup) and ("placed", path), in order
+        try:
+            for file_name, write in outputs:
+                temporaries.append(self._temporary(file_name, ".tmp"))
+                write(temporaries[-1])
+            for (file_name, _), path, temporary in zip(outputs, targets, list(temporaries)):
+                if os.path.lexists(path):
+                    backup = self._temporary(file_name, ".old")
+                    temporaries.append(backup)  # removed unless it holds a file that could not be put back
+                    os.replace(path, backup)
+                    done.append(("aside", path, backup))
                 os.replace(temporary, path)
-        except (OSError, ValueError) as error:
-            for temporary, _ in temporaries:
-                if os.path.exists(temporary):
-                    os.unlink(temporary)
+                done.append(("placed", path))
+        except BaseException as error:
+            lost = self._undo_save(done, temporaries)
+            if not isinstance(error, (OSError, ValueError, RuntimeError)):
+                raise
+            if lost:
+                raise StudioError("save failed (%s) and could not put back %s" % (error, "; ".join(lost)))
             raise StudioError("save failed, nothing written: %s" % error)
-        return sorted([name + ".ply"] + list(files))
+        for step in done:
+            if step[0] == "aside":
+                self._remove(step[2])
+        for (file_name, _), path in zip(outputs, targets):
+            entry = os.lstat(path)
+            self._written[file_name] = (entry.st_dev, entry.st_ino)
+        return sorted(file_name for file_name, _ in outputs)
+
+    def _temporary(self, file_name, suffix):
+        fd, path = tempfile.mkstemp(prefix="." + file_name + ".", suffix=suffix, dir=self.root)
+        os.close(fd)
+        return path
+
+    @staticmethod
+    def _remove(path):
+        """Removes a temporary if it is still there (as best it can: a temporary left is no reason to fail)."""
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+
+    def _undo_save(self, done, temporaries):
+        """Undoes the steps of a save in reverse (each file put aside back in its place, each new file removed)
+        and removes the temporaries; returns what could not be undone."""
+        lost, kept = [], set()
+        aside = {step[1] for step in done if step[0] == "aside"}
+        for step in reversed(done):
+            try:
+                if step[0] == "aside":
+                    os.replace(step[2], step[1])
+                elif step[1] not in aside:  # a new file (one put aside is put back over it by one rename)
+                    os.unlink(step[1])
+            except OSError as error:
+                if step[0] == "aside":
+                    kept.add(step[2])
+                    lost.append("%s (%s; its previous content is in %s)" % (step[1].name, error.strerror,
+                                                                            os.path.basename(step[2])))
+                else:
+                    lost.append("%s (%s; the new file stays)" % (step[1].name, error.strerror))
+        for path in temporaries:
+            if path not in kept:
+                self._remove(path)
+        return lost
 
     def load_edit(self, name):
         """Loads a selection (and settings) from an edit JSON the studio saved: indices files beside it."""

@@ -110,7 +110,6 @@ const studio = {
   framesReceived: 0, errors: [], lastSaved: null, busy: false, renderer: null, timings: [],
 };
 window.studio = studio;
-
 const renderer = new THREE.WebGLRenderer({ canvas: $('canvas'), context: $('canvas').getContext('webgl2', { antialias: false, preserveDrawingBuffer: true }) });
 renderer.setPixelRatio(1);
 const scene = new THREE.Scene();
@@ -232,6 +231,7 @@ function connect() {
 }
 
 function onCommand(m) {
+  if (m.type === 'error' && m.replace) { askToReplace(m); return; }
   if (m.type === 'error') { showError(m.message); studio.busy = false; studio.inFlight = false; return; }
   if (m.type === 'refused') { studio.refused = true; showError(m.message); return; }
   if (m.type === 'progress') {
@@ -241,6 +241,18 @@ function onCommand(m) {
   }
   if (m.type === 'saved') { studio.lastSaved = m.files; status(`saved ${m.files.join(', ')}`); return; }
   if (m.type === 'state') onState(m);
+}
+
+// A save that would replace files this session did not write (another scan, an earlier session's save): the
+// server refused it and named them; asked, the page sends it again with overwrite.
+function askToReplace(m) {
+  const files = m.replace.join(', ');
+  if (window.confirm(`${files} already ${m.replace.length === 1 ? 'exists' : 'exist'} in the studio's folder and ` +
+                     `this session did not write ${m.replace.length === 1 ? 'it' : 'them'}. Replace?`)) {
+    send({ type: 'save', name: m.name, overwrite: true });
+  } else {
+    showError(`not saved: ${files} kept`);
+  }
 }
 
 function onState(m) {
