@@ -375,6 +375,31 @@ def test_a_drag_whose_solve_fails_leaves_the_edit_as_it_was(server):
     run(scenario())
 
 
+def test_started_on_a_link_the_studio_opens_the_file_it_leads_to(tmp_path):
+    # cli/tentacle.ply -> ../demo2/edit_cubic.ply, and demo2 holds another tentacle.ply.
+    (tmp_path / "cli").mkdir()
+    (tmp_path / "demo2").mkdir()
+    for name, n in (("edit_cubic.ply", 2500), ("tentacle.ply", 3000)):
+        cgal_ext.write_ply(tmp_path / "demo2" / name, *bumpy_sphere(n, seed=n))
+    os.symlink("../demo2/edit_cubic.ply", tmp_path / "cli" / "tentacle.ply")
+    studio = Server(tmp_path / "cli" / "tentacle.ply")
+
+    async def scenario():
+        client = await Client.open(studio)
+        geometry = await client.until("geometry")
+        assert geometry["scan"] == "edit_cubic.ply" and len(geometry["positions"]) == 2500
+        state = await client.command({"type": "state"})
+        assert state["scan"] == "edit_cubic.ply" and state["files"] == ["edit_cubic.ply", "tentacle.ply"]
+        refused = await save(client, name="edit_cubic")
+        assert refused["type"] == "error" and "the scan itself" in refused["message"]
+        await client.close()
+    try:
+        run(scenario())
+    finally:
+        status, err = studio.stop()
+    assert status == 0 and "Traceback" not in err
+
+
 def test_soak_2000_drags_keep_memory_flat(server):
     async def scenario():
         client = await Client.open(server)

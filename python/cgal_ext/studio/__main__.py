@@ -13,15 +13,18 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="python3 -m cgal_ext.studio",
                                      description="Paint a region and handles on a scan, drag, keep its details, save. "
                                                  "Files are read and written only inside the scan's folder.")
-    parser.add_argument("scan", help="a PLY, OFF, XYZ or PWN point set (its folder is the studio's folder)")
+    parser.add_argument("scan", help="a PLY, OFF, XYZ or PWN point set (its folder is the studio's folder; a link "
+                                     "stands for the file it leads to, in that file's folder)")
     parser.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (default: any free one)")
     parser.add_argument("--open", action="store_true", help="open the page in the default browser")
     args = parser.parse_args(argv)
     scan = pathlib.Path(args.scan)
     if not scan.is_file():
         parser.error("%s: no such file" % scan)
+    # A link is followed to its file: the studio's folder is that file's folder, and the scan that file.
+    scan = scan.resolve()
     try:
-        studio = Studio(scan.resolve().parent, scan.name)
+        studio = Studio(scan.parent, scan.name)
     except StudioError as error:
         parser.error(str(error))
 
