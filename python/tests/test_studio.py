@@ -196,3 +196,5 @@ def test_the_page_logged_no_error(page):
     server, driver = page
     severe = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
     assert severe == [] and driver.execute_script("return studio.errors.filter(e => /failed/.test(e))") == []
+    # The page works under its content security policy (three.js served from the studio itself): nothing blocked.
+    assert driver.execute_script("return studio.errors.filter(e => /content security policy/.test(e))") == []

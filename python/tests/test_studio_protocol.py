@@ -1,11 +1,16 @@
 # The studio's server against what a hostile or confused client sends: requests without the token, another
-# origin, a second tab, paths out of its folder, and malformed, unknown, out-of-order or oversized messages,
-# each refused with an error while the session stays as it was; then a soak of 2,000 drags.
+# origin or host, a second tab, paths out of its folder, and malformed, unknown, out-of-order or oversized
+# messages, each refused with an error while the session and the folder stay as they were; a flood of drags; then
+# a soak of 2,000 drags. Last, the session's files in-process: saves that fail half-way, links swapped while it
+# reads.
 import asyncio
+import base64
 import errno
+import http.client
 import json
 import os
 import pathlib
+import socket
 import struct
 import threading
 import time
@@ -153,6 +158,63 @@ def test_every_request_needs_the_token_and_the_origin(server):
     run(wrong_origin())
 
 
+def get(server, path, host="127.0.0.1:%(port)d"):
+    """Status, headers and body of GET `path` with the given Host header (None: none)."""
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=60)
+    try:
+        connection.putrequest("GET", path, skip_host=True)
+        if host is not None:
+            connection.putheader("Host", host % {"port": server.port})
+        connection.endheaders()
+        response = connection.getresponse()
+        return response.status, response.headers, response.read()
+    finally:
+        connection.close()
+
+
+def test_only_the_loopback_host_and_the_exact_token_are_answered(server):
+    token = "?token=" + server.token
+    for host in ("127.0.0.1:%(port)d", "localhost:%(port)d", "LocalHost:%(port)d", "[::1]:%(port)d"):
+        assert get(server, "/" + token, host)[0] == 200, host
+    # DNS rebinding: another name that resolves to 127.0.0.1 reaches the server with its own Host.
+    for host in ("evil.example:%(port)d", "127.0.0.1", "127.0.0.1:1", "localhost.evil.example:%(port)d", "", None):
+        status, _, body = get(server, "/" + token, host)
+        assert status == 421 and b"127.0.0.1:%d" % server.port in body, (host, status)
+    # A token outside ASCII or not UTF-8 is a wrong token, not a server error.
+    for query in ("?token=%C3%A9", "?token=%FF", "?token=" + server.token + "%C3%A9"):
+        status, _, body = get(server, "/" + query)
+        assert status == 403 and b"Traceback" not in body, (query, status, body)
+
+    async def handshakes():
+        with pytest.raises(WSServerHandshakeError) as error:
+            await Client.open(server, token="%C3%A9")
+        assert error.value.status == 403
+        http = ClientSession()
+        try:
+            with pytest.raises(WSServerHandshakeError) as error:
+                await http.ws_connect("ws://127.0.0.1:%d/ws?token=%s" % (server.port, server.token),
+                                      headers={"Origin": server.base, "Host": "evil.example:%d" % server.port})
+            assert error.value.status == 421
+        finally:
+            await http.close()
+    run(handshakes())
+
+
+def test_every_response_carries_the_security_headers(server):
+    token = "?token=" + server.token
+    seen = set()
+    for path, host in [("/" + token, None), ("/static/studio.js" + token, None),
+                       ("/three/build/three.min.js" + token, None), ("/static/missing.js" + token, None),
+                       ("/" + token + "x", None), ("/ws" + token, None), ("/" + token, "evil.example:%(port)d")]:
+        status, headers, _ = get(server, path, *(() if host is None else (host,)))
+        seen.add(status)
+        csp = headers.get("Content-Security-Policy", "")
+        assert "frame-ancestors 'none'" in csp and "default-src 'self'" in csp, (path, status, csp)
+        assert headers.get("Referrer-Policy") == "no-referrer", (path, status)
+        assert headers.get("X-Content-Type-Options") == "nosniff", (path, status)
+    assert {200, 403, 404, 421} <= seen, seen
+
+
 def test_a_second_tab_is_refused(server):
     async def scenario():
         first = await Client.open(server)
@@ -224,6 +286,8 @@ BAD_BEFORE_EDITING = [
     ({"type": "save", "name": "edited", "overwrite": "yes"}, "overwrite is true or false"),
     ({"type": "save", "name": "d"}, "d.ply exists and is not a file"),
     (json.dumps({"type": "state", "pad": "x" * (2 << 20)}), "at most"),
+    ("[" * 100000, "nested too deeply"),  # a RecursionError in the parser: refused, the socket stays open
+    (struct.pack("<I", 4000) + b"[" * 4000, "not JSON"),
 ]
 
 
@@ -373,6 +437,96 @@ def test_a_drag_whose_solve_fails_leaves_the_edit_as_it_was(server):
         await start_over(client)
         await client.close()
     run(scenario())
+
+
+class RawSocket:
+    """A WebSocket on a plain socket, for writing many commands in one go (aiohttp's client sends each by
+    itself, so that how many queue up at the server would depend on the two processes' speeds)."""
+
+    def __init__(self, server):
+        self.socket = socket.create_connection(("127.0.0.1", server.port), timeout=120)
+        key = base64.b64encode(os.urandom(16)).decode()
+        self.socket.sendall(("GET /ws?token=%s HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nOrigin: %s\r\nUpgrade: websocket\r\n"
+                             "Connection: Upgrade\r\nSec-WebSocket-Key: %s\r\nSec-WebSocket-Version: 13\r\n\r\n" %
+                             (server.token, server.port, server.base, key)).encode())
+        self.buffer = b""
+        while b"\r\n\r\n" not in self.buffer:
+            self.buffer += self.socket.recv(65536)
+        head, self.buffer = self.buffer.split(b"\r\n\r\n", 1)
+        assert head.startswith(b"HTTP/1.1 101"), head
+
+    @staticmethod
+    def text_frame(text, opcode=0x81):
+        data = text.encode()
+        n = len(data)
+        length = bytes([0x80 | n]) if n < 126 else bytes([0x80 | 126]) + struct.pack(">H", n)
+        return bytes([opcode]) + length + b"\0\0\0\0" + data  # masked with a zero key: the data as it is
+
+    def read(self, n):
+        while len(self.buffer) < n:
+            chunk = self.socket.recv(1 << 20)
+            if not chunk:
+                raise EOFError("the server closed the connection")
+            self.buffer += chunk
+        data, self.buffer = self.buffer[:n], self.buffer[n:]
+        return data
+
+    def receive(self):
+        """The server's next message: a JSON command, or the header of a binary one."""
+        first, second = self.read(2)
+        n = second & 0x7F
+        if n == 126:
+            (n,) = struct.unpack(">H", self.read(2))
+        elif n == 127:
+            (n,) = struct.unpack(">Q", self.read(8))
+        data = self.read(n)
+        if first & 0x0F == 1:
+            return json.loads(data)
+        if first & 0x0F == 2:
+            (length,) = struct.unpack_from("<I", data)
+            return json.loads(data[4:4 + length])
+        return {"type": "closed"}
+
+    def close(self):
+        self.socket.sendall(bytes([0x88, 0x82]) + b"\0\0\0\0" + struct.pack(">H", 1000))
+        while self.receive()["type"] != "closed":
+            pass
+        self.socket.close()
+
+
+def test_a_flood_of_drags_cannot_delay_a_command(server):
+    drags = 5000
+
+    async def prepare():
+        client = await (await Client.open(server)).ready()
+        await prepared_edit(client, cgal_ext.read_points(server_scan(server)).points)
+        await client.close()
+    run(prepare())
+    raw = RawSocket(server)
+    assert raw.receive()["type"] == "state"
+    matrices = []
+    for k in range(1, drags + 1):
+        T = np.eye(4)
+        T[:3, 3] = (1e-4 * k, 0, 0)
+        matrices.append(T)
+    raw.socket.sendall(b"".join(RawSocket.text_frame(json.dumps({"type": "drag", "group": 0, "seq": k,
+                                                                  "matrix": T.reshape(-1).tolist()}))
+                                for k, T in enumerate(matrices, 1)) +
+                       RawSocket.text_frame(json.dumps({"type": "state"})))
+    frames = []
+    while (reply := raw.receive())["type"] != "state":
+        assert reply["type"] == "frame", reply
+        frames.append(reply["seq"])
+    raw.close()
+    # Without merging, all 5,000 frames come first; merged, one per batch the server read while it solved.
+    assert 1 <= len(frames) <= 100 and frames == sorted(frames) and frames[-1] == drags, frames
+    assert np.abs(np.array(reply["transforms"][0]).reshape(4, 4) - matrices[-1]).max() < 1e-12
+
+    async def clean_up():
+        client = await (await Client.open(server)).ready()
+        await start_over(client)
+        await client.close()
+    run(clean_up())
 
 
 def test_started_on_a_link_the_studio_opens_the_file_it_leads_to(tmp_path):

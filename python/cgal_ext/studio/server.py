@@ -1,12 +1,15 @@
 """The studio's web server (aiohttp): one page, its static files and one WebSocket over a Session.
 
-Bound to 127.0.0.1; every request needs the session's token; the WebSocket also checks Origin and admits one
-tab at a time. Text frames carry JSON commands; binary frames carry arrays: a little-endian uint32 header length,
-the JSON header, zero padding to a multiple of 4 bytes, then the arrays the header lists (doc/studio.md,
-"Protocol").
+Bound to 127.0.0.1; every request needs the session's token and a Host header naming the loopback address and
+the port; every response carries headers that keep it out of frames and other sites' referrers. The WebSocket also
+checks Origin and admits one tab at a time. Text frames carry JSON commands; binary frames carry arrays: a
+little-endian uint32 header length, the JSON header, zero padding to a multiple of 4 bytes, then the arrays the
+header lists (doc/studio.md, "Protocol").
 """
 import asyncio
+import collections
 import functools
+import hmac
 import json
 import pathlib
 import secrets
@@ -25,6 +28,7 @@ THREE = pathlib.Path("/usr/share/javascript/three")  # Debian's libjs-three
 MAX_TEXT = 1 << 20           # a JSON command
 MAX_BINARY = 64 << 20        # a selection of up to 16M indices
 MAX_HEADER = 4096
+MAX_QUEUED = 64              # commands read ahead of the one being handled (drags merged into them)
 
 
 def pack(header, arrays=()):
@@ -51,7 +55,7 @@ def unpack(data):
         raise StudioError("a binary message with a bad header length (%d)" % length)
     try:
         header = json.loads(data[4:4 + length])
-    except (ValueError, UnicodeDecodeError):
+    except (ValueError, UnicodeDecodeError, RecursionError):
         raise StudioError("a binary message whose header is not JSON")
     if not isinstance(header, dict) or not isinstance(header.get("count"), int) or header["count"] < 0:
         raise StudioError("a binary message's header needs a count")
@@ -59,6 +63,68 @@ def unpack(data):
     if len(payload) != 4 * header["count"]:
         raise StudioError("a binary message of %d bytes for %d indices" % (len(payload), header["count"]))
     return header, np.frombuffer(payload, "<u4")
+
+
+def parse(message):
+    """A command from a WebSocket message, checked as far as its form goes; StudioError otherwise."""
+    if message.type == WSMsgType.TEXT:
+        if len(message.data) > MAX_TEXT:
+            raise StudioError("a command of %d bytes; commands are JSON of at most %d bytes" %
+                              (len(message.data), MAX_TEXT))
+        try:
+            return json.loads(message.data)
+        except ValueError:
+            raise StudioError("a command that is not JSON")
+        except RecursionError:
+            raise StudioError("a command nested too deeply to be a command")
+    header, indices = unpack(message.data)
+    return dict(header, indices=indices)
+
+
+def is_drag(command):
+    return isinstance(command, dict) and command.get("type") == "drag" and type(command.get("group")) is int
+
+
+class Inbox:
+    """The commands read from the tab and not handled yet, in order, each a command or a StudioError to reply. A
+    drag replaces a queued drag of the same handle group behind which only drags wait: a flood of drags costs one
+    solve per group before the next command, not one per message (the replaced drag gets no frame; the page sends
+    one drag at a time and never has one replaced)."""
+
+    def __init__(self):
+        self.items = collections.deque()
+        self.changed = asyncio.Condition()
+        self.closed = False
+
+    def merge(self, command):
+        for k in range(len(self.items) - 1, -1, -1):
+            queued = self.items[k]
+            if not is_drag(queued):
+                return False
+            if queued["group"] == command["group"]:
+                self.items[k] = command
+                return True
+        return False
+
+    async def put(self, item):
+        async with self.changed:
+            if not (is_drag(item) and self.merge(item)):
+                await self.changed.wait_for(lambda: len(self.items) < MAX_QUEUED)
+                self.items.append(item)
+            self.changed.notify_all()
+
+    async def get(self):
+        """The next item, None once closed and empty."""
+        async with self.changed:
+            await self.changed.wait_for(lambda: self.items or self.closed)
+            item = self.items.popleft() if self.items else None
+            self.changed.notify_all()
+            return item
+
+    async def close(self):
+        async with self.changed:
+            self.closed = True
+            self.changed.notify_all()
 
 
 class Studio:
@@ -76,20 +142,37 @@ class Studio:
     # ---- HTTP -------------------------------------------------------------------------------------------------
 
     def authorised(self, request):
-        return secrets.compare_digest(request.query.get("token", ""), self.token)
+        # Bytes: compare_digest refuses a str with characters outside ASCII (a TypeError, answered 500).
+        given = request.query.get("token", "").encode("utf-8", "surrogatepass")
+        return hmac.compare_digest(given, self.token.encode())
+
+    def host_allowed(self, request):
+        """The Host the page's own address names: another name resolving to 127.0.0.1 (DNS rebinding) is refused."""
+        host = request.headers.get("Host", "").lower()
+        return host in ("127.0.0.1:%d" % self.port, "localhost:%d" % self.port, "[::1]:%d" % self.port)
 
     @web.middleware
     async def require_token(self, request, handler):
+        if not self.host_allowed(request):
+            return web.Response(status=421, text="421: this studio answers only at 127.0.0.1:%d\n" % self.port)
         if not self.authorised(request):
             return web.Response(status=403, text="403: this studio needs its session token (the URL it printed)\n")
         return await handler(request)
 
+    def security_headers(self):
+        ws = " ".join("ws://%s:%d" % (host, self.port) for host in ("127.0.0.1", "localhost"))
+        return {"Content-Security-Policy": "default-src 'self'; script-src 'self'; connect-src 'self' %s; "
+                                           "style-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+                                           "base-uri 'none'; form-action 'none'; frame-ancestors 'none'" % ws,
+                "Referrer-Policy": "no-referrer", "X-Content-Type-Options": "nosniff"}
+
+    async def add_security_headers(self, request, response):
+        """Every response, the errors and the WebSocket's handshake too (aiohttp's on_response_prepare)."""
+        response.headers.update(self.security_headers())
+
     async def index(self, request):
         page = (STATIC / "index.html").read_text().replace("{{TOKEN}}", self.token)
-        return web.Response(text=page, content_type="text/html",
-                            headers={"Cache-Control": "no-store", "Content-Security-Policy":
-                                     "default-src 'self'; connect-src 'self' ws://127.0.0.1:* ws://localhost:*; "
-                                     "style-src 'self' 'unsafe-inline'; img-src 'self' data: blob:"})
+        return web.Response(text=page, content_type="text/html", headers={"Cache-Control": "no-store"})
 
     async def static(self, request, folder):
         name = request.match_info["name"]
@@ -119,31 +202,41 @@ class Studio:
             await self.send_state(ws)
             if self.initial_scan and self.session.points is None:
                 await self.handle(ws, {"type": "load", "path": self.initial_scan})
-            async for message in ws:
-                if message.type == WSMsgType.TEXT:
-                    if len(message.data) > MAX_TEXT:
-                        await self.error(ws, "a command of %d bytes; commands are JSON of at most %d bytes" %
-                                         (len(message.data), MAX_TEXT))
-                        continue
-                    try:
-                        command = json.loads(message.data)
-                    except ValueError:
-                        await self.error(ws, "a command that is not JSON")
-                        continue
-                    await self.handle(ws, command)
-                elif message.type == WSMsgType.BINARY:
-                    try:
-                        header, indices = unpack(message.data)
-                    except StudioError as error:
-                        await self.error(ws, str(error))
-                        continue
-                    await self.handle(ws, dict(header, indices=indices))
+            # The messages are read while a command runs, so that queued drags merge (Inbox).
+            inbox = Inbox()
+            worker = asyncio.create_task(self.work(ws, inbox))
+            try:
+                async for message in ws:
+                    if message.type in (WSMsgType.TEXT, WSMsgType.BINARY):
+                        try:
+                            await inbox.put(parse(message))
+                        except StudioError as error:
+                            await inbox.put(error)
+            finally:
+                await inbox.close()
+                try:
+                    await worker
+                except asyncio.CancelledError:
+                    worker.cancel()
+                    raise
             if self.stopping:  # serve() ended the loop: tell the tab why (aiohttp would close with 1000)
                 await ws.close(code=WSCloseCode.GOING_AWAY, message=b"the studio was stopped")
         finally:
             if self.socket is ws:
                 self.socket = None
         return ws
+
+    async def work(self, ws, inbox):
+        """Handles the inbox's commands in order until the socket closed and they are done."""
+        while (item := await inbox.get()) is not None:
+            try:
+                if isinstance(item, StudioError):
+                    await self.error(ws, str(item))
+                else:
+                    await self.handle(ws, item)
+            except ConnectionResetError:
+                pass  # the tab is gone: the commands it sent still run, their replies have no one to reach
+            await asyncio.sleep(0)  # the reader's turn: what arrived meanwhile reaches the inbox (and merges)
 
     async def error(self, ws, text, **details):
         await ws.send_json(dict(details, type="error", message=text))
@@ -321,6 +414,7 @@ class Studio:
 
 def make_app(studio):
     app = web.Application(middlewares=[studio.require_token], client_max_size=MAX_TEXT)
+    app.on_response_prepare.append(studio.add_security_headers)
     app.router.add_get("/", studio.index)
     app.router.add_get("/ws", studio.websocket)
     app.router.add_get("/static/{name}", functools.partial(studio.static, folder=STATIC))

@@ -110,6 +110,11 @@ const studio = {
   framesReceived: 0, errors: [], lastSaved: null, busy: false, renderer: null, timings: [],
 };
 window.studio = studio;
+// Anything the content security policy blocks is a bug of the page's: shown, and the browser test fails on it.
+document.addEventListener('securitypolicyviolation', (event) => {
+  studio.errors.push(`content security policy: ${event.violatedDirective} blocked ${event.blockedURI}`);
+});
+
 const renderer = new THREE.WebGLRenderer({ canvas: $('canvas'), context: $('canvas').getContext('webgl2', { antialias: false, preserveDrawingBuffer: true }) });
 renderer.setPixelRatio(1);
 const scene = new THREE.Scene();
