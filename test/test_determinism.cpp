@@ -163,3 +163,185 @@ TEST_F(Determinism, Demo)
   }
   EXPECT_GE(files, 10u) << "the demo writes its PLY and PNG files";
 }
+
+// The same points in another order give the same answer, point by point once the order is undone (doc/design.md,
+// "One neighbourhood rule"): on a lattice whose distances tie exactly, on the lattice with 2 % of its points
+// duplicated, and on a random sampling of the same surface.
+namespace {
+
+struct Shape
+{
+  std::vector<Point> points;
+  std::vector<Vector> normals;
+};
+
+// Height z(x, y): flat for x < 0.55, smooth bumps beyond; the normal is exact.
+void add_surface_point(Shape& shape, double x, double y)
+{
+  const double kx = 2 * CGAL_PI / 0.4, ky = 2 * CGAL_PI / 0.3;
+  double z = 0, zx = 0, zy = 0;
+  if(x > 0.55) {
+    const double s = x - 0.55;
+    z = 0.02 * s * s * 50 * std::sin(ky * y) * (1 - std::cos(kx * s));
+    zx = 0.02 * 50 * std::sin(ky * y) * (2 * s * (1 - std::cos(kx * s)) + s * s * kx * std::sin(kx * s));
+    zy = 0.02 * s * s * 50 * ky * std::cos(ky * y) * (1 - std::cos(kx * s));
+  }
+  shape.points.emplace_back(x, y, z);
+  const double length = std::sqrt(zx * zx + zy * zy + 1);
+  shape.normals.emplace_back(-zx / length, -zy / length, 1 / length);
+}
+
+// 70 x 60 points at spacing 1/64 (a range image's raster), with every 50th point again when `duplicates`.
+Shape lattice(bool duplicates)
+{
+  Shape shape;
+  for(int j = 0; j < 60; ++j)
+    for(int i = 0; i < 70; ++i) add_surface_point(shape, i / 64.0, j / 64.0);
+  if(duplicates)
+    for(std::size_t i = 0; i < 70 * 60; i += 50) {
+      shape.points.push_back(shape.points[i]);
+      shape.normals.push_back(shape.normals[i]);
+    }
+  return shape;
+}
+
+Shape random_sampling()
+{
+  Shape shape;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> x(0, 69 / 64.0), y(0, 59 / 64.0);
+  for(int i = 0; i < 4200; ++i) {
+    const double u = x(rng);
+    add_surface_point(shape, u, y(rng));
+  }
+  return shape;
+}
+
+// The shape's points in `order`, with their normals unless `bare`.
+void write_shape(const Shape& shape, const std::vector<int>& order, bool bare, const fs::path& file)
+{
+  Point_set set;
+  if(!bare) set.add_normal_map();
+  for(const int i : order)
+    if(bare)
+      set.insert(shape.points[std::size_t(i)]);
+    else
+      set.insert(shape.points[std::size_t(i)], shape.normals[std::size_t(i)]);
+  std::ofstream out(file, std::ios::binary);
+  ASSERT_TRUE(CGAL::IO::write_PLY(out, set, CGAL::parameters::stream_precision(17)));
+}
+
+// Every column of two outputs compared to 1e-12 of its largest magnitude: row order[r] of `a` against row r of `b`
+// for the first `per_point` rows (`a` ran on the points in their order, `b` on `order`); the rows after those
+// (points an up-sampling added, or sample points) compared as sets, sorted by position.
+void expect_same_after_undoing(const fs::path& a_file, const fs::path& b_file, const std::vector<int>& order,
+                               std::size_t per_point, const std::string& what)
+{
+  Point_set a, b;
+  ASSERT_TRUE(CGAL::IO::read_point_set(a_file.string(), a)) << a_file;
+  ASSERT_TRUE(CGAL::IO::read_point_set(b_file.string(), b)) << b_file;
+  ASSERT_EQ(a.size(), b.size()) << what;
+  ASSERT_EQ(a.properties(), b.properties()) << what;
+  std::vector<std::size_t> a_row(a.size()), b_row(b.size());
+  std::iota(a_row.begin(), a_row.end(), std::size_t(0));
+  std::iota(b_row.begin(), b_row.end(), std::size_t(0));
+  for(std::size_t r = 0; r < per_point; ++r) a_row[r] = std::size_t(order[r]);
+  auto sort_the_rest = [per_point](const Point_set& s, std::vector<std::size_t>& rows) {
+    std::sort(rows.begin() + std::ptrdiff_t(per_point), rows.end(), [&](std::size_t i, std::size_t j) {
+      return s.point(Point_set::Index(i)) < s.point(Point_set::Index(j));
+    });
+  };
+  sort_the_rest(a, a_row);
+  sort_the_rest(b, b_row);
+  auto compare = [&](auto&& value_a, auto&& value_b, const std::string& name) {
+    double scale = 0, difference = 0;
+    std::size_t worst = 0;
+    for(std::size_t r = 0; r < a.size(); ++r) {
+      const double va = value_a(Point_set::Index(a_row[r])), vb = value_b(Point_set::Index(b_row[r]));
+      scale = std::max(scale, std::abs(va));
+      if(std::abs(va - vb) > difference) difference = std::abs(va - vb), worst = r;
+    }
+    EXPECT_LE(difference, 1e-12 * std::max(scale, 1e-300))
+      << what << ", " << name << ": row " << worst << " of " << a.size();
+  };
+  for(int c = 0; c < 3; ++c) {
+    compare([&](Point_set::Index i) { return a.point(i)[c]; }, [&](Point_set::Index i) { return b.point(i)[c]; },
+            "point");
+    if(a.has_normal_map())
+      compare([&](Point_set::Index i) { return a.normal(i)[c]; }, [&](Point_set::Index i) { return b.normal(i)[c]; },
+              "normal");
+  }
+  for(const std::string& name : a.properties()) {
+    auto pa = a.property_map<double>(name);
+    auto pb = b.property_map<double>(name);
+    if(pa.second && pb.second)
+      compare([&](Point_set::Index i) { return pa.first[i]; }, [&](Point_set::Index i) { return pb.first[i]; }, name);
+  }
+}
+
+class OrderIndependence : public ::testing::TestWithParam<const char*>
+{
+protected:
+  void SetUp() override
+  {
+    dir = fs::temp_directory_path() / ("point_detail_order_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir);
+    const std::string kind = GetParam();
+    shape = kind == "lattice" ? lattice(false) : kind == "duplicates" ? lattice(true) : random_sampling();
+    identity.resize(shape.points.size());
+    std::iota(identity.begin(), identity.end(), 0);
+    order = identity;
+    std::shuffle(order.begin(), order.end(), std::mt19937(11));
+    for(const bool bare : {false, true}) {
+      write_shape(shape, identity, bare, dir / (bare ? "in_order_bare.ply" : "in_order.ply"));
+      write_shape(shape, order, bare, dir / (bare ? "shuffled_bare.ply" : "shuffled.ply"));
+    }
+    std::ofstream(dir / "edit.json")
+      << R"({"roi": ["sphere:0.75,0.45,0,0.3"], "handles": [{"select": ["sphere:0.9,0.45,0,0.08"], )"
+      << R"("translation": [0.02, 0.01, 0.08]}]})";
+  }
+  void TearDown() override { fs::remove_all(dir); }
+
+  /// Runs `arguments` (IN and OUT standing for the input and output files) on both orders and compares; the
+  /// inputs have no normals when `bare`.
+  void check(const std::string& name, const std::string& arguments, std::size_t per_point, bool bare = false)
+  {
+    for(const char* input : {"in_order", "shuffled"}) {
+      std::string args = arguments;
+      args.replace(args.find("IN"), 2, (dir / (std::string(input) + (bare ? "_bare.ply" : ".ply"))).string());
+      args.replace(args.find("OUT"), 3, (dir / (name + "_" + input + ".ply")).string());
+      const Program_run r = run(args);
+      ASSERT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    }
+    expect_same_after_undoing(dir / (name + "_in_order.ply"), dir / (name + "_shuffled.ply"), order, per_point,
+                              std::string(GetParam()) + " " + name);
+  }
+  std::size_t n() const { return shape.points.size(); }
+
+  fs::path dir;
+  Shape shape;
+  std::vector<int> identity, order;
+};
+
+} // namespace
+
+TEST_P(OrderIndependence, Details)
+{
+  for(const char* filter : {"linear", "quadric", "cubic"})
+    check(std::string("details_") + filter, std::string("details -i IN -o OUT --order ") + filter, n());
+}
+TEST_P(OrderIndependence, DetailsOnMeanShiftNeighbourhoods)
+{
+  check("details_ms", "details -i IN -o OUT --order cubic --neighbors mean_shift --weights distance", n());
+}
+TEST_P(OrderIndependence, EstimatedNormals) { check("normals", "details -i IN -o OUT --order quadric", n(), true); }
+TEST_P(OrderIndependence, Scale) { check("scale", "scale -i IN -o OUT -s 2 --roi sphere:0.7,0.45,0,0.3", n()); }
+TEST_P(OrderIndependence, Enhance) { check("enhance", "enhance -i IN -o OUT -s 1.5", n()); }
+TEST_P(OrderIndependence, Curvature) { check("curvature", "curvature -i IN -o OUT", n()); }
+TEST_P(OrderIndependence, Simplify) { check("simplify", "simplify -i IN -o OUT", 0); }
+TEST_P(OrderIndependence, Edit) { check("edit", "edit -i IN -o OUT --edit " + (dir / "edit.json").string(), n()); }
+TEST_P(OrderIndependence, EditAsRigidAsPossibleAndUpsampled)
+{
+  check("edit_arap", "edit -i IN -o OUT --rotations arap --upsample --edit " + (dir / "edit.json").string(), n());
+}
+INSTANTIATE_TEST_SUITE_P(Shapes, OrderIndependence, ::testing::Values("lattice", "duplicates", "random"));

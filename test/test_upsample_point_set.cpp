@@ -226,15 +226,11 @@ TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOw
   Inserted on_sphere;
   CGAL_ext::upsample_point_set(sphere.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_sphere), sphere.np());
 
-  // A random sampling of a plane (density 1) with a hole of radius 4: the hole is twice as wide as the
-  // sampling's own gaps, so it is filled, to within a quarter of the covering the sampling has in discs of the
-  // hole's size elsewhere (the test prints both).
+  // Random samplings of a plane (density 1) with a hole of radius 4: the hole is twice as wide as the
+  // samplings' own gaps, so it is filled, to about the covering the sampling has in discs of the hole's size
+  // elsewhere. The candidates are kept greedily, so the covering varies with the sampling: seven of them, the
+  // median judged and the worst bounded (the test prints each).
   const double radius = 4;
-  const Oriented_points plane = random_plane_with_hole(80, radius, 2);
-  Inserted on_plane;
-  CGAL_ext::upsample_point_set(plane.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_plane), plane.np());
-  std::size_t in_hole = 0;
-  for(const auto& [p, n] : on_plane) in_hole += std::hypot(p.x() - 40, p.y() - 40) < radius + 0.5;
   auto disc = [&](double cx, double cy) {
     std::vector<Eigen::Vector3d> surface;
     for(double x = cx - radius; x <= cx + radius; x += 0.1)
@@ -242,18 +238,35 @@ TEST(UpsamplePointSet, ARandomSamplingGetsAlmostNothingAndItsHoleIsFilledToItsOw
         if(std::hypot(x - cx, y - cy) <= radius) surface.emplace_back(x, y, 0);
     return surface;
   };
-  const double before = covering_radius(plane.points, disc(40, 40)), after = covering_radius(with(plane.points, on_plane), disc(40, 40));
-  double elsewhere = 0;
-  for(const auto& [cx, cy] : {std::pair{20.0, 20.0}, std::pair{60.0, 20.0}, std::pair{20.0, 60.0}, std::pair{60.0, 60.0}})
-    elsewhere = std::max(elsewhere, covering_radius(plane.points, disc(cx, cy)));
-  std::printf("random sphere, %zu points: %zu new; random plane, %zu points: %zu new, %zu in the hole (about 50 missing), "
-              "covering radius in the hole %.2f -> %.2f, in discs of its size elsewhere up to %.2f\n",
-              sphere.points.size(), on_sphere.size(), plane.points.size(), on_plane.size(), in_hole, before, after, elsewhere);
+  std::vector<double> filled, against_elsewhere;
+  for(unsigned int seed = 1; seed <= 7; ++seed) {
+    const Oriented_points plane = random_plane_with_hole(80, radius, seed);
+    Inserted on_plane;
+    CGAL_ext::upsample_point_set(plane.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(on_plane),
+                                 plane.np());
+    std::size_t in_hole = 0;
+    for(const auto& [p, n] : on_plane) in_hole += std::hypot(p.x() - 40, p.y() - 40) < radius + 0.5;
+    const double before = covering_radius(plane.points, disc(40, 40));
+    const double after = covering_radius(with(plane.points, on_plane), disc(40, 40));
+    double elsewhere = 0;
+    for(const auto& [cx, cy] :
+        {std::pair{20.0, 20.0}, std::pair{60.0, 20.0}, std::pair{20.0, 60.0}, std::pair{60.0, 60.0}})
+      elsewhere = std::max(elsewhere, covering_radius(plane.points, disc(cx, cy)));
+    std::printf("random plane %u, %zu points: %zu new, %zu in the hole (about 50 missing), covering radius in the "
+                "hole %.2f -> %.2f, in discs of its size elsewhere up to %.2f\n",
+                seed, plane.points.size(), on_plane.size(), in_hole, before, after, elsewhere);
+    EXPECT_LT(on_plane.size() - in_hole, plane.points.size() / 50);
+    EXPECT_GT(in_hole, 15u); // the covering radius below judges how well
+    filled.push_back(after / before);
+    against_elsewhere.push_back(after / elsewhere);
+  }
+  std::printf("random sphere, %zu points: %zu new\n", sphere.points.size(), on_sphere.size());
   EXPECT_LT(on_sphere.size(), sphere.points.size() / 100);
-  EXPECT_LT(on_plane.size() - in_hole, plane.points.size() / 50);
-  EXPECT_GT(in_hole, 25u);
-  EXPECT_LT(after, 0.5 * before);
-  EXPECT_LT(after, 1.25 * elsewhere);
+  for(std::vector<double>* ratios : {&filled, &against_elsewhere}) std::sort(ratios->begin(), ratios->end());
+  EXPECT_LT(filled[3], 0.5);
+  EXPECT_LT(filled.back(), 0.6);
+  EXPECT_LT(against_elsewhere[3], 1.25);
+  EXPECT_LT(against_elsewhere.back(), 1.5);
 }
 
 TEST(UpsamplePointSet, TwoDensitiesGetAlmostNothingAndAStretchOnlyItsOwnGaps)

@@ -347,3 +347,61 @@ def test_a_sparser_neighbour_tile_makes_a_tile_rerun(client, tmp_path):
     details, _ = cgal_ext.compute_geometric_details(points, normals, order="cubic")
     out = read_output(tmp_path / "out.ply")
     assert np.abs(columns(out, ("detail_x", "detail_y", "detail_z")) - details).max() <= 1e-12
+
+
+def test_a_tie_with_a_point_the_tile_cannot_see_is_not_certified():
+    """On a lattice of spacing 1/8, k = 10 takes three rings (12 points, the last four tied at 2 spacings): a point
+    two spacings from the read box's open side has a tied neighbour there that the box leaves out, and is not
+    certified; one more spacing inside, it is, with the whole lattice's neighbourhood."""
+    from cgal_ext.tiled import plan
+    j, i = np.mgrid[0:24, 0:24]
+    points = np.column_stack([i.ravel() / 8.0, j.ravel() / 8.0, np.zeros(i.size)])
+    lo, hi = np.array([-np.inf, -np.inf, -np.inf]), np.array([2.0, np.inf, np.inf])  # x = 2 is outside
+    read = plan.own_mask(points, lo, hi)
+    neighborhoods = plan.Neighborhoods(points[read], 10, plan.border_distance(points[read], lo, hi))
+    row = {x: int(np.flatnonzero((points[read] == [x, 1.5, 0]).all(axis=1))[0]) for x in (1.75, 1.625)}
+    assert neighborhoods.kth_distance(10)[row[1.75]] == 0.25 and neighborhoods.border[row[1.75]] == 0.25
+    assert not neighborhoods.exact(10)[row[1.75]] and neighborhoods.exact(10)[row[1.625]]
+    ball = neighborhoods.neighbors(10)[row[1.625]]
+    ball = np.sort(ball[ball < read.sum()])
+    whole = plan.Neighborhoods(points, 10, np.full(len(points), np.inf)).neighbors(10)
+    full_row = np.flatnonzero((points == [1.625, 1.5, 0]).all(axis=1))[0]
+    expected = whole[full_row][whole[full_row] < len(points)]
+    assert len(ball) == 12 and np.array_equal(np.flatnonzero(read)[ball], np.sort(expected))
+
+
+def lattice_scan(duplicates=True):
+    """A 500 x 400 raster of spacing 1/256 (distances tie exactly): flat on one half, smooth bumps on the other,
+    with exact normals; with every 50th point again (2 % duplicates, as overlapping scans give)."""
+    j, i = np.mgrid[0:400, 0:500]
+    x, y = i.ravel() / 256.0, j.ravel() / 256.0
+    s = np.maximum(x - 1.0, 0.0)
+    z = 0.05 * s * s * np.sin(9 * y) * (1 - np.cos(7 * s))
+    zx = 0.05 * np.sin(9 * y) * (2 * s * (1 - np.cos(7 * s)) + 7 * s * s * np.sin(7 * s))
+    zy = 0.05 * 9 * s * s * np.cos(9 * y) * (1 - np.cos(7 * s))
+    points = np.column_stack([x, y, z])
+    normals = np.column_stack([-zx, -zy, np.ones_like(x)])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    if duplicates:
+        points, normals = np.vstack([points, points[::50]]), np.vstack([normals, normals[::50]])
+    return points, normals
+
+
+def test_on_a_lattice_with_duplicates_the_tiles_equal_the_one_process_calls(client, tmp_path):
+    points, normals = lattice_scan()
+    shuffled = np.random.default_rng(2).permutation(len(points))
+    points, normals = points[shuffled], normals[shuffled]
+    cgal_ext.write_ply(tmp_path / "lattice.ply", points, normals)
+    write_zarr(tmp_path / "bare.zarr", points, chunk=50_000)
+    tiled.run("details", tmp_path / "lattice.ply", tmp_path / "details.ply", client=client, tiles=8, order="cubic")
+    details, _ = cgal_ext.compute_geometric_details(points, normals, order="cubic")
+    out = read_output(tmp_path / "details.ply")
+    assert np.abs(columns(out, ("detail_x", "detail_y", "detail_z")) - details).max() <= 1e-12 * np.abs(details).max()
+    tiled.run("curvature", tmp_path / "lattice.ply", tmp_path / "curvature.ply", client=client, tiles=8)
+    curvature = cgal_ext.estimate_mean_curvature(points, normals)
+    out = read_output(tmp_path / "curvature.ply")
+    assert np.abs(out["mean_curvature"] - curvature).max() <= 1e-12 * np.abs(curvature).max()
+    tiled.run("normals", tmp_path / "bare.zarr", tmp_path / "normals.ply", client=client, tiles=8)
+    estimated = cgal_ext.estimate_oriented_normals(points)
+    dots = np.einsum("ij,ij->i", columns(read_output(tmp_path / "normals.ply"), ("nx", "ny", "nz")), estimated)
+    assert np.abs(np.abs(dots) - 1).max() <= 1e-12

@@ -17,8 +17,12 @@
 #include <boost/iterator/counting_iterator.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <memory>
+#include <mutex>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 namespace CGAL_ext {
@@ -49,7 +53,20 @@ inline void check_neighbor_count(std::size_t k, std::size_t n, const char* who)
   }
 }
 
-/// CGAL's kd-tree over the rows of a position array: k-nearest queries that report row indices.
+/// The squared distance of two points: the one formula every ranking of neighbours uses, so that two searches
+/// over different sets of points (a whole scan and a tile of it) rank the same pair alike.
+inline double squared_distance(double ax, double ay, double az, double bx, double by, double bz)
+{
+  const double dx = ax - bx, dy = ay - by, dz = az - bz;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/// (squared distance, row): the order in which every search ranks its candidates.
+using Ranked_row = std::pair<double, int>;
+
+/// CGAL's kd-tree over the rows of a position array: nearest-neighbour queries that report row indices under a
+/// rule that depends on the positions and rows alone, never on the tree's inner order (doc/design.md, "One
+/// neighbourhood rule").
 class Position_tree
 {
   using SC = CGAL::Simple_cartesian<double>;
@@ -58,12 +75,21 @@ class Position_tree
   using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
   using Tree = typename Search::Tree;
 
+  // Distances within this relative margin of the k-th are checked by a range search: the tree reports the k + 1
+  // nearest by its own rounding of the distance, which may differ from ours in the last bits.
+  static constexpr double tie_margin = 1e-12;
+
 public:
   using Point = SC::Point_3;
 
   static Point point(const Matrix_n3& positions, Eigen::Index i)
   {
     return Point(positions(i, 0), positions(i, 1), positions(i, 2));
+  }
+
+  static double squared_distance(const Point& a, const Point& b)
+  {
+    return internal::squared_distance(a.x(), a.y(), a.z(), b.x(), b.y(), b.z());
   }
 
   template <typename ConcurrencyTag>
@@ -80,12 +106,44 @@ public:
   std::size_t size() const { return m_points.size(); }
   const Point& operator[](std::size_t i) const { return m_points[i]; }
 
-  /// Calls `visit(row, squared_distance)` for the `k` rows nearest to `query`, nearest first.
+  /// Calls `visit(row, squared_distance)` for the `min(k, size())` rows nearest to `query` in the order
+  /// (squared distance, row), nearest first: a tie at the k-th distance goes to the smaller rows.
   template <typename Visit>
   void nearest(const Point& query, std::size_t k, const Visit& visit) const
   {
-    Search search(*m_tree, query, unsigned(k), 0, true, typename Search::Distance(m_pmap), true);
-    for(auto it = search.begin(); it != search.end(); ++it) visit(it->first, it->second);
+    thread_local std::vector<Ranked_row> found;
+    ranked_nearest(query, k, found);
+    for(const Ranked_row& entry : found) visit(entry.second, entry.first);
+  }
+
+  /// `out` = the `min(k, size())` rows nearest to `query` in the order (squared distance, row), in that order.
+  void ranked_nearest(const Point& query, std::size_t k, std::vector<Ranked_row>& out) const
+  {
+    k = std::min(k, size());
+    search(query, std::min(k + 1, size()), out);
+    if(out.size() > k && out[k].first <= out[k - 1].first * (1 + tie_margin)) gather_ties(query, out[k - 1].first, out);
+    out.resize(k);
+  }
+
+  /// `out` = the closed ball of row `self`'s k-th nearest other row: every other row whose squared distance is at
+  /// most the k-th smallest (all rows tied there included, so exact duplicates are taken or left together), in the
+  /// order (squared distance, row). `k < size()`.
+  void nearest_ball(std::size_t self, std::size_t k, std::vector<Ranked_row>& out) const
+  {
+    const Point& query = m_points[self];
+    const auto drop_self = [&] {
+      out.erase(std::remove(out.begin(), out.end(), Ranked_row(0.0, int(self))), out.end());
+    };
+    search(query, std::min(k + 2, size()), out); // the point itself, k others and one to see a tie
+    drop_self();
+    if(out.size() > k && out[k].first <= out[k - 1].first * (1 + tie_margin)) {
+      gather_ties(query, out[k - 1].first, out);
+      drop_self();
+    }
+    const double kth = out[k - 1].first;
+    std::size_t end = k;
+    while(end < out.size() && out[end].first <= kth) ++end;
+    out.resize(end);
   }
 
   /// Appends to `out` the rows within `radius` of `centre` (and perhaps some a rounding farther).
@@ -95,6 +153,33 @@ public:
   }
 
 private:
+  // The tree's `count` nearest to `query`, ranked.
+  void search(const Point& query, std::size_t count, std::vector<Ranked_row>& out) const
+  {
+    out.clear();
+    Search search(*m_tree, query, unsigned(count), 0, true, typename Search::Distance(m_pmap), true);
+    for(auto it = search.begin(); it != search.end(); ++it)
+      out.emplace_back(squared_distance(query, m_points[std::size_t(it->first)]), it->first);
+    // Nearest first already, but for ties (and our rounding of the distance): an insertion sort, linear here.
+    for(std::size_t i = 1; i < out.size(); ++i)
+      for(std::size_t j = i; j > 0 && out[j] < out[j - 1]; --j) std::swap(out[j], out[j - 1]);
+  }
+
+  // Replaces `out` by every row within the margin of `kth` (a squared distance), ranked: the rows tied with the k-th
+  // that the tree's k + 1 may have left out.
+  void gather_ties(const Point& query, double kth, std::vector<Ranked_row>& out) const
+  {
+    thread_local std::vector<int> rows;
+    rows.clear();
+    within(query, std::sqrt(kth) * (1 + tie_margin), rows);
+    out.clear();
+    for(const int row : rows) {
+      const double d2 = squared_distance(query, m_points[std::size_t(row)]);
+      if(d2 <= kth * (1 + tie_margin)) out.emplace_back(d2, row);
+    }
+    std::sort(out.begin(), out.end());
+  }
+
   std::vector<Point> m_points;
   Point_pmap m_pmap;
   std::unique_ptr<Tree> m_tree;
@@ -110,24 +195,91 @@ inline Neighbor_graph fixed_degree_graph(std::size_t n, std::size_t k)
   return graph;
 }
 
-/// Directed k-nearest-neighbour graph (each row holds exactly k other points, nearest first) with CGAL's
-/// kd-tree, built once and queried in parallel. Returns an empty graph when cancelled.
+/// How many rows past k a neighbourhood may take in for ties at the k-th distance before the points are refused
+/// as a pile of duplicates (whose neighbourhoods would grow with the square of the pile).
+constexpr std::size_t max_tied_neighbors = 256;
+
+/// Directed k-nearest-neighbour graph under the package's one rule: each row holds the closed ball of its k-th
+/// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Built
+/// with CGAL's kd-tree, queried in parallel. Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
 {
   const std::size_t n = std::size_t(positions.rows());
   const Position_tree tree(positions, ConcurrencyTag());
   Neighbor_graph graph = fixed_degree_graph(n, k);
-  // Ask for k + 1 to skip the point itself; with exact duplicates the point need not come first.
+  // Rows with ties past the k-th: rare but for lattices and duplicates, kept aside and merged after the loop.
+  std::mutex tied_mutex;
+  std::vector<std::pair<int, std::vector<int>>> tied;
+  std::atomic<std::size_t> pile{n};
   const bool completed = for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
+    thread_local std::vector<Ranked_row> ball;
+    tree.nearest_ball(i, k, ball);
     int* out = graph.indices.data() + i * k;
-    std::size_t m = 0;
-    tree.nearest(tree[i], k + 1, [&](int j, double) {
-      if(std::size_t(j) != i && m < k) out[m++] = j;
-    });
+    for(std::size_t m = 0; m < k; ++m) out[m] = ball[m].second;
+    if(ball.size() == k) return;
+    if(ball.size() > k + max_tied_neighbors) {
+      for(std::size_t seen = pile.load(); i < seen && !pile.compare_exchange_weak(seen, i);) {}
+      return;
+    }
+    std::vector<int> rest;
+    for(std::size_t m = k; m < ball.size(); ++m) rest.push_back(ball[m].second);
+    const std::lock_guard<std::mutex> lock(tied_mutex);
+    tied.emplace_back(int(i), std::move(rest));
   });
   if(!completed) return {};
-  return graph;
+  if(pile.load() < n) {
+    const std::size_t i = pile.load();
+    std::vector<Ranked_row> ball;
+    tree.nearest_ball(i, k, ball);
+    const Position_tree::Point& p = tree[i];
+    const Position_tree::Point& tied_with = tree[std::size_t(ball[k - 1].second)];
+    std::ostringstream os;
+    os << ball.size() << " points lie within the distance of the " << k << "-th nearest neighbour of the point ("
+       << p.x() << ", " << p.y() << ", " << p.z() << "), (" << tied_with.x() << ", " << tied_with.y() << ", "
+       << tied_with.z() << "), all tied at that distance (at most " << k + max_tied_neighbors
+       << " are taken): duplicate points pile up "
+       << "there; remove duplicates first";
+    throw Invalid_input(os.str());
+  }
+  if(tied.empty()) return graph;
+  std::sort(tied.begin(), tied.end());
+  Neighbor_graph wide;
+  wide.offsets.resize(n + 1);
+  wide.indices.reserve(graph.indices.size() + tied.size());
+  auto next = tied.begin();
+  for(std::size_t i = 0; i < n; ++i) {
+    wide.indices.insert(wide.indices.end(), graph.begin(i), graph.end(i));
+    if(next != tied.end() && std::size_t(next->first) == i)
+      wide.indices.insert(wide.indices.end(), next->second.begin(), next->second.end()), ++next;
+    wide.offsets[i + 1] = int(wide.indices.size());
+  }
+  return wide;
+}
+
+/// The rows of a graph of closed balls (`k_nearest_neighbor_graph` for some k' >= k) cut to the closed balls of
+/// their k-th nearest: the first k entries and those tied with the k-th.
+inline Neighbor_graph nearest_prefix(const Neighbor_graph& graph, const Matrix_n3& positions, std::size_t k)
+{
+  const std::size_t n = graph.size();
+  const auto d2 = [&](std::size_t i, int j) {
+    return squared_distance(positions(Eigen::Index(i), 0), positions(Eigen::Index(i), 1), positions(Eigen::Index(i), 2),
+                            positions(j, 0), positions(j, 1), positions(j, 2));
+  };
+  Neighbor_graph prefix;
+  prefix.offsets.resize(n + 1);
+  prefix.indices.reserve(n * k);
+  prefix.offsets[0] = 0;
+  for(std::size_t i = 0; i < n; ++i) {
+    int count = std::min(graph.degree(i), int(k));
+    if(count > 0) {
+      const double kth = d2(i, graph.begin(i)[count - 1]);
+      while(count < graph.degree(i) && d2(i, graph.begin(i)[count]) <= kth) ++count;
+    }
+    prefix.indices.insert(prefix.indices.end(), graph.begin(i), graph.begin(i) + count);
+    prefix.offsets[i + 1] = int(prefix.indices.size());
+  }
+  return prefix;
 }
 
 /// Each query row's distance to its last neighbour among the rows of `samples`: in a graph of nearest-first rows,
@@ -189,7 +341,7 @@ Neighbor_graph k_nearest_samples_by_owner(const Matrix_n3& samples, const Matrix
     for(int m = first[s]; m < first[s + 1]; ++m)
       radius = std::max(radius, (queries.row(members[std::size_t(m)]) - centre).norm());
     thread_local std::vector<int> candidates;
-    thread_local std::vector<std::pair<double, int>> ranked; // (squared distance, row), nearest first
+    thread_local std::vector<Ranked_row> ranked; // nearest first
     candidates.clear();
     ranked.resize(k);
     // A relative margin for the rounding of the distances compared.
@@ -201,9 +353,9 @@ Neighbor_graph k_nearest_samples_by_owner(const Matrix_n3& samples, const Matrix
       const double bound2 = bound * bound * (1 + 1e-12);
       std::size_t found = 0;
       for(const int c : candidates) {
-        const double d2 = (samples.row(c) - p).squaredNorm();
+        const double d2 = squared_distance(p(0), p(1), p(2), samples(c, 0), samples(c, 1), samples(c, 2));
         if(d2 > bound2) continue;
-        const std::pair<double, int> entry(d2, c);
+        const Ranked_row entry(d2, c);
         if(found == k && !(entry < ranked[k - 1])) continue;
         std::size_t e = found < k ? found++ : k - 1;
         for(; e > 0 && entry < ranked[e - 1]; --e) ranked[e] = ranked[e - 1];

@@ -22,12 +22,14 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cmath>
 #include <iterator>
 #include <numeric>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
@@ -92,6 +94,36 @@ inline void check_spans_a_surface(const std::vector<CGAL::Simple_cartesian<doubl
 }
 
 #ifdef CGAL_EXT_CORE_DEFINITIONS
+/// The traits of the Hilbert sort with each axis's order made total: coordinates equal on the axis compared on the
+/// next axes. Its median cuts then split the same sets of points whatever their order, so the Hilbert order is a
+/// function of the positions alone but for coinciding points, which it may also part; a comparison of two of them
+/// raises `coincide` (doc/design.md, "One neighbourhood rule").
+struct Total_order_sort_traits : CGAL::Simple_cartesian<double>
+{
+  using Point_3 = CGAL::Simple_cartesian<double>::Point_3;
+  template <int a, int b, int c>
+  struct Less
+  {
+    std::atomic<bool>* coincide;
+    bool operator()(const Point_3& p, const Point_3& q) const
+    {
+      if(p.cartesian(a) < q.cartesian(a)) return true;
+      if(q.cartesian(a) < p.cartesian(a)) return false;
+      if(p.cartesian(b) < q.cartesian(b)) return true;
+      if(q.cartesian(b) < p.cartesian(b)) return false;
+      if(p.cartesian(c) == q.cartesian(c) && &p != &q) coincide->store(true, std::memory_order_relaxed);
+      return p.cartesian(c) < q.cartesian(c);
+    }
+  };
+  using Less_x_3 = Less<0, 1, 2>;
+  using Less_y_3 = Less<1, 2, 0>;
+  using Less_z_3 = Less<2, 0, 1>;
+  std::atomic<bool>* coincide = nullptr;
+  Less_x_3 less_x_3_object() const { return {coincide}; }
+  Less_y_3 less_y_3_object() const { return {coincide}; }
+  Less_z_3 less_z_3_object() const { return {coincide}; }
+};
+
 template <typename ConcurrencyTag>
 Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy, const char* who)
 {
@@ -100,11 +132,35 @@ Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<doub
   const std::size_t n = copy.size();
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t(0));
-  using Traits = CGAL::Spatial_sort_traits_adapter_3<CGAL::Simple_cartesian<double>,
+  using Traits = CGAL::Spatial_sort_traits_adapter_3<Total_order_sort_traits,
                                                      typename CGAL::Pointer_property_map<SC_point>::const_type>;
-  // Median policy: deterministic (no random shuffle), balanced on uneven scans.
-  CGAL::hilbert_sort<ConcurrencyTag>(order.begin(), order.end(), Traits(CGAL::make_property_map(copy)),
+  std::atomic<bool> coincide{false};
+  Total_order_sort_traits total_order;
+  total_order.coincide = &coincide;
+  // Median policy: balanced on uneven scans.
+  CGAL::hilbert_sort<ConcurrencyTag>(order.begin(), order.end(), Traits(CGAL::make_property_map(copy), total_order),
                                      CGAL::Hilbert_sort_median_policy());
+  if(coincide.load()) {
+    // Coinciding points one after another, where the first of them stands: then the caller's order among them
+    // moves no other row and no neighbour in a sum over rows; only a row's own diagonal, kept in its sorted place,
+    // stands before or after its twin's column (doc/design.md, "One neighbourhood rule").
+    std::vector<std::size_t> place(n), by_position(order);
+    for(std::size_t s = 0; s < n; ++s) place[order[s]] = s;
+    std::sort(by_position.begin(), by_position.end(), [&](std::size_t i, std::size_t j) {
+      const SC_point &p = copy[i], &q = copy[j];
+      return std::make_tuple(p.x(), p.y(), p.z(), place[i]) < std::make_tuple(q.x(), q.y(), q.z(), place[j]);
+    });
+    std::vector<std::size_t> run(n); // each point's run of coinciding points in by_position: its first place there
+    for(std::size_t r = 0; r < n; ++r)
+      run[by_position[r]] = r > 0 && copy[by_position[r]] == copy[by_position[r - 1]] ? run[by_position[r - 1]] : r;
+    std::vector<std::size_t> grouped;
+    grouped.reserve(n);
+    for(const std::size_t i : order) {
+      if(by_position[run[i]] != i) continue; // not the first of its run: placed with it
+      for(std::size_t r = run[i]; r < n && run[by_position[r]] == run[i]; ++r) grouped.push_back(by_position[r]);
+    }
+    order.swap(grouped);
+  }
   Spatial_point_cloud cloud;
   cloud.input_index.assign(order.begin(), order.end());
   cloud.positions.resize(Eigen::Index(n), 3);

@@ -85,8 +85,20 @@ std::vector<int> split_into_clusters(const Matrix_n3& positions, const Cluster_s
     eigen.computeDirect(covariance);
     const Eigen::RowVector3d axis = eigen.eigenvectors().col(2).transpose();
     int* middle = std::partition(first, last, [&](int r) { return (positions.row(r) - centroid).dot(axis) < 0; });
-    if(middle == first || middle == last) middle = first + size / 2; // coincident points: halve
-    return middle;
+    if(middle != first && middle != last) return middle;
+    // No side (rounding, or coinciding points): halve in the order of position, never between coinciding points,
+    // which stay one cluster whatever the caller's order (doc/design.md, "One neighbourhood rule").
+    const auto coincide = [&](int a, int b) { return positions.row(a) == positions.row(b); };
+    std::sort(first, last, [&](int a, int b) {
+      for(int c = 0; c < 3; ++c)
+        if(positions(a, c) != positions(b, c)) return positions(a, c) < positions(b, c);
+      return a < b;
+    });
+    middle = first + size / 2;
+    while(middle != last && coincide(*(middle - 1), *middle)) ++middle;
+    if(middle == last)
+      for(middle = first + size / 2; middle != first && coincide(*(middle - 1), *middle);) --middle;
+    return middle == first ? nullptr : middle; // null: every point coincides, no cut
   };
   // Whether the members' modes spread beyond the threshold, and their scatter (the budget's priority).
   auto mode_spread = [&](Range range) {
@@ -183,15 +195,20 @@ std::vector<int> split_into_clusters(const Matrix_n3& positions, const Cluster_s
   };
   std::priority_queue<Range, std::vector<Range>, decltype(size_order)> largest(size_order, std::move(leaves));
   std::size_t count = largest.size();
-  while(count < target && largest.top().end - largest.top().begin > 1) {
+  leaves.clear(); // now the clusters of coinciding points, which no cut divides
+  while(count < target && !largest.empty() && largest.top().end - largest.top().begin > 1) {
     const Range r = largest.top();
     largest.pop();
-    const int cut_at = int(principal_cut(r) - order.data());
+    const int* cut = principal_cut(r);
+    if(!cut) {
+      leaves.push_back(r);
+      continue;
+    }
+    const int cut_at = int(cut - order.data());
     largest.push({r.begin, cut_at});
     largest.push({cut_at, r.end});
     ++count;
   }
-  leaves.clear();
   for(; !largest.empty(); largest.pop()) leaves.push_back(largest.top());
   const std::size_t after_size = leaves.size();
 
@@ -213,7 +230,12 @@ std::vector<int> split_into_clusters(const Matrix_n3& positions, const Cluster_s
   while(!spread.empty() && settled.size() + spread.size() < budget) {
     const Range r = spread.top().range;
     spread.pop();
-    const int cut_at = int(principal_cut(r) - order.data());
+    const int* cut = principal_cut(r);
+    if(!cut) {
+      settled.push_back(r);
+      continue;
+    }
+    const int cut_at = int(cut - order.data());
     consider({r.begin, cut_at});
     consider({cut_at, r.end});
   }

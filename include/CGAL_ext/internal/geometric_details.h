@@ -44,7 +44,7 @@ bool detail_laplacian(const Spatial_point_cloud& cloud, std::size_t k, const Det
     return false;
   progress.stage(whole.at(0.9), whole.end);
   constexpr std::size_t min_neighbors = 3;
-  const Neighbor_graph nearest = nearest_prefix(analysis.candidates, k);
+  const Neighbor_graph nearest = nearest_prefix(analysis.candidates, cloud.positions, k);
   if(neighbor_radius) *neighbor_radius = last_neighbor_distances(cloud.positions, cloud.positions, nearest);
   const Neighbor_graph graph = symmetrize<ConcurrencyTag>(
     mean_shift_neighbor_graph<ConcurrencyTag>(nearest, analysis.modes, std::min(k, min_neighbors)));

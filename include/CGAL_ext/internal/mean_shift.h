@@ -35,22 +35,6 @@ inline void check_mean_shift_neighbors(std::size_t k, std::size_t n, const char*
                         " is too small: the curvature fit of the mean shift needs at least 5 neighbours");
 }
 
-/// The first `k` neighbours of every row of a nearest-first graph with at least `k` per row.
-inline Neighbor_graph nearest_prefix(const Neighbor_graph& graph, std::size_t k)
-{
-  const std::size_t n = graph.size();
-  Neighbor_graph prefix;
-  prefix.offsets.resize(n + 1);
-  prefix.indices.reserve(n * k);
-  prefix.offsets[0] = 0;
-  for(std::size_t i = 0; i < n; ++i) {
-    const int count = std::min(graph.degree(i), int(k));
-    prefix.indices.insert(prefix.indices.end(), graph.begin(i), graph.begin(i) + count);
-    prefix.offsets[i + 1] = int(prefix.indices.size());
-  }
-  return prefix;
-}
-
 /// The bandwidths and curvature scale actually used, after the automatic rules of `Mean_shift_settings`.
 struct Mean_shift_scales
 {

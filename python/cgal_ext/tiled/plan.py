@@ -4,8 +4,10 @@ Tiles come from a kd-split of a sample of the scan: half-open boxes `lo <= x < h
 infinite, so every point of the scan, sampled or not, is the own point of exactly one tile. A tile reads its box
 grown by the halo width on every finite side (its "read box").
 
-The check (`certify`) is exact, not a rule of thumb: a point's k nearest neighbours among the points read are its
-k nearest in the whole scan when the k-th of them is closer than the read box's border. Operations that use the
+The check (`certify`) is exact, not a rule of thumb: a point's neighbourhood among the points read (the closed ball
+of its k-th nearest, every point tied at that distance included) is its neighbourhood in the whole scan when the
+k-th of them is closer than the read box's border: a point tied with it that the tile cannot see is at least as
+far as the border, and the point is not certified. Operations that use the
 symmetrised k-nearest-neighbour graph (the Laplacian of the details) also need every point that has the row among
 its own k nearest; such a point outside the read box lies beyond the border, so it cannot exist when the border is
 farther than every k-th-neighbour distance of the points around (`reach`, verified against the neighbouring
@@ -92,9 +94,19 @@ def own_mask(points, lo, hi):
     return np.all((points >= lo) & (points < hi), axis=1)
 
 
+def squared_distances(a, b):
+    """Squared distances of the rows of `a` to those of `b` (broadcast), by the library's own formula, so that a tie
+    the library sees is a tie here too."""
+    d = a - b
+    return d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] + d[..., 2] * d[..., 2]
+
+
+TIE_MARGIN = 1e-12  # distances within this relative margin of the k-th are checked exactly (SciPy rounds its own)
+
+
 class Neighborhoods:
-    """The k nearest neighbours (itself not counted) of the points read that the certificate needs, and whether
-    they are the whole scan's.
+    """The neighbourhoods (the library's rule: the closed ball of the k-th nearest other point, every point tied at
+    that distance included) of the points read that the certificate needs, and whether they are the whole scan's.
 
     `search(mask)` finds them for the points of the mask (all by default). A point not searched must have its k
     nearest closer than its border (see `banded_neighborhoods`): it reads as exact, at distance 0, with the
@@ -105,40 +117,68 @@ class Neighborhoods:
         m = len(points)
         self.points, self.k, self.border = points, k, border
         self.distances = np.zeros((m, k))
-        self.indices = np.full((m, k), m, dtype=np.int64)
+        self.indices = np.full((m, k + 1), m, dtype=np.int64)  # ranked (distance, row); sentinel m past the ball
+        self.squared = np.full((m, k + 1), np.inf)
         self.searched = np.zeros(m, dtype=bool)
         self._tree = cKDTree(points, leafsize=32, balanced_tree=False, compact_nodes=False) if m else None
         if search_all:
             self.search(np.ones(m, dtype=bool))
 
     def search(self, mask):
-        """Finds the k nearest of the points of `mask` not searched yet."""
+        """Finds the neighbourhoods of the points of `mask` not searched yet."""
         new = mask & ~self.searched
         if not new.any():
             return
+        m, k = len(self.points), self.k
         rows = self._tree.indices[new[self._tree.indices]]  # in the tree's order: nearby queries run together
-        count = min(self.k + 1, len(self.points))
-        distances, indices = self._tree.query(self.points[rows], count, workers=_core.get_num_threads())
-        distances, indices = distances.reshape(len(rows), count), indices.reshape(len(rows), count)
-        # Leave the point itself out; where exact duplicates hide it beyond the k + 1 found, leave out the last.
+        count = min(k + 2, m)  # the point itself, k others and one more to see a tie at the k-th
+        while len(rows):
+            indices, squared = self._ranked(rows, count)
+            found = count - 1
+            self._store(rows, indices, squared)
+            self.distances[rows, :min(k, found)] = np.sqrt(squared[:, :min(k, found)])
+            self.distances[rows, found:] = np.inf  # fewer points read than neighbours asked: none of them exact
+            if count == m:
+                break
+            # A tie at the k-th distance that reaches the last point found may go on past it: ask for more.
+            tied = squared[:, -1] <= squared[:, k - 1] * (1 + TIE_MARGIN)
+            rows, count = rows[tied], min(2 * count, m)
+        self.searched |= new
+
+    def _ranked(self, rows, count):
+        """The `count` - 1 nearest other points of each of `rows`, ranked (squared distance, row)."""
+        _, indices = self._tree.query(self.points[rows], count, workers=_core.get_num_threads())
+        indices = indices.reshape(len(rows), count)
+        # Leave the point itself out; where exact duplicates hide it beyond those found, leave out the last.
         keep = indices != rows[:, None]
         keep[keep.all(axis=1), -1] = False
-        self.distances[rows, :count - 1] = distances[keep].reshape(len(rows), count - 1)
-        self.indices[rows, :count - 1] = indices[keep].reshape(len(rows), count - 1)
-        self.distances[rows, count - 1:] = np.inf  # fewer points read than neighbours asked: none of them exact
-        self.searched |= new
+        indices = indices[keep].reshape(len(rows), count - 1)
+        squared = squared_distances(self.points[indices], self.points[rows][:, None, :])
+        order = np.lexsort((indices, squared), axis=1)
+        return np.take_along_axis(indices, order, 1), np.take_along_axis(squared, order, 1)
+
+    def _store(self, rows, indices, squared):
+        width = indices.shape[1]
+        if width > self.indices.shape[1]:
+            extra = width - self.indices.shape[1]
+            self.indices = np.pad(self.indices, ((0, 0), (0, extra)), constant_values=len(self.points))
+            self.squared = np.pad(self.squared, ((0, 0), (0, extra)), constant_values=np.inf)
+        self.indices[rows, :width], self.squared[rows, :width] = indices, squared
 
     def kth_distance(self, k):
         """Each point's distance to its k-th nearest (0 where not searched)."""
         return self.distances[:, k - 1]
 
     def exact(self, k):
-        """Each point's k nearest are its k nearest in the whole scan."""
+        """Each point's neighbourhood is its neighbourhood in the whole scan: its k-th nearest, and so every point
+        tied with it, is closer than the read box's border."""
         return self.distances[:, k - 1] < self.border
 
     def neighbors(self, k):
-        """Each point's k nearest (m, k); the sentinel `m` where not searched."""
-        return self.indices[:, :k]
+        """Each point's neighbourhood for k, padded with the sentinel `m` (also where not searched)."""
+        ball = self.squared <= self.squared[:, k - 1:k]
+        width = max(int(ball.sum(axis=1).max(initial=0)), k)
+        return np.where(ball, self.indices, len(self.points))[:, :width]
 
 
 def interior_bound(points, k, cell):
