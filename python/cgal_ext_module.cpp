@@ -295,43 +295,46 @@ PYBIND11_MODULE(_core, m)
         "Tests only: the lowest and one past the highest address read since _trace_reads(True).");
 
   const Deformation::Settings defaults;
-  py::class_<Deformation>(m, "Deformation",
-                          doc("Detail-preserving editing of a point set (Miao et al. 2007, Sect. 6), shaped like CGAL's "
-                              "Surface_mesh_deformation: select a region of interest and handle groups, preprocess(), "
-                              "then per frame of a drag set_handle_transform(), deform() and diffuse(), and "
-                              "restore_details() once the drag ends (doc/editing.md). The points and normals are "
-                              "copied at construction. The settings are keyword-only; `settings` reads them back.",
-                              {points_doc, normals_doc,
-                               "order, lam, mu : str, float, float\n    The detail transfer function, as in compute_geometric_details.",
-                               "k : int\n    Neighbours of the sample points' Laplacian.",
-                               "handle_weight : float\n    inf: handles are hard constraints; else their weight in the "
-                               "least squares.",
-                               "rotations : {\"propagate\", \"arap\", \"none\"}\n    How the details turn: by the strength "
-                               "field, fitted as rigid as possible, or not.",
-                               "rigid_iterations : int\n    Local/global iterations per step in \"arap\" mode.",
-                               "rigid_rotation_smoothing : float\n    SRE-ARAP's smooth-rotation weight (0: plain ARAP).",
-                               "rigid_rotation_smoothing_scale : {\"edge_lengths\", \"surface_area\"}\n    How that weight "
-                               "is scaled.",
-                               "rigid_edge_weights : {\"uniform\", \"cotangent\"}\n    Edge weights of the \"arap\" energy.",
-                               "strength_distance : {\"euclidean\", \"geodesic\"}\n    The distance of the strength "
-                               "field.",
-                               "target_count : int\n    About how many sample points to make.",
-                               "max_cluster_size : int, optional\n    The most points per sample point, instead.",
-                               "diffusion_samples : int\n    Sample points blended per point by the diffusion.",
-                               "diffusion_origin : {\"own\", \"nearest\"}\n    Where each point's offset is taken from.",
-                               "diffusion_turn : {\"affine\", \"fitted\", \"frames\"}\n    How each sample point carries "
-                               "its points.",
-                               "detail_iterations : int\n    The most conjugate-gradient iterations of restore_details().",
-                               "detail_tolerance : float\n    Its relative residual to stop at.",
-                               "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape.",
-                               "strength : str, optional\n    The older spelling of strength_distance, still read."},
-                              "", true)
-                            .c_str())
+  py::class_<Deformation>(
+    m, "Deformation",
+    doc("Detail-preserving editing of a point set (Miao et al. 2007, Sect. 6), shaped like CGAL's "
+        "Surface_mesh_deformation: select a region of interest and handle groups, preprocess(), "
+        "then per frame of a drag set_handle_transform(), deform() and diffuse(), and "
+        "restore_details() once the drag ends (doc/editing.md). The points and normals are "
+        "copied at construction. The settings are keyword-only; `settings` reads them back.",
+        {points_doc,
+         normals_doc,
+         "order, lam, mu : str, float, float\n    The detail transfer function, as in compute_geometric_details.",
+         "k : int\n    Neighbours of the sample points' Laplacian.",
+         "handle_weight : float\n    inf: handles are hard constraints; else their weight in the "
+         "least squares.",
+         "rotations : {\"propagate\", \"arap\", \"none\"}\n    How the details turn: by the strength "
+         "field, fitted as rigid as possible, or not.",
+         "rigid_iterations : int\n    Local/global iterations per step in \"arap\" mode.",
+         "rigid_rotation_smoothing : float\n    SRE-ARAP's smooth-rotation weight (0: plain ARAP).",
+         "rigid_rotation_smoothing_scale : {\"edge_lengths\", \"surface_area\"}\n    How that weight "
+         "is scaled.",
+         "rigid_edge_weights : {\"uniform\", \"cotangent\"}\n    Edge weights of the \"arap\" energy.",
+         "strength_distance : {\"euclidean\", \"geodesic\"}\n    The distance of the strength "
+         "field.",
+         "target_count : int\n    About how many sample points to make.",
+         "max_cluster_size : int, optional\n    The most points per sample point, instead.",
+         "diffusion_samples : int\n    Sample points blended per point by the diffusion.",
+         "diffusion_origin : {\"own\", \"nearest\"}\n    Where each point's offset is taken from.",
+         "diffusion_turn : {\"affine\", \"fitted\", \"frames\"}\n    How each sample point carries "
+         "its points.",
+         "detail_iterations : int\n    The most conjugate-gradient iterations of restore_details().",
+         "detail_tolerance : float\n    Its relative residual to stop at.",
+         "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape.",
+         "strength : str, optional\n    The older spelling of strength_distance, still read."},
+        "", true)
+      .c_str())
     .def(py::init([](const Array_like& points, const Optional_array_like& normals, const std::string& order, double lam,
-                     double mu, long long k, double handle_weight, const std::string& rotations, long long rigid_iterations,
-                     double rigid_rotation_smoothing, const std::string& rigid_rotation_smoothing_scale,
-                     const std::string& rigid_edge_weights, const std::string& strength_distance, long long target_count,
-                     const Optional_int& max_cluster_size, long long diffusion_samples, const std::string& diffusion_origin,
+                     double mu, long long k, double handle_weight, const std::string& rotations,
+                     long long rigid_iterations, double rigid_rotation_smoothing,
+                     const std::string& rigid_rotation_smoothing_scale, const std::string& rigid_edge_weights,
+                     const std::string& strength_distance, long long target_count, const Optional_int& max_cluster_size,
+                     long long diffusion_samples, const std::string& diffusion_origin,
                      const std::string& diffusion_turn, long long detail_iterations, double detail_tolerance,
                      double detail_anchor, const std::optional<std::string>& strength) {
            Deformation::Settings s;
@@ -348,7 +351,8 @@ PYBIND11_MODULE(_core, m)
              throw py::value_error("give strength_distance (strength is its older spelling), not both");
            s.strength_distance = strength ? parse_setting<Strength_distance>(*strength, "strength")
                                           : parse_setting<Strength_distance>(strength_distance, "strength_distance");
-           if(target_count < 1) throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
+           if(target_count < 1)
+             throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
            s.simplification.target_count = std::size_t(target_count);
            if(!max_cluster_size.is_none()) {
              const long long size = max_cluster_size.cast<long long>();
@@ -367,26 +371,34 @@ PYBIND11_MODULE(_core, m)
          "points"_a, "normals"_a = py::none(), py::kw_only(), "order"_a = setting_name(defaults.filter.order),
          "lam"_a = defaults.filter.lambda, "mu"_a = defaults.filter.mu, "k"_a = defaults.sample_neighbors,
          "handle_weight"_a = defaults.handle_weight, "rotations"_a = setting_name(defaults.rotations),
-         "rigid_iterations"_a = defaults.rigid_iterations, "rigid_rotation_smoothing"_a = defaults.rigid_rotation_smoothing,
+         "rigid_iterations"_a = defaults.rigid_iterations,
+         "rigid_rotation_smoothing"_a = defaults.rigid_rotation_smoothing,
          "rigid_rotation_smoothing_scale"_a = setting_name(defaults.rigid_rotation_smoothing_scale),
          "rigid_edge_weights"_a = setting_name(defaults.rigid_edge_weights),
          "strength_distance"_a = setting_name(defaults.strength_distance),
          "target_count"_a = defaults.simplification.target_count, "max_cluster_size"_a = py::none(),
          "diffusion_samples"_a = defaults.diffusion_samples,
          "diffusion_origin"_a = setting_name(defaults.diffusion_origin),
-         "diffusion_turn"_a = setting_name(defaults.diffusion_turn),
-         "detail_iterations"_a = defaults.detail_iterations, "detail_tolerance"_a = defaults.detail_tolerance,
-         "detail_anchor"_a = defaults.detail_anchor, "strength"_a = py::none())
+         "diffusion_turn"_a = setting_name(defaults.diffusion_turn), "detail_iterations"_a = defaults.detail_iterations,
+         "detail_tolerance"_a = defaults.detail_tolerance, "detail_anchor"_a = defaults.detail_anchor,
+         "strength"_a = py::none())
+    // Reached only when the arguments matched no constructor: pybind11 alone says "incompatible constructor
+    // arguments"; this names the keyword that is no setting (and the setting nearest to it), or else the call.
+    .def(py::init([](const py::args& args, const py::kwargs& kwargs) -> std::unique_ptr<Deformation> {
+           refuse_arguments(py::type::of<Deformation>().attr("__init__"), "Deformation", args, kwargs);
+         }),
+         "Any other arguments: a TypeError naming the keyword that is no setting, or the arguments' types.")
     .def("insert_roi", &Deformation::insert_roi, "indices"_a,
          doc("Adds points to the region of interest (the part that deforms).",
              {"indices : array_like of int or bool\n    Point indices, or a boolean mask of all the points."}, "", true)
            .c_str())
-    .def("create_handle_group", &Deformation::create_handle_group, "indices"_a = py::none(),
-         doc("Adds a handle group (points moved together by one rigid transform; they must lie in the region).",
-             {"indices : array_like of int or bool, optional\n    Its points (indices or a mask); more can be added with "
-              "insert_handle_points()."},
-             "int\n    The group's number.", true)
-           .c_str())
+    .def(
+      "create_handle_group", &Deformation::create_handle_group, "indices"_a = py::none(),
+      doc("Adds a handle group (points moved together by one rigid transform; they must lie in the region).",
+          {"indices : array_like of int or bool, optional\n    Its points (indices or a mask); more can be added with "
+           "insert_handle_points()."},
+          "int\n    The group's number.", true)
+        .c_str())
     .def("insert_handle_points", &Deformation::insert_handle_points, "group"_a, "indices"_a,
          doc("Adds points to a handle group.",
              {"group : int\n    A group create_handle_group() returned.",
@@ -406,30 +418,33 @@ PYBIND11_MODULE(_core, m)
              "when it has not been. Safe to call in another thread while the selection is changed.",
              {progress_doc}, "bool\n    True (a cancelled run raises).")
            .c_str())
-    .def("set_handle_transform", &Deformation::set_handle_transform, "group"_a, "rotation"_a = py::none(),
-         "translation"_a = py::none(), py::kw_only(), "transform"_a = py::none(), "pivot"_a = py::none(),
-         doc("Sets the rigid motion of a handle group: p -> R (p - c) + c + t (c = pivot, 0 when not given), or the "
-             "4x4 matrix [[R, t], [0, 0, 0, 1]].",
-             {"group : int\n    The handle group.", "rotation : (3, 3) array_like, optional\n    R, a rotation "
-              "(orthonormal within 1e-6, determinant +1); None: the identity.",
-              "translation : (3,) array_like, optional\n    t; None: zero.",
-              "transform : (4, 4) array_like, optional\n    The whole rigid motion instead of rotation, translation and "
-              "pivot.",
-              "pivot : (3,) array_like, optional\n    The point the rotation turns about."},
-             "", true)
-           .c_str())
+    .def(
+      "set_handle_transform", &Deformation::set_handle_transform, "group"_a, "rotation"_a = py::none(),
+      "translation"_a = py::none(), py::kw_only(), "transform"_a = py::none(), "pivot"_a = py::none(),
+      doc("Sets the rigid motion of a handle group: p -> R (p - c) + c + t (c = pivot, 0 when not given), or the "
+          "4x4 matrix [[R, t], [0, 0, 0, 1]].",
+          {"group : int\n    The handle group.",
+           "rotation : (3, 3) array_like, optional\n    R, a rotation "
+           "(orthonormal within 1e-6, determinant +1); None: the identity.",
+           "translation : (3,) array_like, optional\n    t; None: zero.",
+           "transform : (4, 4) array_like, optional\n    The whole rigid motion instead of rotation, translation and "
+           "pivot.",
+           "pivot : (3,) array_like, optional\n    The point the rotation turns about."},
+          "", true)
+        .c_str())
     .def("deform", &Deformation::deform, py::kw_only(), "progress"_a = py::none(),
          doc("Solves the sample points' new positions for the handles' transforms (preprocessing first when the "
              "selection changed): one back-substitution per call.",
              {progress_doc}, "", true)
            .c_str())
-    .def("diffuse", &Deformation::diffuse, "points_out"_a = py::none(), "normals_out"_a = py::none(),
-         doc("Carries the sample points' deformation to every point and normal.",
-             {"points_out : (n, 3) float64 ndarray, optional\n    Written in place (reuse it from drag to drag); None: a "
-              "new array.",
-              "normals_out : (n, 3) float64 ndarray, optional\n    The same for the normals."},
-             "Deformed\n    (points, normals) in the input order: points_out and normals_out when given.", true)
-           .c_str())
+    .def(
+      "diffuse", &Deformation::diffuse, "points_out"_a = py::none(), "normals_out"_a = py::none(),
+      doc("Carries the sample points' deformation to every point and normal.",
+          {"points_out : (n, 3) float64 ndarray, optional\n    Written in place (reuse it from drag to drag); None: a "
+           "new array.",
+           "normals_out : (n, 3) float64 ndarray, optional\n    The same for the normals."},
+          "Deformed\n    (points, normals) in the input order: points_out and normals_out when given.", true)
+        .c_str())
     .def("restore_details", &Deformation::restore_details, "points_out"_a = py::none(), "normals_out"_a = py::none(),
          doc("After diffuse(): puts back the fine details the diffusion smoothed (conjugate gradients, at most "
              "detail_iterations; call it once a drag ends), then returns the points and normals as diffuse() does.",
@@ -437,8 +452,9 @@ PYBIND11_MODULE(_core, m)
               "normals_out : (n, 3) float64 ndarray, optional\n    The same for the normals."},
              "Deformed\n    (points, normals) in the input order.", true)
            .c_str())
-    .def("reset", &Deformation::reset,
-         "Handle transforms back to the identity and every point back to its input position; the preprocessing is kept.")
+    .def(
+      "reset", &Deformation::reset,
+      "Handle transforms back to the identity and every point back to its input position; the preprocessing is kept.")
     .def("sample_point_of", &Deformation::sample_point_of, "points"_a,
          doc("The sample point of points (after preprocess()).",
              {"points : int or array_like of int or bool\n    A point index, or indices or a boolean mask."},

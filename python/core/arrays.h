@@ -98,6 +98,50 @@ std::string shape_of(const py::array& array)
 
 std::string dtype_name(const py::array& array) { return py::str(array.dtype()); }
 
+/// Whether every element of `array` lies at an address its type's alignment divides (not so in a view of a buffer
+/// at an odd offset, `np.frombuffer(b, offset=4)`), as the library's reads through typed pointers need.
+bool is_aligned(const py::array& array)
+{
+  const auto alignment = py::ssize_t(array.itemsize());
+  if(reinterpret_cast<std::uintptr_t>(array.data()) % std::uintptr_t(alignment) != 0) return false;
+  for(py::ssize_t d = 0; d < array.ndim(); ++d)
+    if(array.strides(d) % alignment != 0) return false;
+  return true;
+}
+
+/// Flags of `py::array_t<T, ...>::ensure` that copy an array whose elements are not aligned.
+constexpr int aligned_copy = py::detail::npy_api::NPY_ARRAY_ALIGNED_;
+
+/// Raises the TypeError of a call to `function` (named `name`) whose arguments matched none of its signatures: the
+/// keywords its first signature does not take, each with the nearest one it does, or else the arguments' types.
+[[noreturn]] inline void refuse_arguments(const py::object& function, const std::string& name, const py::args& args,
+                                          const py::kwargs& kwargs)
+{
+  const py::module_ re = py::module_::import("re"), difflib = py::module_::import("difflib");
+  // pybind11's docstring starts with the signatures ("1. " before each when there are several), "name: type" for
+  // each argument.
+  const std::string doc = py::str(function.attr("__doc__"));
+  const std::size_t numbered = doc.find("\n1. "), start = numbered == std::string::npos ? 0 : numbered + 4;
+  const std::string first = doc.substr(start, doc.find(')', start) - start);
+  const py::list taken = re.attr("findall")(R"(([A-Za-z_]\w*)\s*:)", first);
+  std::string unknown;
+  for(const auto& item : kwargs) {
+    const py::str keyword(item.first);
+    if(taken.contains(keyword)) continue;
+    const py::list near = difflib.attr("get_close_matches")(keyword, taken, 1);
+    unknown += std::string(unknown.empty() ? "" : "; ") + "'" + std::string(keyword) + "'" +
+               (near.empty() ? std::string() : " (did you mean '" + std::string(py::str(near[0])) + "'?)");
+  }
+  if(!unknown.empty()) throw py::type_error(name + "() takes no keyword argument " + unknown);
+  std::string given;
+  for(const auto& arg : args)
+    given += std::string(given.empty() ? "" : ", ") + std::string(py::str(py::type::of(arg).attr("__name__")));
+  for(const auto& item : kwargs)
+    given += std::string(given.empty() ? "" : ", ") + std::string(py::str(item.first)) + "=" +
+             std::string(py::str(py::type::of(item.second).attr("__name__")));
+  throw py::type_error(name + "() cannot take these arguments (" + given + "); its signature: " + first + ")");
+}
+
 /// `object` as a numpy array, or a ValueError naming `argument` and `what` it must be.
 py::array as_array(const py::handle& object, const char* argument, const std::string& what)
 {
@@ -110,7 +154,8 @@ py::array as_array(const py::handle& object, const char* argument, const std::st
 }
 
 /// An (n, 3) array of real numbers as float64: the caller's own array when it is float64 (compared by value, so
-/// an array that went through pickle is one too), else one converted copy (float32, integers, nested lists).
+/// an array that went through pickle is one too) and aligned, else one converted copy (float32, integers, nested
+/// lists, a float64 view at an odd offset).
 py::array float64_rows3(const py::handle& object, const char* argument)
 {
   const py::array array = as_array(object, argument, "an (n, 3) array of numbers");
@@ -120,7 +165,7 @@ py::array float64_rows3(const py::handle& object, const char* argument)
                           dtype_name(array));
   if(array.ndim() != 2 || array.shape(1) != 3)
     throw py::value_error(std::string(argument) + " must have shape (n, 3), not " + shape_of(array));
-  if(array.dtype().equal(py::dtype::of<double>())) return array;
+  if(array.dtype().equal(py::dtype::of<double>()) && is_aligned(array)) return array;
   return array.attr("astype")(py::dtype::of<double>());
 }
 
@@ -150,6 +195,8 @@ std::pair<py::array, Rows3> output_rows3(const py::object& object, const char* a
   if(!array.dtype().equal(py::dtype::of<double>()))
     throw py::value_error(std::string(argument) + " must have dtype float64, not " + dtype_name(array));
   if(!array.writeable()) throw py::value_error(std::string(argument) + " is not writable");
+  if(!is_aligned(array))
+    throw py::value_error(std::string(argument) + " is not aligned (a view of a buffer at an odd offset)");
   return {array, view_of(array)};
 }
 
@@ -170,6 +217,8 @@ double* output_values(const py::object& object, const char* argument, std::size_
   if(!array.writeable()) throw py::value_error(std::string(argument) + " is not writable");
   if(n > 1 && array.strides(0) != py::ssize_t(sizeof(double)))
     throw py::value_error(std::string(argument) + " must be contiguous");
+  if(!is_aligned(array))
+    throw py::value_error(std::string(argument) + " is not aligned (a view of a buffer at an odd offset)");
   return static_cast<double*>(array.mutable_data());
 }
 
@@ -224,12 +273,12 @@ std::vector<std::size_t> indices(const py::handle& object, std::size_t n, const 
     if(std::size_t(array.size()) != n)
       throw py::value_error(std::string(argument) + ": a boolean mask needs one value per point (" + std::to_string(n) +
                             "), not " + std::to_string(array.size()));
-    const auto mask = py::array_t<bool, py::array::forcecast>::ensure(array);
+    const auto mask = py::array_t<bool, py::array::forcecast | aligned_copy>::ensure(array);
     for(py::ssize_t m = 0; m < mask.size(); ++m)
       if(mask.at(m)) out.push_back(std::size_t(m));
     return out;
   }
-  const auto values = py::array_t<long long, py::array::forcecast>::ensure(array);
+  const auto values = py::array_t<long long, py::array::forcecast | aligned_copy>::ensure(array);
   out.resize(std::size_t(values.size()));
   for(py::ssize_t m = 0; m < values.size(); ++m) {
     const long long v = values.at(m);
@@ -252,7 +301,7 @@ std::vector<double> values_of(const py::handle& object, std::size_t n, const cha
   if(std::size_t(array.size()) != n)
     throw py::value_error(std::string(argument) + " must have one value per point (" + std::to_string(n) + "), not " +
                           std::to_string(array.size()));
-  const auto values = py::array_t<double, py::array::forcecast | py::array::c_style>::ensure(array);
+  const auto values = py::array_t<double, py::array::forcecast | py::array::c_style | aligned_copy>::ensure(array);
   return std::vector<double>(values.data(), values.data() + values.size());
 }
 
@@ -265,7 +314,7 @@ std::vector<point_detail::Color> colors_of(const py::handle& object, std::size_t
     throw py::value_error(std::string(argument) + " must hold integers in 0..255 (uint8), not dtype " + dtype_name(array));
   if(array.ndim() != 2 || array.shape(1) != 3 || std::size_t(array.shape(0)) != n)
     throw py::value_error(std::string(argument) + " must have shape (" + std::to_string(n) + ", 3), not " + shape_of(array));
-  const auto values = py::array_t<long long, py::array::forcecast | py::array::c_style>::ensure(array);
+  const auto values = py::array_t<long long, py::array::forcecast | py::array::c_style | aligned_copy>::ensure(array);
   std::vector<point_detail::Color> colors(n);
   for(std::size_t i = 0; i < n; ++i)
     for(int c = 0; c < 3; ++c) {

@@ -291,7 +291,7 @@ private:
       throw py::value_error(std::string(argument) + " must be " +
                             (Columns == 1 ? "3 numbers" : "a (" + std::to_string(Rows) + ", " + std::to_string(Columns) + ") array") +
                             ", not shape " + shape_of(array) + " of dtype " + dtype_name(array));
-    const auto values = py::array_t<double, py::array::forcecast | py::array::c_style>::ensure(array);
+    const auto values = py::array_t<double, py::array::forcecast | py::array::c_style | aligned_copy>::ensure(array);
     Eigen::Matrix<double, Rows, Columns> m;
     for(int r = 0; r < Rows; ++r)
       for(int c = 0; c < Columns; ++c) m(r, c) = values.data()[r * Columns + c];

@@ -43,10 +43,16 @@ def public_callables():
     yield "Deformation", cgal_ext.Deformation
 
 
+def init_signature():
+    """The signature of Deformation's constructor (the first of its overloads; the second only explains a bad call)."""
+    lines = cgal_ext.Deformation.__init__.__doc__.splitlines()
+    return next(line[len("1. "):] for line in lines if line.startswith("1. __init__("))
+
+
 def parameters_of(name, function):
     """The parameter names of a function, from pybind11's signature line (or Python's own)."""
     if name == "Deformation":
-        signature = cgal_ext.Deformation.__init__.__doc__.splitlines()[0]
+        signature = init_signature()
     elif name == "threads":
         import inspect
         return [p for p in inspect.signature(function).parameters]
@@ -73,7 +79,7 @@ def test_every_parameter_is_documented(name, function):
 
 def test_defaults_are_the_libraries():
     """The defaults help() shows come from the C++ settings: the program's own defaults give the same numbers."""
-    signature = cgal_ext.Deformation.__init__.__doc__.splitlines()[0]
+    signature = init_signature()
     assert "k: int = 10" in signature and "rotations: str = 'propagate'" in signature
     settings = cgal_ext.Deformation(np.random.default_rng(0).normal(size=(50, 3)), np.tile([0, 0, 1.0], (50, 1))).settings
     for key, value in re.findall(r"(\w+): \w+(?:\[\w+\])? = ('[^']*'|[^,)]+)", signature[signature.index("*"):]):
@@ -155,6 +161,35 @@ def test_float64_input_is_read_in_place_and_others_are_copied_once(sphere):
     finally:
         cgal_ext._core._trace_reads(False)
     assert buffer(moved)[0] <= lo and hi <= max(buffer(moved)[1], buffer(normals)[1])
+
+
+def misaligned(array):
+    """A copy of an 8-byte-element array in a buffer 4 bytes past an 8-byte boundary, as np.frombuffer at an odd
+    offset gives."""
+    raw = bytearray(4 + array.nbytes)
+    view = np.frombuffer(raw, dtype=array.dtype, offset=4, count=array.size).reshape(array.shape)
+    view[...] = array
+    assert not view.flags.aligned
+    return view
+
+
+def test_a_float64_array_that_is_not_aligned_is_read_through_a_copy_and_refused_as_an_output(sphere):
+    points, normals = sphere
+    expected = cgal_ext.compute_geometric_details(points, normals)
+    got = cgal_ext.compute_geometric_details(misaligned(points), misaligned(normals))
+    assert np.array_equal(got.details, expected.details)
+    roi = misaligned(np.flatnonzero(points[:, 2] > 0.5).astype(np.int64))
+    assert np.array_equal(cgal_ext.scale_geometric_details(points, normals, roi=roi, s=2.0),
+                          cgal_ext.scale_geometric_details(points, normals, roi=points[:, 2] > 0.5, s=2.0))
+    radius = misaligned(np.zeros(len(points)))
+    with pytest.raises(ValueError, match="neighbor_radius is not aligned"):
+        cgal_ext.compute_geometric_details(points, normals, neighbor_radius=radius)
+    edit = cgal_ext.Deformation(points, normals)
+    edit.insert_roi(points[:, 2] > 0.5)
+    edit.create_handle_group(points[:, 2] > 0.9)
+    edit.deform()
+    with pytest.raises(ValueError, match="points_out is not aligned"):
+        edit.diffuse(misaligned(points), np.empty_like(normals))
 
 
 def test_the_gil_is_released_during_a_call(sphere):
@@ -517,6 +552,9 @@ def test_a_bad_call_is_a_value_error_and_changes_nothing(sphere, deformation, ca
      "strength_distance must be one of"),
     (lambda p, n: cgal_ext.Deformation(p, n, strength="manhattan"), ValueError, "strength must be one of"),
     (lambda p, n: cgal_ext.Deformation(p, n, strength="geodesic", strength_distance="geodesic"), ValueError, "not both"),
+    (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), TypeError,
+     "takes no keyword argument 'rotation' (did you mean 'rotations'?)"),
+    (lambda p, n: cgal_ext.Deformation(p, n, k="ten"), TypeError, "cannot take these arguments (ndarray, ndarray, k=str)"),
 ])
 def test_bad_settings_are_refused(sphere, make, error, needle):
     points, normals = sphere
