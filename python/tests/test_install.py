@@ -16,7 +16,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 BUILD_DIR = os.environ.get("CGAL_EXT_CMAKE_BUILD_DIR")
 pytestmark = pytest.mark.skipif(not BUILD_DIR, reason="CGAL_EXT_CMAKE_BUILD_DIR (a configured CMake build tree, "
-                                "as ctest's python_package sets it) is not set")
+                                "as ctest's python_install sets it) is not set")
 
 
 def project_version():
