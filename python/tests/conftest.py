@@ -7,6 +7,9 @@ import numpy as np
 import pytest
 
 PROGRAM = os.environ.get("POINT_DETAIL", "point-detail")
+# The program's environment: without the sanitizer runtime that the sanitized pass preloads into Python (a sanitized
+# program carries its own, and refuses a second).
+PROGRAM_ENV = {name: value for name, value in os.environ.items() if name != "LD_PRELOAD"}
 DATA = os.environ.get("CGAL_EXT_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
 PLY_TYPES = {"double": "<f8", "float64": "<f8", "float": "<f4", "float32": "<f4", "uchar": "u1", "uint8": "u1",
@@ -43,7 +46,7 @@ def write_ply(path, points, normals=None):
 
 def run_program(*args):
     """Runs point-detail quietly; a failure shows its message."""
-    result = subprocess.run([PROGRAM, "-q", *map(str, args)], capture_output=True, text=True)
+    result = subprocess.run([PROGRAM, "-q", *map(str, args)], capture_output=True, text=True, env=PROGRAM_ENV)
     assert result.returncode == 0, result.stderr
     return result
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import cgal_ext
-from conftest import PROGRAM, read_ply, run_program, write_ply
+from conftest import PROGRAM, PROGRAM_ENV, read_ply, run_program, write_ply
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -309,7 +309,7 @@ def test_a_bad_file_is_a_value_error_with_the_programs_message(name, tmp_path):
     with pytest.raises(ValueError) as raised:
         cgal_ext.read_points(path)
     result = subprocess.run([PROGRAM, "-q", "details", "-i", str(path), "-o", str(tmp_path / "out.ply")],
-                            capture_output=True, text=True)
+                            capture_output=True, text=True, env=PROGRAM_ENV)
     assert result.returncode == 1 and not (tmp_path / "out.ply").exists()
     message = result.stderr.strip().splitlines()[-1]
     assert message.startswith("point-detail: error: ")
