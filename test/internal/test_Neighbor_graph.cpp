@@ -212,7 +212,7 @@ TEST(NeighborGraph, RowsHoldTheClosedBallOfTheKthNearestWhateverTheOrder)
   }
 }
 
-TEST(NeighborGraph, NearestBreaksTiesByRowWhateverTheTree)
+TEST(NeighborGraph, NearestAreTheNearestRankedByDistanceAndRow)
 {
   const Matrix_n3 points = lattice_with_duplicates(9);
   const Position_tree tree(points, CGAL::Sequential_tag());
@@ -221,9 +221,14 @@ TEST(NeighborGraph, NearestBreaksTiesByRowWhateverTheTree)
       // Queries at lattice points and halfway between four of them (four ties for the nearest).
       for(const double shift : {0.0, 1.0 / 16}) {
         const Eigen::RowVector3d query = points.row(q) + Eigen::RowVector3d(shift, shift, 0);
-        std::vector<int> got;
-        tree.nearest(Position_tree::Point(query(0), query(1), query(2)), k, [&](int j, double) { got.push_back(j); });
-        EXPECT_EQ(got, brute_force_nearest(points, query, k)) << "k " << k << ", query " << q << " + " << shift;
+        std::vector<Ranked_row> got;
+        tree.nearest(Position_tree::Point(query(0), query(1), query(2)), k,
+                     [&](int j, double d2) { got.emplace_back(d2, j); });
+        const std::vector<int> expected = brute_force_nearest(points, query, k);
+        ASSERT_EQ(got.size(), k);
+        EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
+        for(std::size_t m = 0; m < k; ++m) // the same distances; at the k-th, any of the tied rows
+          EXPECT_EQ(got[m].first, (points.row(expected[m]) - query).squaredNorm()) << "k " << k << ", query " << q;
       }
     }
 }

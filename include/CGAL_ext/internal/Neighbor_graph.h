@@ -107,7 +107,8 @@ public:
   const Point& operator[](std::size_t i) const { return m_points[i]; }
 
   /// Calls `visit(row, squared_distance)` for the `min(k, size())` rows nearest to `query` in the order
-  /// (squared distance, row), nearest first: a tie at the k-th distance goes to the smaller rows.
+  /// (squared distance, row), nearest first. Of rows tied at the k-th distance the tree keeps those it meets first:
+  /// its inner order is a function of the rows it was built on, and those are in the order of their positions.
   template <typename Visit>
   void nearest(const Point& query, std::size_t k, const Visit& visit) const
   {
@@ -116,13 +117,10 @@ public:
     for(const Ranked_row& entry : found) visit(entry.second, entry.first);
   }
 
-  /// `out` = the `min(k, size())` rows nearest to `query` in the order (squared distance, row), in that order.
+  /// `out` = the `min(k, size())` rows nearest to `query` (as `nearest`), in the order (squared distance, row).
   void ranked_nearest(const Point& query, std::size_t k, std::vector<Ranked_row>& out) const
   {
-    k = std::min(k, size());
-    search(query, std::min(k + 1, size()), out);
-    if(out.size() > k && out[k].first <= out[k - 1].first * (1 + tie_margin)) gather_ties(query, out[k - 1].first, out);
-    out.resize(k);
+    search(query, std::min(k, size()), out);
   }
 
   /// `out` = the closed ball of row `self`'s k-th nearest other row: every other row whose squared distance is at
