@@ -20,7 +20,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numeric>
 #include <sstream>
+#include <tuple>
 
 namespace point_detail {
 
@@ -233,7 +235,15 @@ std::string render_png(const std::vector<Point>& points, const std::vector<Vecto
 
   std::vector<float> depth(std::size_t(W) * std::size_t(H), -std::numeric_limits<float>::infinity());
   std::vector<Color> image(depth.size(), Color{255, 255, 255});
-  for(std::size_t i = 0; i < n; ++i) {
+  // Splats of equal depth keep the first drawn: drawn in the order of their positions, the picture is the same
+  // whatever the order of the points (doc/design.md, "One neighbourhood rule").
+  std::vector<std::size_t> draw_order(n);
+  std::iota(draw_order.begin(), draw_order.end(), std::size_t(0));
+  std::sort(draw_order.begin(), draw_order.end(), [&](std::size_t a, std::size_t b) {
+    return std::make_tuple(points[a].x(), points[a].y(), points[a].z(), a) <
+           std::make_tuple(points[b].x(), points[b].y(), points[b].z(), b);
+  });
+  for(const std::size_t i : draw_order) {
     // Flagged points are drawn over the others (a few spacings nearer the camera) and never thinner than 2 pixels.
     const bool emphasized = !coloring.emphasized.empty() && coloring.emphasized[i];
     const double radius = std::clamp(0.75 * settings.splat_scale * spacings[i] * scale, (emphasized ? 2.0 : 1.0) * ss, 20.0 * ss);

@@ -344,4 +344,44 @@ TEST_P(OrderIndependence, EditAsRigidAsPossibleAndUpsampled)
 {
   check("edit_arap", "edit -i IN -o OUT --rotations arap --upsample --edit " + (dir / "edit.json").string(), n());
 }
+TEST_P(OrderIndependence, Upsample)
+{
+  // A hole of radius 0.1 cut out of both orders: the points kept keep their rows, the new ones compare as a set.
+  std::vector<int> kept_row(n(), -1), kept, kept_order;
+  for(std::size_t i = 0; i < n(); ++i)
+    if(std::hypot(shape.points[i].x() - 0.5, shape.points[i].y() - 0.45) > 0.1) {
+      kept_row[i] = int(kept.size());
+      kept.push_back(int(i));
+    }
+  for(const int i : order)
+    if(kept_row[std::size_t(i)] >= 0) kept_order.push_back(kept_row[std::size_t(i)]);
+  Shape holed;
+  for(const int i : kept) {
+    holed.points.push_back(shape.points[std::size_t(i)]);
+    holed.normals.push_back(shape.normals[std::size_t(i)]);
+  }
+  std::vector<int> in_order(kept.size());
+  std::iota(in_order.begin(), in_order.end(), 0);
+  write_shape(holed, in_order, false, dir / "holed_in_order.ply");
+  write_shape(holed, kept_order, false, dir / "holed_shuffled.ply");
+  for(const char* input : {"in_order", "shuffled"}) {
+    const Program_run r = run("upsample -i " + (dir / (std::string("holed_") + input + ".ply")).string() + " -o " +
+                              (dir / (std::string("upsampled_") + input + ".ply")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  Point_set added;
+  ASSERT_TRUE(CGAL::IO::read_point_set((dir / "upsampled_in_order.ply").string(), added));
+  EXPECT_GT(added.size(), kept.size()) << "the hole is filled";
+  expect_same_after_undoing(dir / "upsampled_in_order.ply", dir / "upsampled_shuffled.ply", kept_order, kept.size(),
+                            std::string(GetParam()) + " upsample");
+}
+TEST_P(OrderIndependence, Render)
+{
+  for(const char* input : {"in_order", "shuffled"}) {
+    const Program_run r = run("render -i " + (dir / (std::string(input) + ".ply")).string() + " -o " +
+                              (dir / (std::string("render_") + input + ".png")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  EXPECT_TRUE(contents(dir / "render_in_order.png") == contents(dir / "render_shuffled.png")) << GetParam();
+}
 INSTANTIATE_TEST_SUITE_P(Shapes, OrderIndependence, ::testing::Values("lattice", "duplicates", "random"));

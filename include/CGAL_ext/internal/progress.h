@@ -4,6 +4,7 @@
 #define CGAL_EXT_INTERNAL_PROGRESS_H
 
 #include <algorithm>
+#include <atomic>
 #include <functional>
 #include <utility>
 
