@@ -71,7 +71,8 @@ protected:
 
   /// `a` per point in the shape's order, `b` per point in `order`, `width` values each: equal to 1e-12 of the
   /// largest value once the order is undone.
-  void expect_same(const std::vector<double>& a, const std::vector<double>& b, std::size_t width, const char* what) const
+  void expect_same(const std::vector<double>& a, const std::vector<double>& b, std::size_t width,
+                   const char* what) const
   {
     ASSERT_EQ(a.size(), b.size());
     double scale = 0, difference = 0;
@@ -107,7 +108,8 @@ TEST_P(LibraryOrderIndependence, Laplacian)
   for(int r = 0; r < a.outerSize(); ++r)
     for(decltype(a)::InnerIterator it(a, r); it; ++it) entries_a[{r, int(it.col())}] = it.value();
   for(int r = 0; r < b.outerSize(); ++r)
-    for(decltype(b)::InnerIterator it(b, r); it; ++it) entries_b[{order[std::size_t(r)], order[std::size_t(it.col())]}] = it.value();
+    for(decltype(b)::InnerIterator it(b, r); it; ++it)
+      entries_b[{order[std::size_t(r)], order[std::size_t(it.col())]}] = it.value();
   ASSERT_EQ(entries_a.size(), entries_b.size()) << GetParam();
   double difference = 0;
   for(const auto& [key, value] : entries_a) {
@@ -149,7 +151,8 @@ TEST_P(LibraryOrderIndependence, BalancedFlowAndRefittedNormals)
 {
   Oriented_points a = shape, b = shuffled;
   auto writable = [](Oriented_points& o) {
-    return CGAL::parameters::point_map(CGAL::make_property_map(o.points)).normal_map(CGAL::make_property_map(o.normals));
+    return CGAL::parameters::point_map(CGAL::make_property_map(o.points))
+      .normal_map(CGAL::make_property_map(o.normals));
   };
   std::vector<std::size_t> all = a.indices();
   ASSERT_TRUE(CGAL_ext::balanced_flow_smooth_point_set(all, 10, CGAL_ext::Balanced_flow_settings(), writable(a)));
