@@ -64,8 +64,8 @@ inline double squared_distance(double ax, double ay, double az, double bx, doubl
 /// (squared distance, row): the order in which every search ranks its candidates.
 using Ranked_row = std::pair<double, int>;
 
-/// CGAL's kd-tree over the rows of a position array: nearest-neighbour queries that report row indices under a
-/// rule that depends on the positions and rows alone, never on the tree's inner order (doc/design.md, "One
+/// CGAL's kd-tree over the rows of a position array: nearest-neighbour queries that report row indices, ranked by
+/// (squared distance, row); a closed ball of the k-th nearest depends on the positions alone (doc/design.md, "One
 /// neighbourhood rule").
 class Position_tree
 {
@@ -113,14 +113,8 @@ public:
   void nearest(const Point& query, std::size_t k, const Visit& visit) const
   {
     thread_local std::vector<Ranked_row> found;
-    ranked_nearest(query, k, found);
+    search(query, std::min(k, size()), found);
     for(const Ranked_row& entry : found) visit(entry.second, entry.first);
-  }
-
-  /// `out` = the `min(k, size())` rows nearest to `query` (as `nearest`), in the order (squared distance, row).
-  void ranked_nearest(const Point& query, std::size_t k, std::vector<Ranked_row>& out) const
-  {
-    search(query, std::min(k, size()), out);
   }
 
   /// `out` = the closed ball of row `self`'s k-th nearest other row: every other row whose squared distance is at
@@ -236,8 +230,7 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
     os << ball.size() << " points lie within the distance of the " << k << "-th nearest neighbour of the point ("
        << p.x() << ", " << p.y() << ", " << p.z() << "), (" << tied_with.x() << ", " << tied_with.y() << ", "
        << tied_with.z() << "), all tied at that distance (at most " << k + max_tied_neighbors
-       << " are taken): duplicate points pile up "
-       << "there; remove duplicates first";
+       << " are taken): duplicate points pile up there; remove duplicates first";
     throw Invalid_input(os.str());
   }
   if(tied.empty()) return graph;

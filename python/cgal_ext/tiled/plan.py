@@ -6,12 +6,11 @@ grown by the halo width on every finite side (its "read box").
 
 The check (`certify`) is exact, not a rule of thumb: a point's neighbourhood among the points read (the closed ball
 of its k-th nearest, every point tied at that distance included) is its neighbourhood in the whole scan when the
-k-th of them is closer than the read box's border: a point tied with it that the tile cannot see is at least as
-far as the border, and the point is not certified. Operations that use the
-symmetrised k-nearest-neighbour graph (the Laplacian of the details) also need every point that has the row among
-its own k nearest; such a point outside the read box lies beyond the border, so it cannot exist when the border is
-farther than every k-th-neighbour distance of the points around (`reach`, verified against the neighbouring
-tiles' measured distances after the run).
+k-th of them is closer than the read box's border: a point tied with it that the tile cannot see is at least as far
+as the border, and the point is not certified. Operations that use the symmetrised k-nearest-neighbour graph (the
+Laplacian of the details) also need every point that has the row among its own k nearest; such a point outside the
+read box lies beyond the border, so it cannot exist when the border is farther than every k-th-neighbour distance of
+the points around (`reach`, verified against the neighbouring tiles' measured distances after the run).
 """
 import numpy as np
 from scipy.spatial import cKDTree
