@@ -5,7 +5,7 @@
 1 % duplicates (every distance ties: the rule's slow path). Commands: details, curvature, simplify, edit (the harness's
 raw-scan edit, a region of 0.4 diagonals around the point farthest along x). Writes order_rule_results.md and .csv.
 
-Usage: benchmark/compare_programs.py --baseline BIN --candidate BIN [--reps R] [--out DIR] [--build DIR] [--models M...]
+Usage: benchmark/compare_programs.py --baseline BIN --candidate BIN [--reps R] [--out DIR] [--build DIR] [--models M...] [--commands C...]
 """
 import argparse
 import csv
@@ -49,6 +49,7 @@ def main():
     parser.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
     parser.add_argument("--build", default="build")
     parser.add_argument("--models", nargs="+", default=["armadillo_1M", "lattice_1M"])
+    parser.add_argument("--commands", nargs="+", default=["details", "curvature", "simplify", "edit"])
     args = parser.parse_args()
     rows = []
     os.makedirs(args.out, exist_ok=True)
@@ -69,6 +70,8 @@ def main():
             commands = {"details": ["details"], "curvature": ["curvature"], "simplify": ["simplify"],
                         "edit": ["edit", "--edit", edit]}
             for command, words in commands.items():
+                if command not in args.commands:
+                    continue
                 times = {"baseline": [], "candidate": []}
                 for rep in range(args.reps):
                     for side in (("baseline", "candidate") if rep % 2 == 0 else ("candidate", "baseline")):
