@@ -4,6 +4,8 @@
 // coordinates are multiples of 1/4 in [0, 4), so that distances tie and points coincide often: each row is the
 // brute-force closed ball of its point's k-th nearest, and the same set of points in another order gets the same
 // balls; or a pile of duplicates is refused with Invalid_input, and only then.
+#include "neighborhood_reference.h"
+
 #include <CGAL_ext/internal/Neighbor_graph.h>
 
 #include <CGAL/tags.h>
@@ -18,21 +20,6 @@
 namespace {
 
 using namespace CGAL_ext::internal;
-
-std::vector<int> brute_force_ball(const Matrix_n3& points, std::size_t i, std::size_t k)
-{
-  std::vector<Ranked_row> all;
-  for(Eigen::Index j = 0; j < points.rows(); ++j)
-    if(j != Eigen::Index(i))
-      all.emplace_back(squared_distance(points(Eigen::Index(i), 0), points(Eigen::Index(i), 1),
-                                        points(Eigen::Index(i), 2), points(j, 0), points(j, 1), points(j, 2)),
-                       int(j));
-  std::sort(all.begin(), all.end());
-  std::vector<int> ball;
-  for(const Ranked_row& entry : all)
-    if(entry.first <= all[k - 1].first) ball.push_back(entry.second);
-  return ball;
-}
 
 void check(bool holds)
 {

@@ -1,6 +1,7 @@
 // The neighbour graphs of internal/Neighbor_graph.h against brute force.
 #include <CGAL_ext/internal/Neighbor_graph.h>
 
+#include "neighborhood_reference.h"
 #include "test_support.h"
 
 #include <CGAL/tags.h>
@@ -147,22 +148,6 @@ Matrix_n3 lattice_with_duplicates(std::size_t copies)
   for(int i = 0; i < 16 * 12; ++i) m.row(i) << (i % 16) / 8.0, (i / 16) / 8.0, 0.0;
   for(std::size_t c = 0; c < copies; ++c) m.row(Eigen::Index(16 * 12 + c)) = m.row(Eigen::Index(c * 7 % (16 * 12)));
   return m;
-}
-
-// Every other row within the distance of the k-th nearest other row, by brute force, ranked (distance, row).
-std::vector<int> brute_force_ball(const Matrix_n3& points, std::size_t i, std::size_t k)
-{
-  std::vector<Ranked_row> all;
-  for(Eigen::Index j = 0; j < points.rows(); ++j)
-    if(j != Eigen::Index(i))
-      all.emplace_back(squared_distance(points(Eigen::Index(i), 0), points(Eigen::Index(i), 1),
-                                        points(Eigen::Index(i), 2), points(j, 0), points(j, 1), points(j, 2)),
-                       int(j));
-  std::sort(all.begin(), all.end());
-  std::vector<int> ball;
-  for(const Ranked_row& entry : all)
-    if(entry.first <= all[k - 1].first) ball.push_back(entry.second);
-  return ball;
 }
 
 std::vector<int> random_permutation(std::size_t n, unsigned seed)
