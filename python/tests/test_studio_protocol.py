@@ -10,6 +10,7 @@ import http.client
 import json
 import os
 import pathlib
+import re
 import socket
 import struct
 import threading
@@ -726,3 +727,20 @@ def test_a_link_swapped_while_the_session_reads_never_reads_outside(tmp_path):
         stop.set()
         swapper.join()
     assert loaded > 0 and edits > 0  # reads through the link while it pointed inside are served
+
+
+# ---- the command table against the manual -------------------------------------------------------------------------
+
+def documented_commands():
+    """The command names doc/studio.md's "Protocol" section lists: its bullets "- `NAME`" under "Commands"."""
+    manual = (pathlib.Path(__file__).parents[2] / "doc" / "studio.md").read_text()
+    section = manual.split("\n## Protocol\n", 1)[1].split("\n## ", 1)[0]
+    commands = section.split("\nCommands", 1)[1].split("\nMessages", 1)[0]
+    return re.findall(r"^- `([a-z_]+)`", commands, re.MULTILINE)
+
+
+def test_the_command_table_is_the_manuals_list():
+    from cgal_ext.studio.server import COMMANDS
+    listed = documented_commands()
+    assert len(listed) == len(set(listed)), listed
+    assert sorted(listed) == sorted(COMMANDS), (sorted(set(listed) ^ set(COMMANDS)))

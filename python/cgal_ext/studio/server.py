@@ -10,75 +10,19 @@ import asyncio
 import collections
 import functools
 import hmac
-import json
 import pathlib
 import secrets
-import struct
 import traceback
 
 import numpy as np
 from aiohttp import WSCloseCode, WSMsgType, web
 
-import cgal_ext
-
-from .session import FIXED, Session, StudioError
+from .codec import MAX_BINARY, MAX_HEADER, MAX_TEXT, pack, parse, unpack  # noqa: F401 (unpack: the codec's API)
+from .session import FIXED, LABEL_CODES, MAX_GROUPS, Session, StudioError
 
 STATIC = pathlib.Path(__file__).with_name("static")
 THREE = pathlib.Path("/usr/share/javascript/three")  # Debian's libjs-three
-MAX_TEXT = 1 << 20           # a JSON command
-MAX_BINARY = 64 << 20        # a selection of up to 16M indices
-MAX_HEADER = 4096
 MAX_QUEUED = 64              # commands read ahead of the one being handled (drags merged into them)
-
-
-def pack(header, arrays=()):
-    """A binary frame: header (a dict; the arrays' names, dtypes, shapes and offsets added) and arrays."""
-    arrays = [(name, np.ascontiguousarray(a)) for name, a in arrays]
-    listed, offset = [], 0
-    for name, a in arrays:
-        listed.append({"name": name, "dtype": a.dtype.str, "shape": list(a.shape), "offset": offset})
-        offset += (a.nbytes + 3) // 4 * 4
-    text = json.dumps(dict(header, arrays=listed)).encode()
-    text += b" " * (-len(text) % 4)
-    parts = [struct.pack("<I", len(text)), text]
-    for _, a in arrays:
-        parts += [a.tobytes(), b"\0" * (-a.nbytes % 4)]
-    return b"".join(parts)
-
-
-def unpack(data):
-    """The header and the one uint32 array of a binary frame from the page, checked; StudioError otherwise."""
-    if len(data) < 4:
-        raise StudioError("a binary message shorter than its header length")
-    (length,) = struct.unpack_from("<I", data)
-    if length > MAX_HEADER or 4 + length > len(data) or length % 4:
-        raise StudioError("a binary message with a bad header length (%d)" % length)
-    try:
-        header = json.loads(data[4:4 + length])
-    except (ValueError, UnicodeDecodeError, RecursionError):
-        raise StudioError("a binary message whose header is not JSON")
-    if not isinstance(header, dict) or not isinstance(header.get("count"), int) or header["count"] < 0:
-        raise StudioError("a binary message's header needs a count")
-    payload = data[4 + length:]
-    if len(payload) != 4 * header["count"]:
-        raise StudioError("a binary message of %d bytes for %d indices" % (len(payload), header["count"]))
-    return header, np.frombuffer(payload, "<u4")
-
-
-def parse(message):
-    """A command from a WebSocket message, checked as far as its form goes; StudioError otherwise."""
-    if message.type == WSMsgType.TEXT:
-        if len(message.data) > MAX_TEXT:
-            raise StudioError("a command of %d bytes; commands are JSON of at most %d bytes" %
-                              (len(message.data), MAX_TEXT))
-        try:
-            return json.loads(message.data)
-        except ValueError:
-            raise StudioError("a command that is not JSON")
-        except RecursionError:
-            raise StudioError("a command nested too deeply to be a command")
-    header, indices = unpack(message.data)
-    return dict(header, indices=indices)
 
 
 def is_drag(command):
@@ -151,11 +95,24 @@ class Studio:
         host = request.headers.get("Host", "").lower()
         return host in ("127.0.0.1:%d" % self.port, "localhost:%d" % self.port, "[::1]:%d" % self.port)
 
+    def cookie_name(self):
+        # Per port: cookies ignore the port, and two studios on one machine must not overwrite each other's.
+        return "cgal_ext_studio_%d" % self.port
+
+    def cookie_authorised(self, request):
+        """The page's own static files only: ES modules import each other by plain URLs, which cannot carry the
+        token; the page's response set it as an HttpOnly, SameSite=Strict cookie. The page and the WebSocket
+        still need the token in the URL."""
+        if not request.path.startswith(("/static/", "/three/")):
+            return False
+        given = request.cookies.get(self.cookie_name(), "").encode("utf-8", "surrogatepass")
+        return hmac.compare_digest(given, self.token.encode())
+
     @web.middleware
     async def require_token(self, request, handler):
         if not self.host_allowed(request):
             return web.Response(status=421, text="421: this studio answers only at 127.0.0.1:%d\n" % self.port)
-        if not self.authorised(request):
+        if not (self.authorised(request) or self.cookie_authorised(request)):
             return web.Response(status=403, text="403: this studio needs its session token (the URL it printed)\n")
         return await handler(request)
 
@@ -172,7 +129,9 @@ class Studio:
 
     async def index(self, request):
         page = (STATIC / "index.html").read_text().replace("{{TOKEN}}", self.token)
-        return web.Response(text=page, content_type="text/html", headers={"Cache-Control": "no-store"})
+        response = web.Response(text=page, content_type="text/html", headers={"Cache-Control": "no-store"})
+        response.set_cookie(self.cookie_name(), self.token, path="/", httponly=True, samesite="Strict")
+        return response
 
     async def static(self, request, folder):
         name = request.match_info["name"]
@@ -264,13 +223,13 @@ class Studio:
             await self.error(ws, "a command is a JSON object with a type")
             return
         kind = command["type"]
-        handler = getattr(self, "on_" + kind, None)
+        handler = COMMANDS.get(kind)
         if handler is None:
             await self.error(ws, "unknown command %r" % kind[:40])
             return
         async with self.lock:
             try:
-                await handler(ws, command)
+                await handler(self, ws, command)
             except StudioError as error:
                 await self.error(ws, str(error), **error.details)
             except (TypeError, KeyError, ValueError) as error:
@@ -289,7 +248,8 @@ class Studio:
                   ("labels", s.labels)]
         if s.shown_points is not s.points and not np.array_equal(s.shown_points, s.points):
             arrays += [("rest", s.points.astype("<f4")), ("rest_normals", s.normals.astype("<f4"))]
-        await ws.send_bytes(pack({"type": "geometry", "scan": s.scan}, arrays))
+        await ws.send_bytes(pack({"type": "geometry", "scan": s.scan, "label_codes": LABEL_CODES,
+                                  "max_groups": MAX_GROUPS}, arrays))
 
     async def on_load(self, ws, command):
         await self.run(self.session.load, command["path"], progress=self.progress_reporter(ws, "normals"))
@@ -378,28 +338,8 @@ class Studio:
         await self.send_state(ws)
 
     async def on_colors(self, ws, command):
-        s = self.session
         by = command.get("by")
-        if s.points is None:
-            raise StudioError("open a scan first")
-        if by in ("relief", "magnitude"):
-            details = await self.run(cgal_ext.compute_geometric_details, s.shown_points, s.shown_normals,
-                                     order="cubic")
-            magnitude = details.magnitude
-            colors = cgal_ext.diverging_colors(magnitude) if by == "relief" else \
-                cgal_ext.sequential_colors(np.abs(magnitude))
-        elif by == "curvature":
-            curvature = await self.run(cgal_ext.estimate_mean_curvature, s.shown_points, s.shown_normals)
-            colors = cgal_ext.diverging_colors(curvature)
-        elif by == "clusters":
-            if s.deformation is None:
-                raise StudioError("the sample-point clusters exist once the edit is preprocessed")
-            labels = s.deformation.sample_point_of(np.ones(len(s.points), bool)).astype(np.uint64)
-            mixed = (labels * np.uint64(2654435761)) % np.uint64(1 << 24)
-            colors = np.stack([(mixed >> np.uint64(16)) & np.uint64(255), (mixed >> np.uint64(8)) & np.uint64(255),
-                               mixed & np.uint64(255)], axis=1).astype(np.uint8) // 2 + 96
-        else:
-            raise StudioError("colour by relief, magnitude, curvature or clusters, not %r" % by)
+        colors = await self.run(self.session.colors, by)
         await ws.send_bytes(pack({"type": "colors", "by": by}, [("colors", colors)]))
 
     async def on_save(self, ws, command):
@@ -410,6 +350,29 @@ class Studio:
     async def on_load_edit(self, ws, command):
         self.session.load_edit(command.get("path"))
         await self.send_labels(ws)
+
+
+# The commands a tab may send, by their "type": the only way from a message to code (doc/studio.md, "Protocol",
+# lists the same names; a test compares them).
+COMMANDS = {
+    "state": Studio.on_state,
+    "load": Studio.on_load,
+    "labels": Studio.on_labels,
+    "select": Studio.on_select,
+    "new_group": Studio.on_new_group,
+    "invert": Studio.on_invert,
+    "clear": Studio.on_clear,
+    "settings": Studio.on_settings,
+    "preprocess": Studio.on_preprocess,
+    "drag": Studio.on_drag,
+    "release": Studio.on_release,
+    "undo": Studio.on_undo,
+    "redo": Studio.on_redo,
+    "details": Studio.on_details,
+    "colors": Studio.on_colors,
+    "save": Studio.on_save,
+    "load_edit": Studio.on_load_edit,
+}
 
 
 def make_app(studio):

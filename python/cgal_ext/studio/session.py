@@ -17,8 +17,12 @@ import numpy as np
 
 import cgal_ext
 
+# A point's label: fixed, in the region, or a handle of group g (FIRST_HANDLE + g). The page gets these codes and
+# the group limit in the geometry's header instead of spelling them itself.
 FIXED, ROI, FIRST_HANDLE = 0, 1, 2
+LABEL_CODES = {"fixed": FIXED, "roi": ROI, "first_handle": FIRST_HANDLE}
 MAX_GROUPS = 8  # the page's shader holds this many handle transforms
+COLOURINGS = ("relief", "magnitude", "curvature", "clusters")
 ORDERS = ("linear", "quadric", "cubic")
 ROTATIONS = ("propagate", "arap")  # as the edit JSON and the Python package spell them
 STRENGTHS = ("euclidean", "geodesic")
@@ -668,6 +672,33 @@ class Session:
         return roi, handle_files, settings
 
     # ---- what the page shows ----------------------------------------------------------------------------------
+
+    def colors(self, by):
+        """Per-point colours (uint8 RGB) of the shown state: its relief, detail magnitude, mean curvature, or the
+        sample-point clusters of the prepared edit."""
+        self._require_scan()
+        if by not in COLOURINGS:
+            raise StudioError("colour by relief, magnitude, curvature or clusters, not %r" % (by,))
+        if by == "clusters" and self.deformation is None:
+            raise StudioError("the sample-point clusters exist once the edit is preprocessed")
+        try:
+            if by in ("relief", "magnitude"):
+                magnitude = cgal_ext.compute_geometric_details(self.shown_points, self.shown_normals,
+                                                               order="cubic").magnitude
+                return cgal_ext.diverging_colors(magnitude) if by == "relief" else \
+                    cgal_ext.sequential_colors(np.abs(magnitude))
+            if by == "curvature":
+                return cgal_ext.diverging_colors(cgal_ext.estimate_mean_curvature(self.shown_points,
+                                                                                  self.shown_normals))
+        except (ValueError, RuntimeError) as error:
+            raise StudioError(str(error))
+        # Each cluster a colour of its own, from a multiplicative hash of its sample point's index, kept mid-bright.
+        labels = self.deformation.sample_point_of(np.ones(len(self.points), bool)).astype(np.uint64)
+        mixed = (labels * np.uint64(2654435761)) % np.uint64(1 << 24)
+        return np.stack([(mixed >> np.uint64(16)) & np.uint64(255), (mixed >> np.uint64(8)) & np.uint64(255),
+                         mixed & np.uint64(255)], axis=1).astype(np.uint8) // 2 + 96
+
+    # ---- the state --------------------------------------------------------------------------------------------
 
     def state(self):
         return {"scan": self.scan, "points": None if self.points is None else len(self.points),
