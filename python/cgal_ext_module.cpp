@@ -9,10 +9,13 @@
 // exception it raises (or Ctrl-C) cancels the computation and is raised.
 #include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/compute_geometric_details.h>
+#include <CGAL_ext/compute_neighbor_graph.h>
 #include <CGAL_ext/compute_simplification_sample_points.h>
+#include <CGAL_ext/detect_sparse_directions.h>
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/estimate_oriented_normals.h>
+#include <CGAL_ext/refit_normals.h>
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
@@ -192,17 +195,48 @@ PYBIND11_MODULE(_core, m)
   const Upsampling_settings upsampling;
   m.def("upsample_point_set", &bound_upsample_point_set, "points"_a, "normals"_a, py::kw_only(),
         "spacing"_a = upsampling.detection.spacing, "max_hole_size"_a = upsampling.detection.max_hole_size,
-        "k"_a = upsampling.neighbors, "roi"_a = py::none(), "progress"_a = py::none(),
+        "k"_a = upsampling.neighbors, "roi"_a = py::none(), "spacing_before"_a = py::none(), "progress"_a = py::none(),
         doc("New samples that fill the holes and sparse parts of an oriented point set (doc/upsampling.md).",
-            {points_doc, "normals : (n, 3) array_like\n    Unit normals (required: the holes and the new samples' surface "
+            {points_doc,
+             "normals : (n, 3) array_like\n    Unit normals (required: the holes and the new samples' surface "
              "come from them).",
              "spacing : float\n    The spacing of the new samples; 0: each point's local spacing.",
              "max_hole_size : float\n    The widest hole filled, in spacings.",
              "k : int\n    Neighbours of the principal axes and of the local surface fits (at least 6).",
              "roi : array_like of int or bool, optional\n    Only holes next to these points are filled.",
+             "spacing_before : (n,) array_like, optional\n    Each point's local spacing before an edit "
+             "(local_spacing of the points it started from; needs roi): the gaps are measured against it, so that only "
+             "what the edit stretched is filled (point-detail edit --upsample).",
              progress_doc},
             "Upsampled\n    (points (m, 3), normals (m, 3)), the new samples only.")
           .c_str());
+  m.def(
+    "compute_neighbor_graph", &bound_compute_neighbor_graph, "points"_a, py::kw_only(), "k"_a = 10,
+    "progress"_a = py::none(),
+    doc("The neighbourhoods every function of the package uses: each point's closed ball of its k-th nearest other "
+        "point (exactly k points, more where points tie at that distance), whatever the order of the points "
+        "(doc/design.md, \"One neighbourhood rule\").",
+        {points_doc, "k : int\n    Neighbours of a point, itself not counted (fewer than the points).", progress_doc},
+        "tuple\n    (offsets (n + 1,), neighbors (m,)), int64: the neighbours of point i are "
+        "neighbors[offsets[i]:offsets[i + 1]], nearest first.")
+      .c_str());
+  m.def(
+    "compute_local_spacing", &bound_compute_local_spacing, "points"_a,
+    doc("Each point's local spacing: the median, over the point and its 15 nearest neighbours, of their mean distance "
+        "to their 6 nearest (doc/upsampling.md).",
+        {points_doc}, "numpy.ndarray\n    (n,) float64.")
+      .c_str());
+  m.def(
+    "refit_normals", &bound_refit_normals, "points"_a, "normals"_a, "moved"_a, py::kw_only(),
+    "k"_a = default_normal_neighbors,
+    doc("The normals re-fitted where points moved (after scale_geometric_details or enhance_geometric_details, as "
+        "point-detail scale does): each moved point's normal and its neighbours' from a degree-2 fit, on the side of "
+        "the old normal; the others kept (doc/detail_scaling.md).",
+        {points_doc, "normals : (n, 3) array_like\n    The normals before the points moved.",
+         "moved : array_like of int or bool\n    The points that moved (indices or a mask).",
+         "k : int\n    Neighbours of a fit (at least 5)."},
+        "numpy.ndarray\n    (n, 3) float64, a new array.")
+      .c_str());
 
   m.def("read_points", &read_points, "path"_a,
         doc("Reads a PLY, OFF, XYZ or PWN point set with the point-detail program's readers: the header is checked "

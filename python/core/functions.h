@@ -150,8 +150,8 @@ Ndarray bound_compute_simplification_sample_points(const Array_like& points, con
 }
 
 Upsampled_result bound_upsample_point_set(const Array_like& points, const Array_like& normals, double spacing,
-                                    double max_hole_size, long long k, const Optional_array_like& roi,
-                                    const Optional_progress& progress)
+                                          double max_hole_size, long long k, const Optional_array_like& roi,
+                                          const Optional_array_like& spacing_before, const Optional_progress& progress)
 {
   if(normals.is_none())
     throw py::value_error("normals are required: hole detection and the new samples' surface come from them");
@@ -163,14 +163,21 @@ Upsampled_result bound_upsample_point_set(const Array_like& points, const Array_
   const Point_input input(points, normals);
   const std::size_t n = input.size();
   const std::vector<std::size_t> region = roi.is_none() ? std::vector<std::size_t>() : indices(roi, n, "roi");
+  if(!spacing_before.is_none() && roi.is_none())
+    throw py::value_error("spacing_before needs roi: the points whose spacing before an edit it gives");
+  std::vector<double> before =
+    spacing_before.is_none() ? std::vector<double>() : values_of(spacing_before, n, "spacing_before");
   std::vector<std::pair<Point, Vector>> added;
   Python_progress reporter(progress);
   const auto result = with_maps(input, [&](const auto& np) {
     return without_gil([&] {
-      return roi.is_none()
-               ? CGAL_ext::upsample_point_set(all_points(n), settings, std::back_inserter(added), np.callback(reporter.callback()))
-               : CGAL_ext::upsample_point_set(all_points(n), region, settings, std::back_inserter(added),
-                                              np.callback(reporter.callback()));
+      const auto with_callback = np.callback(reporter.callback());
+      if(roi.is_none())
+        return CGAL_ext::upsample_point_set(all_points(n), settings, std::back_inserter(added), with_callback);
+      if(before.empty())
+        return CGAL_ext::upsample_point_set(all_points(n), region, settings, std::back_inserter(added), with_callback);
+      return CGAL_ext::upsample_point_set(all_points(n), region, Array_map<double>{before.data()}, settings,
+                                          std::back_inserter(added), with_callback);
     });
   });
   reporter.raise_if_cancelled(result.completed);
@@ -181,6 +188,54 @@ Upsampled_result bound_upsample_point_set(const Array_like& points, const Array_
     put(Rows3_map<Vector>{normals_view}, m, added[m].second);
   }
   return py::reinterpret_borrow<py::object>(result_types.upsampled)(new_points, new_normals);
+}
+
+py::tuple bound_compute_neighbor_graph(const Array_like& points, long long k, const Optional_progress& progress)
+{
+  const Point_input input(points, py::none());
+  const std::size_t n = input.size();
+  Python_progress reporter(progress);
+  const CGAL_ext::Neighbor_lists lists = with_maps(input, [&](const auto& np) {
+    return without_gil([&] {
+      return CGAL_ext::compute_neighbor_graph(all_points(n), as_count(k, "k"), np.callback(reporter.callback()));
+    });
+  });
+  reporter.raise_if_cancelled(lists.offsets.size() == n + 1);
+  py::array_t<std::int64_t> offsets(static_cast<py::ssize_t>(lists.offsets.size()));
+  py::array_t<std::int64_t> neighbors(static_cast<py::ssize_t>(lists.neighbors.size()));
+  std::copy(lists.offsets.begin(), lists.offsets.end(), offsets.mutable_data());
+  std::copy(lists.neighbors.begin(), lists.neighbors.end(), neighbors.mutable_data());
+  return py::make_tuple(offsets, neighbors);
+}
+
+py::array_t<double> bound_compute_local_spacing(const Array_like& points)
+{
+  const Point_input input(points, py::none());
+  const std::size_t n = input.size();
+  py::array_t<double> spacing(static_cast<py::ssize_t>(n));
+  const Array_map<double> spacing_map{spacing.mutable_data()};
+  with_maps(input, [&](const auto& np) {
+    return without_gil([&] { return CGAL_ext::compute_local_spacing(all_points(n), spacing_map, np); });
+  });
+  return spacing;
+}
+
+Ndarray bound_refit_normals(const Array_like& points, const Array_like& normals, const Array_like& moved, long long k)
+{
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  const std::vector<std::size_t> refit = indices(moved, n, "moved");
+  auto [out, out_rows] = new_rows3(n);
+  for(std::size_t i = 0; i < n; ++i)
+    for(int c = 0; c < 3; ++c) out_rows.at(i, c) = input.normal_rows.at(i, c);
+  const unsigned int neighbors = as_count(k, "k");
+  if(!refit.empty())
+    without_gil([&, out_rows = out_rows] {
+      return CGAL_ext::refit_normals(
+        all_points(n), refit, neighbors,
+        CGAL::parameters::point_map(Rows3_map<Point>{input.point_rows}).normal_map(Rows3_map<Vector>{out_rows}));
+    });
+  return out;
 }
 
 // ---- files and pictures -----------------------------------------------------------------------------------------

@@ -110,6 +110,68 @@ def test_upsampling_is_the_programs(sphere, tmp_path):
     assert_close(added_normals, normals_of(out)[new])
 
 
+def test_scaled_normals_are_the_programs(sphere, sphere_file, tmp_path):
+    # point-detail scale re-fits the normals where points moved: scale_geometric_details then refit_normals.
+    points, normals = sphere
+    roi = np.flatnonzero(points[:, 2] > 0.5)
+    (tmp_path / "roi.txt").write_text("\n".join(map(str, roi)) + "\n")
+    run_program("scale", "-i", sphere_file, "-o", tmp_path / "scaled.ply", "-s", 0, "--roi", "indices:%s" % (tmp_path / "roi.txt"))
+    flat = cgal_ext.scale_geometric_details(points, normals, roi=roi, s=0.0)
+    moved = np.flatnonzero((flat != points).any(axis=1))
+    refitted = cgal_ext.refit_normals(flat, normals, moved)
+    assert_close(refitted, normals_of(read_ply(tmp_path / "scaled.ply")))
+    changed = (refitted != normals).any(axis=1)
+    assert changed[moved].all() and not changed[points[:, 2] < 0.0].any()  # far from the region: kept
+    assert np.array_equal(cgal_ext.refit_normals(flat, normals, []), normals)
+
+
+def test_the_neighbor_graph_is_the_closed_ball_of_the_kth_nearest(tmp_path):
+    # A lattice with duplicates: many ties at the k-th distance; each row is every point within it, whatever the order.
+    g = np.arange(12, dtype=float)
+    lattice = np.stack(np.meshgrid(g, g, [0.0, 1.0], indexing="ij"), -1).reshape(-1, 3)
+    points = np.vstack([lattice, lattice[::17]])
+    k = 10
+    offsets, neighbors = cgal_ext.compute_neighbor_graph(points, k=k)
+    assert offsets.dtype == np.int64 and offsets[0] == 0 and offsets[-1] == len(neighbors)
+    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(-1)
+    np.fill_diagonal(d2, np.inf)
+    for i in range(len(points)):
+        kth = np.sort(d2[i])[k - 1]
+        row = neighbors[offsets[i]:offsets[i + 1]]
+        assert set(row) == set(np.flatnonzero(d2[i] <= kth))
+        assert np.all(np.diff(d2[i][row]) >= 0)  # nearest first
+    order = np.random.default_rng(3).permutation(len(points))
+    o2, n2 = cgal_ext.compute_neighbor_graph(points[order], k=k)
+    for a, i in enumerate(order[:200]):
+        assert set(order[n2[o2[a]:o2[a + 1]]]) == set(neighbors[offsets[i]:offsets[i + 1]])
+    with pytest.raises(ValueError, match="k = 0"):
+        cgal_ext.compute_neighbor_graph(points, k=0)
+
+
+def test_upsampling_after_an_edit_is_the_programs(sphere, sphere_file, tmp_path):
+    # point-detail edit --upsample fills what the edit moved, at the spacing the points had before it.
+    points, normals = sphere
+    status = np.where(points[:, 2] > 0.8, 2, np.where(points[:, 2] > 0.0, 1, 0))
+    (tmp_path / "e.sel").write_text("\n".join(map(str, status)) + "\n")
+    (tmp_path / "e.def").write_text("1 0 0 0\n0 1 0 0\n0 0 1 0.6\n0 0 0 1\n")
+    run_program("edit", "-i", sphere_file, "-o", tmp_path / "edited.ply", "--sel", tmp_path / "e.sel",
+                "--def", tmp_path / "e.def", "--upsample")
+    out = read_ply(tmp_path / "edited.ply")
+    new = out["inserted"] == 1
+    assert new.sum() > 10
+    edited, edited_normals = xyz(out)[~new], normals_of(out)[~new]
+    moved = np.flatnonzero(out["displacement"][~new] > 0)
+    spacing = cgal_ext.compute_local_spacing(points)
+    assert np.all(spacing > 0) and np.median(spacing) < 0.2
+    added, added_normals = cgal_ext.upsample_point_set(edited, edited_normals, roi=moved, spacing_before=spacing)
+    assert_close(added, xyz(out)[new])
+    assert_close(added_normals, normals_of(out)[new])
+    with pytest.raises(ValueError, match="spacing_before needs roi"):
+        cgal_ext.upsample_point_set(edited, edited_normals, spacing_before=spacing)
+    with pytest.raises(ValueError, match="spacing_before must have one value per point"):
+        cgal_ext.upsample_point_set(edited, edited_normals, roi=moved, spacing_before=spacing[:-1])
+
+
 @pytest.mark.parametrize("options, settings", [
     ((), {}),
     (("--diffusion-turn", "frames", "--diffusion-origin", "nearest"), {"diffusion_turn": "frames", "diffusion_origin": "nearest"}),
