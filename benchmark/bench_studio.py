@@ -94,7 +94,7 @@ def browser_costs(folder, name, frame_seconds):
             wait_for(driver, "studio.state.region >= %d" % (len(region) if target == "roi" else 1), timeout=120)
         painting = time.perf_counter()
         driver.execute_script("send({type: 'preprocess'})")
-        wait_for(driver, "studio.renderer && studio.state.preprocessed", timeout=600)
+        wait_for(driver, "studio.prepared && studio.state.preprocessed", timeout=600)
         preprocessed = time.perf_counter() - painting
         driver.execute_script("studio.continuous = true; studio.requestRender()")
         time.sleep(1)

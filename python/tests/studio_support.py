@@ -105,7 +105,7 @@ def pointer_path(driver, path, press=True, release=True, pause=0.03):
 def screen_box(driver):
     """The model's bounding box on the screen, viewport pixels: x0, x1, y0, y1."""
     return driver.execute_script("""
-      const s = projectAll(), r = document.getElementById('canvas').getBoundingClientRect();
+      const s = studio.projectAll(), r = document.getElementById('canvas').getBoundingClientRect();
       let b = [1e9, -1e9, 1e9, -1e9];
       for (let i = 0; i < studio.n; ++i) {
         b[0] = Math.min(b[0], s[2 * i]); b[1] = Math.max(b[1], s[2 * i]);

@@ -42,43 +42,91 @@ def click(driver, element_id):
     driver.find_element("id", element_id).click()
 
 
+def rings(points, seeds, count, within=None, k=10):
+    """The points within `count` rings of `seeds` over the k-nearest-neighbour graph (as a mask), walking only
+    through `within` when given."""
+    from scipy.spatial import cKDTree
+    _, neighbours = cKDTree(points).query(points, k + 1)
+    reached = seeds.copy()
+    for _ in range(count):
+        grown = reached.copy()
+        grown[neighbours[reached].ravel()] = True
+        if within is not None:
+            grown &= within | seeds
+        reached = grown
+    return reached
+
+
+def test_the_page_cookie_opens_its_static_files_only(page):
+    """ES modules import each other by plain URLs: the page's response sets the token as a cookie, which opens the
+    static files and nothing else (the page and the WebSocket need the token in the URL)."""
+    import urllib.error
+    import urllib.request
+    server, driver = page
+    response = urllib.request.urlopen(server.url)
+    cookie = response.headers["Set-Cookie"]
+    assert "cgal_ext_studio_%d=" % server.port in cookie and "HttpOnly" in cookie and "SameSite=Strict" in cookie
+    jar = {"Cookie": cookie.split(";")[0]}
+    for path in ("/static/main.js", "/static/view.js", "/three/build/three.module.js"):
+        assert urllib.request.urlopen(urllib.request.Request(server.base + path, headers=jar)).status == 200
+    for path in ("/", "/ws", "/static/main.js"):
+        headers = {} if path == "/static/main.js" else jar
+        with pytest.raises(urllib.error.HTTPError) as error:
+            urllib.request.urlopen(urllib.request.Request(server.base + path, headers=headers))
+        assert error.value.code == 403, path
+    wrong = {"Cookie": "cgal_ext_studio_%d=wrong" % server.port}
+    with pytest.raises(urllib.error.HTTPError) as error:
+        urllib.request.urlopen(urllib.request.Request(server.base + "/static/main.js", headers=wrong))
+    assert error.value.code == 403
+
+
 def test_paint_drag_save_matches_the_program(page, scan):
     server, driver = page
     wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", what="the scan")
     shot(driver, "1_opened")
     points = cgal_ext.read_points(scan).points
     diagonal = np.linalg.norm(points.max(0) - points.min(0))
+    # The view starts upright: z (the tentacle's axis at its base) up on the screen, the base at the bottom.
+    assert driver.execute_script("return studio.view.up") == "+z"
+    base, top = (driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(p))
+                 for p in (points[np.argmin(points[:, 2])], points[np.argmax(points[:, 2])]))
+    assert top[1] < base[1] - 200
 
-    # The region: a lasso around the upper part of the tentacle (z up on the screen), half of its points.
+    # The region: the upper half of the tentacle, a lasso above the middle's height with X-ray on (through the
+    # model: the far side of the upper half too).
     x0, x1, y0, y1 = screen_box(driver)
     z_cut = np.quantile(points[:, 2], 0.5)
     cut = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(points.mean(0)[:2].tolist() + [z_cut]))[1]
     click(driver, "tool-lasso")
     click(driver, "paint-roi")
+    click(driver, "xray")
     pointer_path(driver, [(x0 - 20, y0 - 20), (x1 + 20, y0 - 20), (x1 + 20, cut), (x0 - 20, cut), (x0 - 20, y0 - 19)])
     wait_for(driver, "studio.state.region > 0", what="the region")
     region = driver.execute_script("return studio.state.region")
     assert 0.3 * len(points) < region < 0.7 * len(points)
 
-    # A handle group painted with the brush over the tip.
+    # A handle group painted with the brush over the tip (the end of the tentacle, farthest from its base).
     click(driver, "new-group")
     wait_for(driver, "studio.state.groups === 1", what="the handle group")
     click(driver, "tool-brush")
-    driver.execute_script("document.getElementById('brush-size').value = 40")
-    tip = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(points[np.argmax(points[:, 2])].tolist()))
-    pointer_path(driver, [(tip[0] - 20, tip[1] + 10), (tip[0], tip[1] + 10), (tip[0] + 20, tip[1] + 10)])
+    driver.execute_script("document.getElementById('brush-size').value = 30")
+    tip = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(points[np.argmin(points[:, 0])].tolist()))
+    pointer_path(driver, [(tip[0] + 10, tip[1] - 15), (tip[0] + 10, tip[1]), (tip[0] + 10, tip[1] + 15)])
     wait_for(driver, "studio.labels && studio.labels.some(l => l === 2)", what="the handle")
+    click(driver, "xray")
     labels = np.array(driver.execute_script("return Array.from(studio.labels)"))
     handle = labels == 2
     assert 100 < handle.sum() < 0.2 * region
+    # The handle lies in the region's movable part, away from the fixed part: the edit bends the region.
+    assert (labels[rings(points, handle, 3)] != 0).all()
     shot(driver, "2_painted")
 
-    # Edit: preprocess, then drag the gizmo's centre 100 px up and 60 px left.
+    # Edit: preprocess, then drag the gizmo's centre 130 px right and 50 px up (the tentacle straightens).
     click(driver, "tool-orbit")
     click(driver, "edit-start")
-    wait_for(driver, "studio.renderer && studio.state.preprocessed", what="the preprocessing")
+    wait_for(driver, "studio.prepared && studio.state.preprocessed", what="the preprocessing")
     px, py = driver.execute_script("return studio.pivotScreen()")
-    path = [(px, py)] + [(px - 0.6 * t, py - t) for t in range(5, 101, 5)]
+    path = [(px, py)] + [(px + 1.3 * t, py - 0.5 * t) for t in range(5, 101, 5)]
     pointer_path(driver, path, release=False)
     wait_for(driver, "studio.framesReceived > 0 && !studio.inFlight && !studio.pending", what="the drag's frames")
     shot(driver, "3_dragging")
@@ -113,11 +161,31 @@ def test_paint_drag_save_matches_the_program(page, scan):
     for field in ("status", "ssp_index"):
         assert np.array_equal(saved[field], program[field])
     # The handle points sit where the drag put them: the page's last transform.
-    R, t = np.array(edit["handles"][0]["matrix"]), np.array(edit["handles"][0]["translation"])
+    step = edit["steps"][-1] if "steps" in edit else edit
+    R, t = np.array(step["handles"][0]["matrix"]), np.array(step["handles"][0]["translation"])
     T = _rigid(matrix)
     assert np.abs(R - T[:3, :3]).max() < 1e-9 and np.abs(t - T[:3, 3]).max() < 1e-9 * diagonal
     assert np.abs(xyz(saved)[handle] - (points[handle] @ T[:3, :3].T + T[:3, 3])).max() < 1e-9 * diagonal
     assert not (folder / "tentacle.ply.tmp").exists() and cgal_ext.read_points(scan).points.shape == points.shape
+
+    # The region bends: its points within a few rings of the handle follow at least half of the handle's motion,
+    # and no 10-nearest-neighbour edge of the region outside the handle's collar stretches more than 3 times.
+    moved = xyz(saved) - points
+    motion = T[:3, 3]
+    in_region = labels != 0
+    near = rings(points, handle, 3, within=in_region) & ~handle
+    follow = moved[near] @ motion / (motion @ motion)
+    assert near.sum() > 100 and follow.min() >= 0.5, (near.sum(), follow.min())
+    from scipy.spatial import cKDTree
+    _, neighbours = cKDTree(points).query(points, 11)
+    collar = rings(points, handle, 3)
+    rows = np.flatnonzero(in_region & ~collar)
+    i, j = np.repeat(rows, 10), neighbours[rows, 1:].ravel()
+    keep = in_region[j] & ~collar[j]
+    i, j = i[keep], j[keep]
+    after, before = np.linalg.norm(xyz(saved)[i] - xyz(saved)[j], axis=1), np.linalg.norm(points[i] - points[j], axis=1)
+    stretch = after / np.maximum(before, 1e-12)
+    assert stretch.max() <= 3, (stretch.max(), np.quantile(stretch, 0.99))
 
 
 def test_undo_returns_the_input_and_details_match_the_program(page, scan):
@@ -151,7 +219,8 @@ def test_undo_returns_the_input_and_details_match_the_program(page, scan):
     driver.find_element("id", "save-name").send_keys("scaled")
     click(driver, "save")
     wait_for(driver, "studio.lastSaved", what="the save")
-    run_program("scale", "-i", scan, "--roi", "indices:%s" % (folder / "undone.roi.txt"), "-s", 2,
+    roi = next(folder / name for name in ("undone.step0.roi.txt", "undone.roi.txt") if (folder / name).exists())
+    run_program("scale", "-i", scan, "--roi", "indices:%s" % roi, "-s", 2,
                 "-o", folder / "program_scaled.ply")
     diagonal = np.linalg.norm(points.max(0) - points.min(0))
     scaled = xyz(read_ply(folder / "scaled.ply"))
@@ -190,6 +259,81 @@ def test_saving_over_a_file_the_session_did_not_write_asks_first(page, scan):
     saved = wait_for(driver, "studio.lastSaved", what="the save")
     assert "taken.ply" in saved
     assert cgal_ext.read_points(taken).points.shape == cgal_ext.read_points(scan).points.shape
+
+
+def seen_from(driver, points):
+    """Each point's view depth and viewport position, the pixels per world unit at depth 1, the eye."""
+    c = driver.execute_script("return studio.cameraMatrices()")
+    V, P = np.array(c["view"]).reshape(4, 4).T, np.array(c["projection"]).reshape(4, 4).T
+    clip = np.c_[points, np.ones(len(points))] @ (P @ V).T
+    depth = clip[:, 3]
+    screen = np.c_[(clip[:, 0] / depth * 0.5 + 0.5) * c["width"], (0.5 - clip[:, 1] / depth * 0.5) * c["height"]]
+    eye = np.linalg.inv(V)[:3, 3]
+    return depth, screen, P[1, 1] * c["height"] / 2, eye
+
+
+def first_hits(points, spacing, depth, screen, per_unit, rows):
+    """For each of `rows`, the view depth where its ray first meets the scan: the nearest point whose disc of
+    its local spacing's diameter the ray crosses."""
+    from scipy.spatial import cKDTree
+    tree = cKDTree(screen)
+    reach = (0.5 * spacing * per_unit / depth).max()
+    hits = np.empty(len(rows))
+    for k, i in enumerate(rows):
+        near = np.array(tree.query_ball_point(screen[i], reach))
+        off = np.linalg.norm(screen[near] - screen[i], axis=1) * depth[near] / per_unit
+        hits[k] = depth[near[off <= 0.5 * spacing[near]]].min()
+    return hits
+
+
+def test_the_brush_takes_only_what_is_seen(page, scan):
+    from scipy.spatial import cKDTree
+    server, driver = page
+    idle(driver)
+    click(driver, "clear")
+    wait_for(driver, "studio.state.region === 0", what="the cleared selection")
+    click(driver, "view-side")
+    click(driver, "tool-brush")
+    click(driver, "paint-roi")
+    assert not driver.find_element("id", "xray").is_selected()
+    driver.execute_script("document.getElementById('brush-size').value = 40")
+    shown = np.array(driver.execute_script("return Array.from(studio.geometry.getAttribute('shown').array)")).reshape(-1, 3)
+    normals = np.array(driver.execute_script(
+        "return Array.from(studio.geometry.getAttribute('shownNormal').array)")).reshape(-1, 3)
+    # A stroke across the tube at a third of its height: the brush covers its whole width on the screen.
+    z = np.quantile(shown[:, 2], 0.3)
+    ring = shown[np.abs(shown[:, 2] - z) < 0.01]
+    left, right = (driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(p))
+                   for p in (ring[np.argmin(ring[:, 1])], ring[np.argmax(ring[:, 1])]))
+    pointer_path(driver, [(left[0] - 30 + t * (right[0] - left[0] + 60) / 20, left[1]) for t in range(21)])
+    wait_for(driver, "studio.state.region > 0", what="the painted region")
+    shot(driver, "7_seen_only")
+    painted = np.array(driver.execute_script("return Array.from(studio.labels)")) != 0
+    assert painted.sum() > 300
+
+    distances, _ = cKDTree(shown).query(shown, 11)
+    spacing = distances[:, 1:].mean(1)
+    depth, screen, per_unit, eye = seen_from(driver, shown)
+    rows = np.flatnonzero(painted)
+    behind = (depth[rows] - first_hits(shown, spacing, depth, screen, per_unit, rows)) / spacing[rows]
+    assert behind.max() <= 3, (behind.max(), np.quantile(behind, 0.99))
+    # None on the far side: the normals (oriented as the points the eye sees first face it) face away from the eye.
+    view = (shown - eye) / np.linalg.norm(shown - eye, axis=1)[:, None]
+    facing = np.einsum("ij,ij->i", normals, view)
+    sample = np.flatnonzero(painted)
+    sign = -np.sign(np.median(facing[sample]))
+    assert (sign * facing[painted] > 0.5).sum() == 0, (sign * facing[painted]).max()
+    # X-ray takes the far side too.
+    click(driver, "clear")
+    wait_for(driver, "studio.state.region === 0", what="the cleared selection")
+    click(driver, "xray")
+    pointer_path(driver, [(left[0] - 30 + t * (right[0] - left[0] + 60) / 20, left[1]) for t in range(21)])
+    wait_for(driver, "studio.state.region > 0", what="the painted region")
+    click(driver, "xray")
+    through = np.array(driver.execute_script("return Array.from(studio.labels)")) != 0
+    assert through.sum() > 1.6 * painted.sum() and (sign * facing[through] > 0.5).sum() > 0.3 * painted.sum()
+    click(driver, "clear")
+    wait_for(driver, "studio.state.region === 0", what="the cleared selection")
 
 
 def test_the_page_logged_no_error(page):
