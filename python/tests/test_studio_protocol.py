@@ -289,6 +289,27 @@ BAD_BEFORE_EDITING = [
     (json.dumps({"type": "state", "pad": "x" * (2 << 20)}), "at most"),
     ("[" * 100000, "nested too deeply"),  # a RecursionError in the parser: refused, the socket stays open
     (struct.pack("<I", 4000) + b"[" * 4000, "not JSON"),
+    # The commands of many edits and of the selection over the neighbour graph.
+    ({"type": "commit"}, "needs a released drag"),
+    ({"type": "fill"}, "needs a released drag"),
+    ({"type": "grow", "target": "lung"}, "target must be roi or handle"),
+    ({"type": "grow", "target": "handle", "group": 0}, "no handle group 0"),
+    ({"type": "grow", "target": ["roi"]}, "target must be roi or handle"),
+    ({"type": "shrink", "target": "handle", "group": -1}, "no handle group -1"),
+    ({"type": "shrink", "target": "handle", "group": True}, "no handle group True"),
+    ({"type": "shrink", "target": None}, "target must be roi or handle"),
+    ({"type": "select_connected", "target": "roi", "mode": "add", "seed": 10 ** 7}, "seed is a point index"),
+    ({"type": "select_connected", "target": "roi", "mode": "add", "seed": -1}, "seed is a point index"),
+    ({"type": "select_connected", "target": "roi", "mode": "add", "seed": "3"}, "seed is a point index"),
+    ({"type": "select_connected", "target": "roi", "mode": "add", "seed": 1.5}, "seed is a point index"),
+    ({"type": "select_connected", "target": "roi", "mode": "add"}, "seed is a point index"),
+    ({"type": "select_connected", "target": "roi", "mode": "paint", "seed": 1}, "mode must be add or erase"),
+    ({"type": "select_connected", "target": "handle", "mode": "add", "group": 2, "seed": 1}, "no handle group 2"),
+    ({"type": "grow_region_around", "group": 0}, "no handle group 0"),
+    ({"type": "grow_region_around"}, "no handle group None"),
+    ({"type": "preprocess", "force": "yes"}, "force is true or false"),
+    ({"type": "preprocess", "force": True}, "paint a region of interest first"),
+    ({"type": "details", "mode": "scale", "s": 1, "apply": "yes"}, "apply is true or false"),
 ]
 
 
@@ -335,6 +356,20 @@ def test_bad_messages_while_editing_change_nothing(server):
             ({"type": "new_group"}, "undo the drags first"),
             ({"type": "details", "mode": "scale", "s": 2}, "undo the drags first"),
             ({"type": "redo"}, "nothing to redo"),
+            ({"type": "grow", "target": "roi"}, "undo the drags first"),
+            ({"type": "shrink", "target": "handle", "group": 0}, "undo the drags first"),
+            ({"type": "select_connected", "target": "roi", "mode": "add", "seed": 0}, "undo the drags first"),
+            ({"type": "grow_region_around", "group": 0}, "undo the drags first"),
+            ({"type": "drag", "group": 0, "matrix": IDENTITY, "also": [{"group": 1, "matrix": IDENTITY}]},
+             "no handle group 1"),
+            ({"type": "drag", "group": 0, "matrix": IDENTITY, "also": [{"group": 0, "matrix": IDENTITY}]},
+             "moved twice"),
+            ({"type": "drag", "group": 0, "matrix": IDENTITY, "also": 5}, "also is a list"),
+            ({"type": "drag", "group": 0, "matrix": IDENTITY, "also": [{"group": 0, "matrix": IDENTITY, "x": 1}]},
+             "also is a list"),
+            ({"type": "drag", "group": 0, "matrix": IDENTITY, "also": [{"group": "1", "matrix": IDENTITY}]},
+             "no handle group"),
+            ({"type": "new_group"}, "undo the drags first"),
         ]
         for message, expected in bad:
             reply = await client.command(message, "frame")
@@ -433,9 +468,101 @@ def test_a_drag_whose_solve_fails_leaves_the_edit_as_it_was(server):
         assert (await client.command({"type": "release"}))["step"] == 1
         assert (await save(client, name="after_a_failed_drag"))["type"] == "saved"
         saved = json.loads((folder / "after_a_failed_drag.json").read_text())
-        assert np.abs(np.array(saved["handles"][0]["translation"]) - T[:3, 3]).max() < 1e-12
+        assert np.abs(np.array(saved["steps"][-1]["handles"][0]["translation"]) - T[:3, 3]).max() < 1e-12
         assert np.all(np.isfinite(cgal_ext.read_points(folder / "after_a_failed_drag.ply").points))
         await start_over(client)
+        await client.close()
+    run(scenario())
+
+
+def test_many_edits_over_the_websocket(server):
+    """The warning, the remedy, a mirrored drag, commit, undo and redo of it, a fill and a save, as the page sends
+    them; the shapes of the replies."""
+    folder = folder_of(server)
+
+    async def scenario():
+        client = await (await Client.open(server)).ready()
+        points = cgal_ext.read_points(server_scan(server)).points
+        n = len(points)
+        await client.command(frame({"type": "select", "target": "roi", "mode": "add"}, np.flatnonzero(points[:, 2] > 0)))
+        await client.command({"type": "new_group"})
+        await client.command({"type": "new_group"})
+        await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 0},
+                                   np.flatnonzero(points[:, 2] > 0.9)))
+        await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 1},
+                                   np.flatnonzero(points[:, 2] < -0.95)))  # an island in the fixed part
+        before = await client.snapshot()
+        warning = await client.command({"type": "preprocess"}, "warning")
+        assert warning["type"] == "warning", warning
+        assert [(w["kind"], w.get("group")) for w in warning["warnings"]] == [("island", 1)]
+        assert "grow the region around it" in warning["warnings"][0]["message"]
+        assert (await client.until("state"))["preprocessed"] is False
+        assert await client.snapshot() == before
+        labels = await client.command({"type": "grow_region_around", "group": 1}, "labels")
+        assert labels["type"] == "labels" and np.count_nonzero(labels["labels"]) > np.count_nonzero(
+            np.frombuffer(before[1], np.int8))
+        await client.until("state")
+        assert (await client.command({"type": "preprocess"}))["preprocessed"]
+        # A mirrored drag: group 1 moved with group 0 in one frame; a bad `also` changes nothing.
+        up, down = np.eye(4), np.eye(4)
+        up[2, 3], down[2, 3] = 0.1, -0.1
+        before = await client.snapshot()
+        for also, expected in (([{"group": 1, "matrix": np.diag([2.0, 2, 2, 1]).reshape(-1).tolist()}],
+                                 "not a rigid motion"),
+                                ([{"group": 1, "matrix": [0] * 15}], "16 numbers"),
+                                ([{"group": 8, "matrix": IDENTITY}], "no handle group 8")):
+            reply = await client.command({"type": "drag", "group": 0, "matrix": up.reshape(-1).tolist(),
+                                          "also": also}, "frame")
+            assert reply["type"] == "error" and expected in reply["message"], reply
+            assert await client.snapshot() == before
+        reply = await client.command({"type": "drag", "group": 0, "matrix": up.reshape(-1).tolist(), "seq": 1,
+                                      "also": [{"group": 1, "matrix": down.reshape(-1).tolist()}]}, "frame")
+        assert reply["type"] == "frame" and reply["seq"] == 1
+        shown = await client.command({"type": "release"}, "shown")
+        assert shown["type"] == "shown"
+        state = await client.until("state")
+        assert state["step"] == 1 and state["committable"]
+        assert np.allclose(np.array(state["transforms"][1]).reshape(4, 4), down)
+        # Commit: the geometry again, no selection, the codes and the spacing with it.
+        geometry = await client.command({"type": "commit"}, "geometry")
+        assert geometry["type"] == "geometry", geometry
+        assert geometry["label_codes"] == {"fixed": 0, "roi": 1, "first_handle": 2} and geometry["max_groups"] == 8
+        assert geometry["spacing"].shape == (n,) and np.all(geometry["spacing"] > 0)
+        assert not geometry["labels"].any() and "rest" not in geometry and "inserted" not in geometry
+        committed = geometry["positions"].copy()
+        state = await client.until("state")
+        assert state["chain"] == ["edit"] and state["groups"] == 0 and state["history"] == ["open", "drag", "commit"]
+        # Undo: the first edit as it was shown, its selection and groups, to prepare again.
+        geometry = await client.command({"type": "undo"}, "geometry")
+        assert np.array_equal(geometry["positions"], committed) and "rest" in geometry
+        state = await client.until("state")
+        assert state["chain"] == [] and state["groups"] == 2 and state["preprocessed"] is False
+        await client.command({"type": "redo"}, "geometry")
+        assert (await client.until("state"))["chain"] == ["edit"]
+        # A second edit, then fill: the geometry grows, with `inserted`.
+        shown_points = committed.astype(float)
+        await client.command(frame({"type": "select", "target": "roi", "mode": "add"},
+                                   np.flatnonzero(shown_points[:, 0] > 0.2)))
+        await client.command({"type": "new_group"})
+        await client.command(frame({"type": "select", "target": "handle", "mode": "add", "group": 0},
+                                   np.flatnonzero(shown_points[:, 0] > 0.85)))
+        assert (await client.command({"type": "preprocess"}))["preprocessed"]
+        stretch = np.eye(4)
+        stretch[0, 3] = 0.5
+        await client.command({"type": "drag", "group": 0, "matrix": stretch.reshape(-1).tolist()}, "frame")
+        await client.command({"type": "release"})
+        geometry = await client.command({"type": "fill"}, "geometry")
+        assert geometry["type"] == "geometry", geometry
+        added = len(geometry["positions"]) - n
+        assert added > 0 and geometry["inserted"].sum() == added and not geometry["inserted"][:n].any()
+        state = await client.until("state")
+        assert state["chain"] == ["edit", "edit", "fill"] and state["points"] == n + added
+        saved = await save(client, name="many_edits")
+        assert "many_edits.step2.handle0.txt" not in saved["files"] and "many_edits.step1.handle0.txt" in saved["files"]
+        assert [step["type"] for step in json.loads((folder / "many_edits.json").read_text())["steps"]] == \
+            ["edit", "edit", "fill"]
+        # Back to the bare scan for the tests after this one.
+        await client.command({"type": "load", "path": "sphere.ply"})
         await client.close()
     run(scenario())
 
@@ -616,19 +743,18 @@ def open_session(folder, name, n=2000, groups=1):
 
 
 def test_a_save_never_writes_over_the_scan_under_any_name(tmp_path):
-    session = open_session(tmp_path, "scan.base.ply")
-    session.details("scale", 2.0, apply=True)  # a save now writes NAME.base.ply, the scaled input
-    os.link(tmp_path / "scan.base.ply", tmp_path / "hard.base.ply")
-    os.symlink("scan.base.ply", tmp_path / "soft.base.ply")
-    scan = (tmp_path / "scan.base.ply").read_bytes()
+    session = open_session(tmp_path, "scan.ply")
+    session.details("scale", 2.0, apply=True)  # a chain step: no file but NAME.json, its index files, NAME.ply
+    os.link(tmp_path / "scan.ply", tmp_path / "hard.ply")
+    os.symlink("scan.ply", tmp_path / "soft.ply")
+    scan = (tmp_path / "scan.ply").read_bytes()
     before = listing(tmp_path)
-    for name, file in (("scan", "scan.base.ply"), ("hard", "hard.base.ply"), ("soft", "soft.base.ply"),
-                       ("scan.base", "scan.base.ply")):
+    for name, file in (("scan", "scan.ply"), ("hard", "hard.ply"), ("soft", "soft.ply")):
         with pytest.raises(StudioError, match="%s is the scan itself" % file):
             session.save(name, overwrite=True)
-        assert listing(tmp_path) == before and (tmp_path / "scan.base.ply").read_bytes() == scan
-    assert session.save("scaled") == ["scaled.base.ply", "scaled.handle0.txt", "scaled.json", "scaled.ply",
-                                      "scaled.roi.txt"]
+        assert listing(tmp_path) == before and (tmp_path / "scan.ply").read_bytes() == scan
+    assert session.save("scaled") == ["scaled.json", "scaled.ply", "scaled.step0.roi.txt", "scaled.step1.handle0.txt",
+                                      "scaled.step1.roi.txt"]
 
 
 def test_a_rename_failing_half_way_through_a_save_restores_every_file(tmp_path, monkeypatch):
@@ -651,25 +777,25 @@ def test_a_rename_failing_half_way_through_a_save_restores_every_file(tmp_path, 
     monkeypatch.setattr(os, "replace", replace_failing_on_the_second_file)
     with pytest.raises(StudioError, match="save failed, nothing written: .*simulated failure"):
         session.save("edit")
-    assert placed[:2] == ["edit.roi.txt", "edit.handle0.txt"]  # the first file was in place when the second failed
+    assert placed[:2] == ["edit.step0.roi.txt", "edit.step0.handle0.txt"]  # the first in place when the second failed
     assert listing(tmp_path) == before
     assert {name: (tmp_path / name).read_bytes() for name in first} == saved
     monkeypatch.undo()
-    assert "edit.handle1.txt" in session.save("edit")
-    assert (tmp_path / "edit.roi.txt").read_bytes() != saved["edit.roi.txt"]
+    assert "edit.step0.handle1.txt" in session.save("edit")
+    assert (tmp_path / "edit.step0.roi.txt").read_bytes() != saved["edit.step0.roi.txt"]
 
 
 def test_a_refused_or_failed_save_leaves_no_file_behind(tmp_path, monkeypatch):
     session = open_session(tmp_path, "sphere.ply")
     (tmp_path / "d.ply").mkdir()
-    os.symlink("/etc/hostname", tmp_path / "e.handle0.txt")
+    os.symlink("/etc/hostname", tmp_path / "e.step0.handle0.txt")
     before = listing(tmp_path)
     with pytest.raises(StudioError, match="d.ply exists and is not a file"):
         session.save("d")
     assert listing(tmp_path) == before  # no d.json nor index files
     with pytest.raises(StudioError, match="leads out of the studio's folder"):
         session.save("e")
-    assert listing(tmp_path) == before  # no temporary of e.roi.txt
+    assert listing(tmp_path) == before  # no temporary of e.step0.roi.txt
 
     def failing_write(path, *args, **kwargs):
         raise RuntimeError("simulated failure")

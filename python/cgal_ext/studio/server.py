@@ -8,6 +8,7 @@ header lists (doc/studio.md, "Protocol").
 """
 import asyncio
 import collections
+import concurrent.futures
 import functools
 import hmac
 import pathlib
@@ -17,7 +18,7 @@ import traceback
 import numpy as np
 from aiohttp import WSCloseCode, WSMsgType, web
 
-from .codec import MAX_BINARY, MAX_HEADER, MAX_TEXT, pack, parse, unpack  # noqa: F401 (unpack: the codec's API)
+from .codec import MAX_BINARY, MAX_HEADER, MAX_TEXT, pack, parse
 from .session import FIXED, LABEL_CODES, MAX_GROUPS, Session, StudioError
 
 STATIC = pathlib.Path(__file__).with_name("static")
@@ -81,6 +82,9 @@ class Studio:
         self.socket = None
         self.port = None
         self.lock = asyncio.Lock()
+        # One thread for the session's calls (they run one at a time under the lock anyway): the history's arrays
+        # are then allocated and freed in one malloc arena, not spread over one per thread.
+        self.executor = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="studio-session")
         self.stopping = False
 
     # ---- HTTP -------------------------------------------------------------------------------------------------
@@ -216,7 +220,8 @@ class Studio:
 
     async def run(self, function, *args, **kwargs):
         """A library call in a worker thread (the library releases the GIL), so that progress reaches the page."""
-        return await asyncio.get_running_loop().run_in_executor(None, functools.partial(function, *args, **kwargs))
+        return await asyncio.get_running_loop().run_in_executor(self.executor,
+                                                                functools.partial(function, *args, **kwargs))
 
     async def handle(self, ws, command):
         if not isinstance(command, dict) or not isinstance(command.get("type"), str):
@@ -248,6 +253,12 @@ class Studio:
                   ("labels", s.labels)]
         if s.shown_points is not s.points and not np.array_equal(s.shown_points, s.points):
             arrays += [("rest", s.points.astype("<f4")), ("rest_normals", s.normals.astype("<f4"))]
+        spacing = await self.run(s.spacing)
+        if spacing is not None:
+            arrays.append(("spacing", spacing.astype("<f4")))
+        inserted = s.inserted()
+        if inserted is not None:
+            arrays.append(("inserted", inserted))
         await ws.send_bytes(pack({"type": "geometry", "scan": s.scan, "label_codes": LABEL_CODES,
                                   "max_groups": MAX_GROUPS}, arrays))
 
@@ -288,6 +299,15 @@ class Studio:
         await self.send_state(ws)
 
     async def on_preprocess(self, ws, command):
+        force = command.get("force", False)
+        if not isinstance(force, bool):
+            raise StudioError("preprocess: force is true or false")
+        if not force and self.session.deformation is None:
+            warnings = await self.run(self.session.warnings)
+            if warnings:  # nothing prepared: the page asks, then sends grow_region_around or force
+                await ws.send_json({"type": "warning", "warnings": warnings})
+                await self.send_state(ws)
+                return
         setup = await self.run(self.session.preprocess, progress=self.progress_reporter(ws, "preprocess"))
         movable = setup["movable"]
         await ws.send_bytes(pack({"type": "renderer", "sample_points": int(setup["sample_points"]),
@@ -304,7 +324,7 @@ class Studio:
         await self.send_state(ws)
 
     async def on_drag(self, ws, command):
-        frame = self.session.drag(command.get("group"), command.get("matrix"))
+        frame = self.session.drag(command.get("group"), command.get("matrix"), command.get("also"))
         await ws.send_bytes(pack({"type": "frame", "seq": command.get("seq")}, [("frame", frame)]))
 
     async def send_shown(self, ws):
@@ -319,21 +339,56 @@ class Studio:
         await self.run(self.session.release)
         await self.send_shown(ws)
 
+    async def send_step(self, ws, whole):
+        """After undo or redo: the whole geometry when the base, the selection or the preparation changed, else
+        the prepared edit's moved points."""
+        if whole:
+            await self.send_geometry(ws)
+            await self.send_state(ws)
+        else:
+            await self.send_shown(ws)
+
     async def on_undo(self, ws, command):
-        await self.run(self.session.undo)
-        await self.send_shown(ws)
+        await self.send_step(ws, await self.run(self.session.undo))
 
     async def on_redo(self, ws, command):
-        await self.run(self.session.redo)
-        await self.send_shown(ws)
+        await self.send_step(ws, await self.run(self.session.redo))
+
+    async def on_commit(self, ws, command):
+        await self.run(self.session.commit)
+        await self.send_geometry(ws)
+        await self.send_state(ws)
+
+    async def on_fill(self, ws, command):
+        await self.run(self.session.fill, progress=self.progress_reporter(ws, "fill"))
+        await self.send_geometry(ws)
+        await self.send_state(ws)
+
+    async def on_grow(self, ws, command):
+        await self.run(self.session.grow, command.get("target"), command.get("group", 0))
+        await self.send_labels(ws)
+
+    async def on_shrink(self, ws, command):
+        await self.run(self.session.shrink, command.get("target"), command.get("group", 0))
+        await self.send_labels(ws)
+
+    async def on_select_connected(self, ws, command):
+        await self.run(self.session.select_connected, command.get("target"), command.get("mode"),
+                       command.get("group", 0), command.get("seed"))
+        await self.send_labels(ws)
+
+    async def on_grow_region_around(self, ws, command):
+        await self.run(self.session.grow_region_around, command.get("group"))
+        await self.send_labels(ws)
 
     async def on_details(self, ws, command):
         s = self.session
-        result = await self.run(s.details, command.get("mode"), command.get("s"), bool(command.get("apply")))
+        applied = command.get("apply", False)
+        result = await self.run(s.details, command.get("mode"), command.get("s"), applied)
         region = np.flatnonzero(s.labels != FIXED)
-        await ws.send_bytes(pack({"type": "details", "applied": bool(command.get("apply"))},
+        await ws.send_bytes(pack({"type": "details", "applied": applied},
                                  [("indices", region.astype("<u4")), ("positions", result[region].astype("<f4"))]))
-        if command.get("apply"):
+        if applied:
             await self.send_geometry(ws)
         await self.send_state(ws)
 
@@ -372,6 +427,12 @@ COMMANDS = {
     "colors": Studio.on_colors,
     "save": Studio.on_save,
     "load_edit": Studio.on_load_edit,
+    "commit": Studio.on_commit,
+    "fill": Studio.on_fill,
+    "grow": Studio.on_grow,
+    "shrink": Studio.on_shrink,
+    "select_connected": Studio.on_select_connected,
+    "grow_region_around": Studio.on_grow_region_around,
 }
 
 

@@ -4,6 +4,7 @@ Every public method either completes or raises StudioError before changing anyth
 leaves the session as it was (doc/studio.md, "Bad messages"). The web server (server.py) only parses messages
 and calls these methods; nothing here knows about HTTP.
 """
+import collections
 import concurrent.futures
 import json
 import math
@@ -17,11 +18,16 @@ import numpy as np
 
 import cgal_ext
 
+from .selection import Graph
+
 # A point's label: fixed, in the region, or a handle of group g (FIRST_HANDLE + g). The page gets these codes and
 # the group limit in the geometry's header instead of spelling them itself.
 FIXED, ROI, FIRST_HANDLE = 0, 1, 2
 LABEL_CODES = {"fixed": FIXED, "roi": ROI, "first_handle": FIRST_HANDLE}
 MAX_GROUPS = 8  # the page's shader holds this many handle transforms
+# Undo goes back at most this many steps, and drops the oldest ones whose arrays (shown states, bases) take more.
+HISTORY_STEPS = 100
+HISTORY_BYTES = 1 << 30
 COLOURINGS = ("relief", "magnitude", "curvature", "clusters")
 ORDERS = ("linear", "quadric", "cubic")
 ROTATIONS = ("propagate", "arap")  # as the edit JSON and the Python package spell them
@@ -41,6 +47,13 @@ def _identity():
     return np.eye(4)
 
 
+def _library(name):
+    """The module's function `name`, or StudioError naming it (a module older than the studio)."""
+    if not hasattr(cgal_ext, name):
+        raise StudioError("this needs cgal_ext.%s, which the module does not have: rebuild it" % name)
+    return getattr(cgal_ext, name)
+
+
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 _EYE3 = np.eye(3)
 
@@ -57,13 +70,16 @@ class Session:
         self.scan = None  # path relative to root
         self._scan_file = None  # the scan as read: its resolved path and (st_dev, st_ino)
         self._written = {}  # file name -> (st_dev, st_ino) of each file this session saved
-        self.points = self.normals = None
+        self.scan_points = self.points = self.normals = None  # the scan as read; the current edit's input
         self.settings = {"order": "cubic", "rotations": "propagate", "strength_distance": "euclidean"}
-        self.deformation = None
-        self.base_changed = False  # details applied: the edit's input is no longer the scan file
-        # One Deformation per scan and settings, whose selection-independent part (the mean shift) is computed in
-        # the background from the moment the scan is open, while its user paints.
-        self._editor = None  # a future of the Deformation
+        self.deformation = self.renderer = None
+        self.chain = ()  # the committed steps: edits, detail scalings, fills (the saved JSON's "steps")
+        self.history, self.step = [], 0
+        # One Deformation per base and settings, whose selection-independent part (the mean shift) is computed in
+        # the background from the moment the base exists, while its user paints (_editor_for).
+        self._editors = collections.OrderedDict()
+        self._graphs = collections.OrderedDict()  # the selection graph per base
+        self._spacing = None  # the shown points and their local spacing
         self._worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="studio-analysis")
 
     # ---- files ------------------------------------------------------------------------------------------------
@@ -166,7 +182,7 @@ class Session:
         return found
 
     def load(self, name, progress=None):
-        """Reads a scan (normals estimated when it has none, as the program does) and starts a new edit."""
+        """Reads a scan (normals estimated when it has none, as the program does) and starts a new history."""
         cloud, status, resolved = self._read_points(name)
         points = cloud.points
         if len(points) < 20:
@@ -176,36 +192,121 @@ class Session:
             if normals is not None:
                 raise StudioError("%s has missing or zero normals; give all or none" % name)
             normals = cgal_ext.estimate_oriented_normals(points, k=min(18, len(points)), progress=progress)
-        self.scan, self.points, self.normals = name, points, normals
+        self.scan, self.scan_points = name, points
         self._scan_file = (resolved, (status.st_dev, status.st_ino))
-        self.base_changed = False
-        self._new_edit()
+        self.points, self.normals = points, normals
+        self.chain = ()
+        self._editors.clear()
+        self._graphs.clear()
+        self._blank_edit()
+        self.history, self.step = [self._snapshot("open")], 0
         self._start_editor()
 
-    def _new_edit(self):
-        n = len(self.points)
-        self.labels = np.zeros(n, np.int8)
+    def _blank_edit(self):
+        """A new edit of the current base: no selection, no groups, shown as the base."""
+        self.labels = np.zeros(len(self.points), np.int8)
         self.groups = 0
         self.transforms = []  # per group, the 4x4 of the drag under way or of the shown state
-        self.history = [[]]   # committed transform lists; history[self.step] is shown
-        self.step = 0
-        self.shown_points, self.shown_normals = self.points.copy(), self.normals.copy()
+        self.shown_points, self.shown_normals = self.points, self.normals
+        self.ssp_index = None  # the prepared edit's sample point of each point (saved as ssp_index)
         self._drop_deformation()
 
     def _drop_deformation(self):
         self.deformation = None
         self.renderer = None
+        self._stale = False  # the deformation's handle transforms are not the session's (after undo, redo)
+
+    # ---- history ----------------------------------------------------------------------------------------------
+    # A step of history is a snapshot of everything an undo restores: the committed chain, the current edit's
+    # input (the base), its selection, groups, settings and transforms, and the shown state. The arrays in it are
+    # never changed in place, so snapshots share them.
+
+    def _snapshot(self, kind):
+        return {"kind": kind, "chain": self.chain, "points": self.points, "normals": self.normals,
+                "labels": self.labels, "groups": self.groups, "transforms": tuple(self.transforms),
+                "settings": dict(self.settings), "shown_points": self.shown_points,
+                "shown_normals": self.shown_normals, "ssp_index": self.ssp_index}
+
+    def _record(self, kind):
+        """A new step of history after the current one (the steps that could be redone are dropped; the oldest
+        ones too, beyond HISTORY_STEPS steps or HISTORY_BYTES of arrays held only by them)."""
+        del self.history[self.step + 1:]
+        self.history.append(self._snapshot(kind))
+        self.step += 1
+        while len(self.history) > 2 and (len(self.history) > HISTORY_STEPS or self._history_bytes() > HISTORY_BYTES):
+            del self.history[0]
+            self.step -= 1
+
+    def _history_bytes(self):
+        """The bytes of the arrays the history holds that the current step does not."""
+        current = {id(a) for a in self.history[self.step].values() if isinstance(a, np.ndarray)}
+        held = {}
+        for snapshot in self.history:
+            for a in snapshot.values():
+                if isinstance(a, np.ndarray) and id(a) not in current:
+                    held[id(a)] = a.nbytes
+        return sum(held.values())
+
+    def _amend(self):
+        """The current step updated with a selection or settings changed at the start of an edit (painting is not
+        a step of history; the steps that could be redone, made on the old selection, are dropped)."""
+        del self.history[self.step + 1:]
+        self.history[self.step] = dict(self._snapshot(self.history[self.step]["kind"]))
+
+    def _restore(self, snapshot):
+        """The session as `snapshot` recorded it; whether the page needs the whole geometry again (another base or
+        selection, or the edit no longer prepared) rather than the moved points."""
+        same_edit = (snapshot["points"] is self.points and snapshot["labels"] is self.labels and
+                     snapshot["settings"] == self.settings and self.deformation is not None)
+        self.chain = snapshot["chain"]
+        self.points, self.normals = snapshot["points"], snapshot["normals"]
+        self.labels, self.groups = snapshot["labels"], snapshot["groups"]
+        self.transforms = [T.copy() for T in snapshot["transforms"]]
+        self.settings = dict(snapshot["settings"])
+        self.shown_points, self.shown_normals = snapshot["shown_points"], snapshot["shown_normals"]
+        self.ssp_index = snapshot["ssp_index"]
+        if same_edit:
+            self._stale = True  # solved again from these transforms at the next drag or release
+        else:
+            self._drop_deformation()  # prepared again (Edit) before the next drag
+        return not same_edit
+
+    def undo(self):
+        """One step back: a drag, a commit, a fill or applied details. Returns whether the geometry changed beyond
+        the prepared edit's points (see _restore)."""
+        self._require_scan()
+        if self.step == 0:
+            raise StudioError("nothing to undo")
+        self.step -= 1
+        return self._restore(self.history[self.step])
+
+    def redo(self):
+        self._require_scan()
+        if self.step + 1 >= len(self.history):
+            raise StudioError("nothing to redo")
+        self.step += 1
+        return self._restore(self.history[self.step])
+
+    def _editor_for(self, points, normals, settings):
+        """The Deformation of a base and settings, its points analysed in the background from the moment the base
+        exists; the two most recent kept, so that undoing a commit finds its edit's analysis done."""
+        key = (id(points), tuple(sorted(settings.items())))
+        if key not in self._editors:
+            def make():
+                editor = cgal_ext.Deformation(points, normals, order=settings["order"],
+                                              rotations=settings["rotations"],
+                                              strength_distance=settings["strength_distance"])
+                editor.analyse_points()
+                return editor
+            # The points are kept with the future: the key's id stays theirs.
+            self._editors[key] = (points, self._worker.submit(make))
+            while len(self._editors) > 2:
+                self._editors.popitem(last=False)
+        self._editors.move_to_end(key)
+        return self._editors[key][1]
 
     def _start_editor(self):
-        """A new Deformation for the scan and the settings, its points analysed in the background."""
-        points, normals, settings = self.points, self.normals, dict(self.settings)
-
-        def make():
-            editor = cgal_ext.Deformation(points, normals, order=settings["order"], rotations=settings["rotations"],
-                                          strength_distance=settings["strength_distance"])
-            editor.analyse_points()
-            return editor
-        self._editor = self._worker.submit(make)  # one worker: made after any editor before it
+        self._editor_for(self.points, self.normals, dict(self.settings))
 
     def _require_scan(self):
         if self.points is None:
@@ -213,21 +314,51 @@ class Session:
 
     # ---- selection --------------------------------------------------------------------------------------------
 
+    def _at_edit_start(self):
+        return self.history[self.step]["kind"] != "drag" and \
+            all(np.array_equal(T, _identity()) for T in self.transforms)
+
     def _require_undeformed(self, what):
-        if any(not np.array_equal(t, _identity()) for t in self.transforms) or self.step != 0:
-            raise StudioError("%s changes the edit's selection or settings: undo the drags first (or start a new "
-                              "edit)" % what)
+        if not self._at_edit_start():
+            raise StudioError("%s changes the edit's selection or settings: undo the drags first (or commit the "
+                              "edit and start a new one)" % what)
+
+    def _set_selection(self, labels, groups=None):
+        """A checked new selection, at the start of the edit."""
+        self.labels = labels
+        if groups is not None:
+            self.groups = groups
+            self.transforms = [_identity() for _ in range(groups)]
+        self._drop_deformation()
+        self.ssp_index = None  # another selection, other sample points
+        self._amend()
 
     def new_group(self):
         self._require_scan()
         self._require_undeformed("a new handle group")
         if self.groups >= MAX_GROUPS:
             raise StudioError("at most %d handle groups" % MAX_GROUPS)
-        self.groups += 1
-        self.transforms.append(_identity())
-        self.history = [[_identity() for _ in range(self.groups)]]
-        self._drop_deformation()
+        self._set_selection(self.labels, self.groups + 1)
         return self.groups - 1
+
+    def _check_target(self, target, group, what):
+        if target not in ("roi", "handle"):
+            raise StudioError("%s: target must be roi or handle" % what)
+        if target == "handle" and not (type(group) is int and 0 <= group < self.groups):
+            raise StudioError("there is no handle group %r (%d groups)" % (group, self.groups))
+
+    def _painted(self, target, mode, indices, group):
+        """The labels with `indices` painted into the region or handle group `group`, or erased from it."""
+        labels = self.labels.copy()
+        if target == "roi":
+            labels[indices] = ROI if mode == "add" else FIXED  # erasing the region erases its handles too
+        else:
+            handle = FIRST_HANDLE + group
+            if mode == "add":
+                labels[indices] = handle  # a handle point is in the region; it leaves any other group
+            else:
+                labels[indices[labels[indices] == handle]] = ROI
+        return labels
 
     def select(self, target, mode, indices, group=0):
         """Paints `indices` into the region (target 'roi') or a handle group ('handle'), or erases them."""
@@ -240,19 +371,8 @@ class Session:
             raise StudioError("a selected index is out of range (%d points)" % len(self.points))
         if target not in ("roi", "handle") or mode not in ("add", "erase"):
             raise StudioError("select: target must be roi or handle, mode add or erase")
-        if target == "handle" and not (isinstance(group, int) and 0 <= group < self.groups):
-            raise StudioError("there is no handle group %r (%d groups)" % (group, self.groups))
-        labels = self.labels.copy()
-        if target == "roi":
-            labels[indices] = ROI if mode == "add" else FIXED  # erasing the region erases its handles too
-        else:
-            handle = FIRST_HANDLE + group
-            if mode == "add":
-                labels[indices] = handle  # a handle point is in the region; it leaves any other group
-            else:
-                labels[indices[labels[indices] == handle]] = ROI
-        self.labels = labels
-        self._drop_deformation()
+        self._check_target(target, group, "select")
+        self._set_selection(self._painted(target, mode, indices, group))
 
     def invert(self):
         """Swaps the region and the fixed part (handle points stay handles)."""
@@ -261,13 +381,12 @@ class Session:
         labels = self.labels.copy()
         labels[self.labels == FIXED] = ROI
         labels[self.labels == ROI] = FIXED
-        self.labels = labels
-        self._drop_deformation()
+        self._set_selection(labels)
 
     def clear(self):
         self._require_scan()
         self._require_undeformed("clearing")
-        self._new_edit()
+        self._set_selection(np.zeros(len(self.points), np.int8), 0)
 
     def _checked_settings(self, settings):
         new = dict(self.settings)
@@ -284,36 +403,44 @@ class Session:
         if settings != self.settings:
             self.settings = settings
             self._drop_deformation()
+            self.ssp_index = None
             self._start_editor()
 
     def set_settings(self, **settings):
         self._require_scan()
         self._require_undeformed("changing the settings")
         self._use_settings(self._checked_settings(settings))
+        self._amend()
 
     # ---- editing ----------------------------------------------------------------------------------------------
 
-    def preprocess(self, progress=None):
-        """Builds the deformation of the current selection; returns what the page's shader needs."""
+    def _check_preparable(self):
         self._require_scan()
         if not np.any(self.labels != FIXED):
             raise StudioError("paint a region of interest first")
         if self.groups == 0 or not all(np.any(self.labels == FIRST_HANDLE + g) for g in range(self.groups)):
             raise StudioError("every handle group needs points: paint a handle")
+
+    def preprocess(self, progress=None):
+        """Builds the deformation of the current selection; returns what the page's shader needs."""
+        self._check_preparable()
         if self.deformation is not None:
             return self.renderer
         try:
-            deformation = self._editor.result()
+            deformation = self._editor_for(self.points, self.normals, self.settings).result()
         except ValueError as error:
             raise StudioError(str(error))
-        deformation.reset()
-        deformation.clear_selection()
-        deformation.insert_roi(self.labels != FIXED)
-        for g in range(self.groups):
-            deformation.create_handle_group(self.labels == FIRST_HANDLE + g)
         try:
+            deformation.reset()
+            deformation.clear_selection()
+            deformation.insert_roi(self.labels != FIXED)
+            for g in range(self.groups):
+                deformation.create_handle_group(self.labels == FIRST_HANDLE + g)
             if not deformation.preprocess(progress=progress):
                 raise StudioError("preprocessing was cancelled")
+            # An edit restored by undo starts from its transforms (the page draws it from them).
+            for g, T in enumerate(self.transforms):
+                deformation.set_handle_transform(g, transform=T)
         except ValueError as error:
             raise StudioError(str(error))
         setup = deformation.renderer_setup()
@@ -321,11 +448,13 @@ class Session:
         carried = np.isin(setup["stencil_samples"], region_samples).any(axis=1) | (setup["exact_handle"] != 0)
         setup["movable"] = np.flatnonzero(carried).astype(np.uint32)
         setup["handle_group"] = np.where(self.labels >= FIRST_HANDLE, self.labels - FIRST_HANDLE, -1).astype(np.int8)
-        self.deformation, self.renderer = deformation, setup
+        self.deformation, self.renderer, self._stale = deformation, setup, True
+        self.ssp_index = deformation.sample_point_of(np.ones(len(self.points), bool)).astype(float)
+        self.history[self.step]["ssp_index"] = self.ssp_index  # what a save of this step writes
         return setup
 
     def _transform(self, matrix, group):
-        if not (isinstance(group, int) and 0 <= group < self.groups):
+        if not (type(group) is int and 0 <= group < self.groups):
             raise StudioError("there is no handle group %r (%d groups)" % (group, self.groups))
         try:
             T = np.array(matrix, dtype=float).reshape(4, 4)
@@ -345,15 +474,29 @@ class Session:
         T[3] = _LAST_ROW
         return T
 
-    def drag(self, group, matrix):
-        """One frame of a drag: the handle group's transform (from the rest pose); returns the frame's motions. A
-        transform whose solve fails is refused and the edit stays on the transforms before it."""
+    def drag(self, group, matrix, also=None):
+        """One frame of a drag: the handle group's transform (from the rest pose), and in `also` other groups'
+        transforms set in the same frame ([{"group": h, "matrix": [16]}], mirrored editing); returns the frame's
+        motions. A transform whose solve fails is refused and the edit stays on the transforms before it."""
         if self.deformation is None:
             raise StudioError("a drag needs the edit preprocessed: paint a region and a handle, then edit")
-        T = self._transform(matrix, group)
+        moves = {group: self._transform(matrix, group)}
+        if also is not None:
+            if not isinstance(also, list) or len(also) > MAX_GROUPS or \
+                    not all(isinstance(a, dict) and set(a) <= {"group", "matrix"} for a in also):
+                raise StudioError("also is a list of {group, matrix} of other handle groups")
+            for a in also:
+                h = a.get("group")
+                if type(h) is int and h in moves:
+                    raise StudioError("also: handle group %d is moved twice in one frame" % h)
+                moves[h] = self._transform(a.get("matrix"), h)
         d = self.deformation
         try:
-            d.set_handle_transform(group, transform=T)
+            if self._stale:
+                for g, T in enumerate(self.transforms):
+                    d.set_handle_transform(g, transform=T)
+            for g, T in moves.items():
+                d.set_handle_transform(g, transform=T)
             d.deform()
             frame = d.renderer_frame()
             if not np.isfinite(frame).all():
@@ -361,7 +504,9 @@ class Session:
         except (ValueError, RuntimeError) as error:
             self._restore_deformation()
             raise StudioError("the drag was refused, the handle stays where it was: %s" % error)
-        self.transforms[group] = T
+        for g, T in moves.items():
+            self.transforms[g] = T
+        self._stale = False
         return frame
 
     def _restore_deformation(self):
@@ -376,15 +521,23 @@ class Session:
             for g, T in enumerate(self.transforms):
                 d.set_handle_transform(g, transform=T)
             d.deform()
+        self._stale = False
+
+    def _dragged(self):
+        """Whether the transforms differ from the shown step's: a drag under way, not released."""
+        recorded = self.history[self.step]["transforms"]
+        return len(recorded) != len(self.transforms) or \
+            any(not np.array_equal(a, b) for a, b in zip(recorded, self.transforms))
 
     def release(self):
-        """The end of a drag: the full diffusion and restore_details become the shown state (a step of history)."""
+        """The end of a drag: the full diffusion and restore_details become the shown state (a step of history;
+        a release with nothing dragged since the last changes nothing)."""
         if self.deformation is None:
             raise StudioError("release without a drag")
+        if not self._dragged():
+            return
         self._show(self.transforms)
-        del self.history[self.step + 1:]
-        self.history.append([t.copy() for t in self.transforms])
-        self.step += 1
+        self._record("drag")
 
     def _show(self, transforms):
         """Shows the edit under `transforms`, or raises StudioError with the session unchanged."""
@@ -394,7 +547,7 @@ class Session:
                 d.set_handle_transform(g, transform=T)
             if all(np.array_equal(T, _identity()) for T in transforms):
                 d.reset()
-                points, normals = self.points.copy(), self.normals.copy()
+                points, normals = self.points, self.normals
             else:
                 d.deform()
                 normals = d.diffuse().normals
@@ -406,58 +559,252 @@ class Session:
             raise StudioError("the edit could not be shown: %s" % error)
         self.shown_points, self.shown_normals = points, normals
         self.transforms = [t.copy() for t in transforms]
+        self._stale = False
 
-    def undo(self):
-        if self.step == 0:
-            raise StudioError("nothing to undo")
-        self._show(self.history[self.step - 1])
-        self.step -= 1
+    def _require_released_edit(self, what):
+        if self._dragged():
+            raise StudioError("%s: release the drag first" % what)
+        if self.history[self.step]["kind"] != "drag":
+            raise StudioError("%s needs a released drag of the current edit: drag a handle and release it first" % what)
 
-    def redo(self):
-        if self.step + 1 >= len(self.history):
-            raise StudioError("nothing to redo")
-        self._show(self.history[self.step + 1])
-        self.step += 1
+    def _edit_step(self):
+        """The current edit as a step of the chain (its shown, released state)."""
+        return {"type": "edit", "labels": self.labels, "groups": self.groups,
+                "transforms": tuple(T.copy() for T in self.transforms), "settings": dict(self.settings),
+                "ssp_index": self.ssp_index}
+
+    def commit(self):
+        """The shown state becomes the base of a new edit (no selection, no groups): one step of history."""
+        self._require_scan()
+        self._require_released_edit("commit")
+        chain = self.chain + (self._edit_step(),)
+        self._new_base(chain, self.shown_points, self.shown_normals, "commit")
+
+    def _new_base(self, chain, points, normals, kind, labels=None, groups=0):
+        """A new edit on `points`, after the chain `chain`: recorded as a step of history of kind `kind`."""
+        self.chain = chain
+        self.points, self.normals = points, normals
+        self._blank_edit()
+        if labels is not None:
+            self.labels, self.groups = labels, groups
+            self.transforms = [_identity() for _ in range(groups)]
+        self._start_editor()
+        self._record(kind)
 
     # ---- details ----------------------------------------------------------------------------------------------
 
     def details(self, mode, s, apply=False):
         """Scales or enhances the details of the painted region (its points: region and handles) by `s`, as
-        point-detail scale / enhance do; with `apply`, the result becomes the scan the edit starts from."""
+        point-detail scale / enhance do; with `apply`, a step of the chain: the result, its normals refitted where
+        points moved, becomes the input of the edit (its selection kept)."""
         self._require_scan()
         self._require_undeformed("changing the details")
         if mode not in ("scale", "enhance"):
             raise StudioError("details: mode must be scale or enhance")
         if not isinstance(s, (int, float)) or isinstance(s, bool) or not math.isfinite(s) or not 0 <= s <= 3:
             raise StudioError("details: s must be a number from 0 to 3")
+        if not isinstance(apply, bool):
+            raise StudioError("details: apply is true or false")
         roi = self.labels != FIXED
         if not roi.any():
             raise StudioError("paint the region whose details change first")
         function = cgal_ext.scale_geometric_details if mode == "scale" else cgal_ext.enhance_geometric_details
         try:
             result = function(self.points, self.normals, roi=roi, s=float(s))
+            normals = self.normals
+            if apply:
+                moved = np.flatnonzero((result != self.points).any(axis=1))
+                if len(moved):
+                    normals = _library("refit_normals")(result, self.normals, moved)
         except (ValueError, RuntimeError) as error:
             raise StudioError(str(error))
         if apply:
-            self.points = result
-            self.base_changed = True
-            self.shown_points = result.copy()
-            self._drop_deformation()
-            self._start_editor()
+            step = {"type": mode, "s": float(s), "roi": roi}
+            self._new_base(self.chain + (step,), result, normals, mode, self.labels, self.groups)
         return result
+
+    # ---- selection over the neighbour graph -------------------------------------------------------------------
+
+    def graph(self):
+        """The selection graph of the current base, computed once per base."""
+        key = id(self.points)
+        if key not in self._graphs:
+            self._graphs[key] = (self.points, Graph(self.points))  # the points kept: the key's id stays theirs
+            while len(self._graphs) > 2:
+                self._graphs.popitem(last=False)
+        self._graphs.move_to_end(key)
+        return self._graphs[key][1]
+
+    def grow(self, target, group=0):
+        """The region, or handle group `group`, grown by one ring of neighbours. A handle takes in fixed and region
+        points, never another group's."""
+        self._require_scan()
+        self._require_undeformed("growing the selection")
+        self._check_target(target, group, "grow")
+        labels = self.labels.copy()
+        if target == "roi":
+            labels[self.graph().ring(self.labels != FIXED) & (self.labels == FIXED)] = ROI
+        else:
+            handle = FIRST_HANDLE + group
+            labels[self.graph().ring(self.labels == handle) & (self.labels < FIRST_HANDLE)] = handle
+        self._set_selection(labels)
+
+    def shrink(self, target, group=0):
+        """The region, or handle group `group`, less its points that have a neighbour outside it. The region never
+        loses handle points; a handle's border points go back to the region."""
+        self._require_scan()
+        self._require_undeformed("shrinking the selection")
+        self._check_target(target, group, "shrink")
+        labels = self.labels.copy()
+        if target == "roi":
+            labels[self.graph().border(self.labels != FIXED) & (self.labels == ROI)] = FIXED
+        else:
+            labels[self.graph().border(self.labels == FIRST_HANDLE + group)] = ROI
+        self._set_selection(labels)
+
+    def select_connected(self, target, mode, group, seed):
+        """The connected part of the neighbour graph that holds point `seed`, painted like select()."""
+        self._require_scan()
+        self._require_undeformed("painting")
+        if mode not in ("add", "erase"):
+            raise StudioError("select_connected: mode must be add or erase")
+        self._check_target(target, group, "select_connected")
+        if type(seed) is not int or not 0 <= seed < len(self.points):
+            raise StudioError("select_connected: seed is a point index (%d points)" % len(self.points))
+        part = np.flatnonzero(self.graph().flood(np.array([seed])) >= 0)
+        self._set_selection(self._painted(target, mode, part, group))
+        return len(part)
+
+    def grow_region_around(self, group):
+        """The remedy for a handle group lying in the fixed part: the region grown from the group through fixed
+        points, at least 3 rings and as far as the group's radius beyond it (the largest distance of its points from
+        their centroid, measured from the centroid: within twice that)."""
+        self._require_scan()
+        self._require_undeformed("growing the region")
+        self._check_target("handle", group, "grow_region_around")
+        handle = np.flatnonzero(self.labels == FIRST_HANDLE + group)
+        if not len(handle):
+            raise StudioError("handle group %d has no points to grow the region around" % group)
+        centre = self.points[handle].mean(axis=0)
+        radius = np.linalg.norm(self.points[handle] - centre, axis=1).max()
+        near = np.linalg.norm(self.points - centre, axis=1) <= 2 * radius
+        graph, fixed = self.graph(), self.labels == FIXED
+        ring = graph.flood(handle, allowed=fixed, rings=3)
+        grown = ring > 0
+        # Beyond the 3 rings, on through fixed points near the handle.
+        farther = graph.flood(np.flatnonzero(ring >= 0), allowed=fixed & near)
+        grown |= farther > 0
+        labels = self.labels.copy()
+        labels[grown] = ROI
+        self._set_selection(labels)
+        return int(grown.sum())
+
+    def warnings(self):
+        """What makes the prepared edit tear: a handle group with no movable region point among its neighbours
+        (an island in the fixed part, pulled off it by the drag), a region with no fixed point among its
+        neighbours (nothing holds it). A list of {kind, group?, message}, empty when the edit makes sense."""
+        self._check_preparable()
+        graph, found = self.graph(), []
+        for g in range(self.groups):
+            handle = np.flatnonzero(self.labels == FIRST_HANDLE + g)
+            if not np.any(self.labels[graph.of(handle)] == ROI):
+                found.append({"kind": "island", "group": g, "message": (
+                    "handle group %d touches no movable point of the region: it lies in the fixed part, and a drag "
+                    "would pull it off, leaving a trail of loose points; grow the region around it" % g)})
+        region = self.labels != FIXED
+        if not np.any(self.labels[graph.of(np.flatnonzero(region))] == FIXED):
+            found.append({"kind": "no_fixed_part", "message": (
+                "the region touches no fixed point: nothing holds it, and it would move as a whole with the "
+                "handles")})
+        return found
+
+    # ---- filling ----------------------------------------------------------------------------------------------
+
+    def fill(self, progress=None):
+        """Commits the current edit and fills what it stretched: the library's up-sampling of the points it moved,
+        at the local spacing of its input (point-detail edit --upsample); the new points are appended. One step
+        of history, two of the chain (the edit, the fill)."""
+        self._require_scan()
+        self._require_released_edit("fill")
+        spacing = _library("compute_local_spacing")
+        moved = np.flatnonzero((self.shown_points != self.points).any(axis=1))
+        if not len(moved):
+            raise StudioError("fill: the edit moved no point")
+        try:
+            added = cgal_ext.upsample_point_set(self.shown_points, self.shown_normals, roi=moved,
+                                                spacing_before=spacing(self.points), progress=progress)
+        except (ValueError, RuntimeError) as error:
+            raise StudioError("fill failed: %s" % error)
+        points = np.concatenate([self.shown_points, added.points])
+        normals = np.concatenate([self.shown_normals, added.normals])
+        chain = self.chain + (self._edit_step(), {"type": "fill", "inserted": len(added.points)})
+        self._new_base(chain, points, normals, "fill")
+        return len(added.points)
+
+    def spacing(self):
+        """Each shown point's local spacing (the page sizes its points by it), None without the binding."""
+        function = getattr(cgal_ext, "compute_local_spacing", None)
+        if function is None:  # a module older than the studio
+            return None
+        if self._spacing is None or self._spacing[0] is not self.shown_points:
+            self._spacing = (self.shown_points, function(self.shown_points))
+        return self._spacing[1]
+
+    def inserted(self):
+        """Which points a fill inserted (they follow the scan's), None when none did."""
+        n = len(self.scan_points)
+        if len(self.shown_points) == n:
+            return None
+        flags = np.zeros(len(self.shown_points), np.uint8)
+        flags[n:] = 1
+        return flags
 
     # ---- saving -----------------------------------------------------------------------------------------------
 
-    def edit_json(self, name):
-        """The edit as the program's edit JSON, its selections in index files beside it."""
+    def _saved_chain(self):
+        """The chain a save writes, from the shown step: the committed steps, then the current edit when it has a
+        selection (with the released transforms of the shown step; identity before any drag)."""
+        snapshot = self.history[self.step]
+        chain = list(snapshot["chain"])
+        labels, groups = snapshot["labels"], snapshot["groups"]
+        if groups and (labels != FIXED).any():
+            chain.append({"type": "edit", "labels": labels, "groups": groups, "transforms": snapshot["transforms"],
+                          "settings": snapshot["settings"], "ssp_index": snapshot["ssp_index"]})
+        return snapshot, chain
+
+    @staticmethod
+    def _step_json(step, prefix):
+        """A step as the program's edit JSON spells it, and its index files: (json, [(file name, indices)])."""
+        files = []
+        if step["type"] == "fill":
+            return {"type": "fill"}, files
+        roi = step["labels"] != FIXED if step["type"] == "edit" else step["roi"]
+        files.append((prefix + ".roi.txt", np.flatnonzero(roi)))
+        if step["type"] != "edit":
+            return {"type": step["type"], "s": step["s"], "roi": ["indices:%s.roi.txt" % prefix]}, files
         handles = []
-        for g in range(self.groups):
-            T = self.transforms[g]
-            handles.append({"select": ["indices:%s.handle%d.txt" % (name, g)],
+        for g in range(step["groups"]):
+            T = step["transforms"][g]
+            files.append(("%s.handle%d.txt" % (prefix, g), np.flatnonzero(step["labels"] == FIRST_HANDLE + g)))
+            handles.append({"select": ["indices:%s.handle%d.txt" % (prefix, g)],
                             "matrix": T[:3, :3].tolist(), "translation": T[:3, 3].tolist()})
-        return {"roi": ["indices:%s.roi.txt" % name], "handles": handles,
-                "filter": {"order": self.settings["order"]}, "rotations": self.settings["rotations"],
-                "strength_distance": self.settings["strength_distance"]}
+        settings = step["settings"]
+        return {"type": "edit", "roi": ["indices:%s.roi.txt" % prefix], "handles": handles,
+                "filter": {"order": settings["order"]}, "rotations": settings["rotations"],
+                "strength_distance": settings["strength_distance"]}, files
+
+    def edit_json(self, name):
+        """The chain as the program's edit JSON ("steps"), its selections in index files NAME.step<k>.*.txt."""
+        return self._edit_files(name)[0]
+
+    def _edit_files(self, name):
+        _, chain = self._saved_chain()
+        steps, files = [], []
+        for k, step in enumerate(chain):
+            spelt, indices = self._step_json(step, "%s.step%d" % (name, k))
+            steps.append(spelt)
+            files += indices
+        return {"steps": steps}, files
 
     @staticmethod
     def _check_save_name(name):
@@ -476,21 +823,30 @@ class Session:
 
         def text(content):
             return lambda path: pathlib.Path(path).write_text(content)
-        if self.groups and (self.labels != FIXED).any():
-            outputs.append((name + ".roi.txt", text("".join("%d\n" % i for i in np.flatnonzero(self.labels != FIXED)))))
-            for g in range(self.groups):
-                outputs.append(("%s.handle%d.txt" % (name, g), text(
-                    "".join("%d\n" % i for i in np.flatnonzero(self.labels == FIRST_HANDLE + g)))))
-            outputs.append((name + ".json", text(json.dumps(self.edit_json(name), indent=2) + "\n")))
-        if self.base_changed:  # the scaled input the edit starts from
-            outputs.append((name + ".base.ply", lambda path: cgal_ext.write_ply(path, self.points, self.normals)))
-        moved = np.linalg.norm(self.shown_points - self.points, axis=1)
-        sample = (self.deformation.sample_point_of(np.ones(len(self.points), bool)).astype(float)
-                  if self.deformation is not None else np.zeros(len(self.points)))
-        status = np.minimum(self.labels, 2).astype(float)
+        snapshot, chain = self._saved_chain()
+        if chain:
+            edit, files = self._edit_files(name)
+            for file_name, indices in files:
+                outputs.append((file_name, text("".join("%d\n" % i for i in indices))))
+            outputs.append((name + ".json", text(json.dumps(edit, indent=2) + "\n")))
+        points, normals = snapshot["shown_points"], snapshot["shown_normals"]
+        n, scanned = len(points), len(self.scan_points)
+        # The program's fields: distance from the scan (0 for inserted points), the last edit's status and sample
+        # points (0 for points inserted after it), which points a fill inserted.
+        moved = np.zeros(n)
+        moved[:scanned] = np.linalg.norm(points[:scanned] - self.scan_points, axis=1)
+        status, sample = np.zeros(n), np.zeros(n)
+        edits = [step for step in chain if step["type"] == "edit"]
+        if edits:
+            last = edits[-1]
+            status[:len(last["labels"])] = np.minimum(last["labels"], 2)
+            if last["ssp_index"] is not None:
+                sample[:len(last["ssp_index"])] = last["ssp_index"]
+        fields = dict(displacement=moved, status=status, ssp_index=sample)
+        if any(step["type"] == "fill" for step in chain):
+            fields["inserted"] = (np.arange(n) >= scanned).astype(float)
         outputs.append((name + ".ply", lambda path: cgal_ext.write_ply(
-            path, self.shown_points, self.shown_normals, colors=cgal_ext.sequential_colors(moved),
-            displacement=moved, status=status, ssp_index=sample)))
+            path, points, normals, colors=cgal_ext.sequential_colors(moved), **fields)))
         return outputs
 
     def _is_scan(self, path):
@@ -600,7 +956,8 @@ class Session:
         return lost
 
     def load_edit(self, name):
-        """Loads a selection (and settings) from an edit JSON the studio saved: indices files beside it."""
+        """Loads a selection (and settings) from an edit JSON the studio saved, one edit or a chain of one edit
+        step: index files beside it."""
         self._require_scan()
         self._require_undeformed("loading a selection")
         roi_files, handle_files, settings = self._read_edit(name)
@@ -630,11 +987,8 @@ class Session:
         labels[indices(roi_files)] = ROI
         for g, specs in enumerate(handle_files):
             labels[indices(specs)] = FIRST_HANDLE + g
-        self.labels, self.groups = labels, len(handle_files)
-        self.transforms = [_identity() for _ in range(self.groups)]
-        self.history, self.step = [[_identity() for _ in range(self.groups)]], 0
-        self._drop_deformation()
         self._use_settings(settings)
+        self._set_selection(labels, len(handle_files))
 
     def _read_edit(self, name):
         """The selections (roi, per handle group) and settings of an edit JSON the studio saved, checked."""
@@ -655,6 +1009,15 @@ class Session:
             return value
         if not isinstance(edit, dict):
             raise refuse("not a JSON object")
+        if "steps" in edit:
+            steps = edit["steps"]
+            if not isinstance(steps, list) or not all(isinstance(step, dict) for step in steps):
+                raise refuse("steps is not a list of objects")
+            if len(steps) != 1 or steps[0].get("type") != "edit":
+                raise StudioError("%s holds a chain of %d steps (%s); the studio loads the selection of a single "
+                                  "edit step: open the saved PLY to edit its result further" %
+                                  (name, len(steps), ", ".join(str(step.get("type"))[:20] for step in steps[:8])))
+            edit = steps[0]
         roi = selections(edit.get("roi"), "roi")
         handles = edit.get("handles")
         if not isinstance(handles, list) or not all(isinstance(h, dict) for h in handles):
@@ -701,9 +1064,16 @@ class Session:
     # ---- the state --------------------------------------------------------------------------------------------
 
     def state(self):
-        return {"scan": self.scan, "points": None if self.points is None else len(self.points),
-                "groups": self.groups if self.points is not None else 0, "settings": self.settings,
-                "step": getattr(self, "step", 0), "steps": len(getattr(self, "history", [[]])) - 1,
-                "preprocessed": self.deformation is not None, "base_changed": self.base_changed,
-                "region": int(np.count_nonzero(self.labels != FIXED)) if self.points is not None else 0,
-                "transforms": [t.reshape(-1).tolist() for t in getattr(self, "transforms", [])]}
+        if self.points is None:
+            return {"scan": None, "points": None, "groups": 0, "settings": self.settings, "step": 0, "steps": 0,
+                    "preprocessed": False, "base_changed": False, "region": 0, "transforms": [], "chain": [],
+                    "history": [], "committable": False}
+        snapshot = self.history[self.step]
+        return {"scan": self.scan, "points": len(self.points), "groups": self.groups, "settings": self.settings,
+                "step": self.step, "steps": len(self.history) - 1,
+                "preprocessed": self.deformation is not None, "base_changed": bool(self.chain),
+                "region": int(np.count_nonzero(self.labels != FIXED)),
+                "transforms": [t.reshape(-1).tolist() for t in self.transforms],
+                "chain": [step["type"] for step in self.chain],
+                "history": [s["kind"] for s in self.history],
+                "committable": snapshot["kind"] == "drag" and not self._dragged()}
