@@ -27,6 +27,96 @@ struct Edit_command
   bool upsample = false;
   Render_settings render;
 
+  /// The edit with the command line's settings over the file's, checked.
+  Edit_description with_overrides(Edit_description description) const
+  {
+    for(const auto& [option, apply] : overrides)
+      if(option->count() > 0) apply(description.settings, options);
+    description.settings.validate();
+    return description;
+  }
+
+  /// Runs the steps of `chain` on `cloud` (which has normals), each on the result of the one before (doc/editing.md,
+  /// "Chains of steps"). The result holds the points and normals, each input point's distance from where it
+  /// started (`displacement`), `status` and `ssp_index` of the last edit step and, after a fill, `inserted`.
+  Point_cloud run_chain(const Point_cloud& cloud, const std::vector<Edit_step>& chain, Progress_printer& progress,
+                        Report& rep) const
+  {
+    Point_cloud state;
+    state.points = cloud.points;
+    state.normals = cloud.normals;
+    std::vector<double> status, sample; // of the last edit step
+    std::vector<std::size_t> moved;     // the points the last edit step moved
+    std::vector<double> spacing_before; // and their spacing before it
+    bool filled = false;
+    for(std::size_t s = 0; s < chain.size(); ++s) {
+      const Edit_step& step = chain[s];
+      if(step.kind == Edit_step::Kind::edit) {
+        const Edit_description description = with_overrides(step.edit(state.points));
+        if(s + 1 < chain.size() && chain[s + 1].kind == Edit_step::Kind::fill) spacing_before = local_spacing(state);
+        Point_cloud out;
+        run_edit(state, description, progress, rep, out);
+        const std::vector<double>& displacement = *out.scalar("displacement");
+        moved.clear();
+        for(std::size_t i = 0; i < displacement.size(); ++i)
+          if(displacement[i] > 0) moved.push_back(i);
+        status = *out.scalar("status");
+        sample = *out.scalar("ssp_index");
+        if(rep.data().contains("restore_details"))
+          rep.data()["restore_details"]["tolerance"] = description.settings.detail_tolerance;
+        state.points = std::move(out.points);
+        state.normals = std::move(out.normals);
+      } else if(step.kind == Edit_step::Kind::fill) {
+        Point_cloud grown;
+        grown.points = state.points;
+        grown.normals = state.normals;
+        upsample_cloud(grown, CGAL_ext::Upsampling_settings(), &moved, &spacing_before, progress, rep);
+        state = std::move(grown);
+        filled = true;
+      } else {
+        const bool enhance = step.kind == Edit_step::Kind::enhance;
+        const std::vector<std::size_t> region = step.region(state.points);
+        if(step.k >= state.points.size())
+          throw Cli_error(step.where + ": k = " + std::to_string(step.k) +
+                          " must be smaller than the number of points (" + std::to_string(state.points.size()) + ")");
+        CGAL_ext::Detail_enhancement_settings settings{CGAL_ext::Detail_settings(step.filter)};
+        settings.validate();
+        Point_cloud out;
+        const char* name = enhance ? "enhance" : "scale";
+        const bool done = rep.time(name, [&] {
+          return bool(
+            manipulate(enhance, state, region, nullptr, step.factor, step.k, settings, progress.stage(name), out));
+        });
+        progress.finish();
+        if(!done) throw Cancelled();
+        state.points = std::move(out.points);
+        state.normals = std::move(out.normals);
+      }
+    }
+    const std::size_t n = state.points.size(), input_size = cloud.points.size();
+    std::vector<double> displacement(n, 0.0);
+    for(std::size_t i = 0; i < input_size; ++i)
+      displacement[i] = std::sqrt(CGAL::squared_distance(state.points[i], cloud.points[i]));
+    state.colors =
+      sequential_colors(std::vector<double>(displacement.begin(), displacement.begin() + std::ptrdiff_t(input_size)))
+        .colors;
+    state.colors.resize(n, flag_color);
+    state.set_scalar("displacement", std::move(displacement));
+    if(!status.empty()) {
+      status.resize(n, 0.0);
+      sample.resize(n, 0.0);
+      state.set_scalar("status", std::move(status));
+      state.set_scalar("ssp_index", std::move(sample));
+    }
+    if(filled) {
+      std::vector<double> inserted(n, 0.0);
+      std::fill(inserted.begin() + std::ptrdiff_t(input_size), inserted.end(), 1.0);
+      state.set_scalar("inserted", std::move(inserted));
+    }
+    rep.data()["steps"] = chain.size();
+    return state;
+  }
+
   void run(const Common_options& common)
   {
     if(edit.empty() && sel.empty()) throw Cli_error("edit needs --edit EDIT.json or --sel S --def D");
@@ -41,32 +131,37 @@ struct Edit_command
     rep.data()["input"] = input;
     Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::edit); });
     if(cloud.points.size() < 2) throw Cli_error(input + " has fewer than 2 points");
-    Edit_description description = edit.empty() ? read_botsch_sorkine(sel, def, cloud.points.size())
-                                                 : read_edit_json(edit, cloud.points);
-    // Options given on the command line override the edit file's settings.
-    auto& s = description.settings;
-    for(const auto& [option, apply] : overrides)
-      if(option->count() > 0) apply(s, options);
-    s.validate();
-    ensure_normals(cloud, progress, rep);
-
-    Point_cloud out;
-    run_edit(cloud, description, progress, rep, out);
-    // What the edit stretched is filled at the spacing the model had before it, from the points it moved.
-    if(upsample) {
-      const std::vector<double>& moved = *out.scalar("displacement");
-      std::vector<std::size_t> region;
-      for(std::size_t i = 0; i < moved.size(); ++i)
-        if(moved[i] > 0) region.push_back(i);
-      const std::vector<double> spacing_before = local_spacing(cloud);
-      upsample_cloud(out, CGAL_ext::Upsampling_settings(), &region, &spacing_before, progress, rep);
+    std::vector<Edit_step> chain;
+    if(edit.empty()) {
+      chain.emplace_back();
+      chain.back().where = sel;
+      chain.back().edit = [d = read_botsch_sorkine(sel, def, cloud.points.size())](const std::vector<Point>&) {
+        return d;
+      };
+    } else {
+      chain = read_edit_chain(edit);
     }
+    if(upsample) {
+      if(chain.back().kind != Edit_step::Kind::edit)
+        throw Cli_error("--upsample fills what the last edit step stretched, but " + chain.back().where +
+                        " is not an edit");
+      chain.emplace_back();
+      chain.back().kind = Edit_step::Kind::fill;
+    }
+    for(const Edit_step& step : chain) // the command line's settings over each edit's, checked before any step runs
+      if(step.kind == Edit_step::Kind::edit) {
+        Edit_description settings_only;
+        settings_only.settings = step.settings;
+        with_overrides(settings_only);
+      }
+    ensure_normals(cloud, progress, rep);
+    const Point_cloud out = run_chain(cloud, chain, progress, rep);
     rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] { return render_png(out.points, out.normals, edit_coloring(out), render); }));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();
-    if(!common.quiet) {
+    if(!common.quiet && rep.data().contains("ssps")) {
       const auto& r = rep.data();
       std::fprintf(stderr, "edit: %zu points, %zu SSPs (%zu in the region): editing the SSPs %.3f s, diffusion %.3f s\n",
                    r["points"].get<std::size_t>(), r["ssps"].get<std::size_t>(), r["roi_ssps"].get<std::size_t>(),
@@ -76,15 +171,17 @@ struct Edit_command
                      r["requested_ssps"].get<std::size_t>(), r["ssps"].get<std::size_t>());
     }
     // Printed even with --quiet: the result is probably not what the user wanted.
-    if(rep.data()["displacement_ratio"].get<double>() > swing_warning_ratio)
+    if(rep.data().value("displacement_ratio", 0.0) > swing_warning_ratio)
       std::fprintf(stderr, "point-detail: warning: parts of the region moved %.1f times as far as any handle (the solve "
                    "swings them; try --order quadric or --rotations arap)\n", rep.data()["displacement_ratio"].get<double>());
-    if(rep.data().contains("restore_details") &&
-       rep.data()["restore_details"]["residual"].get<double>() > description.settings.detail_tolerance)
-      std::fprintf(stderr, "point-detail: warning: putting back the fine details stopped after %u iterations at a residual "
+    if(rep.data().contains("restore_details") && rep.data()["restore_details"]["residual"].get<double>() >
+                                                   rep.data()["restore_details"]["tolerance"].get<double>())
+      std::fprintf(stderr,
+                   "point-detail: warning: putting back the fine details stopped after %u iterations at a residual "
                    "of %.2g (tolerance %.2g); raise --detail-iterations\n",
                    rep.data()["restore_details"]["iterations"].get<unsigned>(),
-                   rep.data()["restore_details"]["residual"].get<double>(), description.settings.detail_tolerance);
+                   rep.data()["restore_details"]["residual"].get<double>(),
+                   rep.data()["restore_details"]["tolerance"].get<double>());
   }
 };
 

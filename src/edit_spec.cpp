@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -47,8 +48,8 @@ Eigen::Vector3d vector3(const json& value, const std::string& where)
   return {number(value[0], where + "[0]"), number(value[1], where + "[1]"), number(value[2], where + "[2]")};
 }
 
-std::vector<std::size_t> selection(const json& specs, const std::vector<Point>& points, const std::filesystem::path& base,
-                                   const std::string& where)
+/// The region specs of `specs` (syntax checked, index files relative to `base`).
+std::vector<Region_spec> region_specs(const json& specs, const std::filesystem::path& base, const std::string& where)
 {
   if(!specs.is_array() || specs.empty()) throw Cli_error(where + " must be a non-empty array of region specs");
   std::vector<Region_spec> parsed;
@@ -59,7 +60,7 @@ std::vector<std::size_t> selection(const json& specs, const std::vector<Point>& 
       spec.file = (base / spec.file).string();
     parsed.push_back(spec);
   }
-  return select_points(points, parsed);
+  return parsed;
 }
 
 /// A rotation from its JSON form: {"axis", "degrees"}, "quaternion" [w, x, y, z] or "matrix" (3 rows).
@@ -124,18 +125,44 @@ std::vector<std::pair<std::size_t, std::string>> content_lines(const std::filesy
   return lines;
 }
 
-} // namespace
-
-Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
+std::vector<std::size_t> all_indices(std::size_t n)
 {
-  std::ifstream in = open_input(path);
-  json edit;
-  try {
-    edit = json::parse(in);
-  } catch(const json::exception& e) { // a syntax error, or a number out of range (1e999)
-    throw Cli_error(path.string() + ": not valid JSON: " + e.what());
-  }
-  const std::string file = path.filename().string();
+  std::vector<std::size_t> indices(n);
+  std::iota(indices.begin(), indices.end(), std::size_t(0));
+  return indices;
+}
+
+/// A whole number >= 1 (counts and sizes).
+double whole(const json& v, const std::string& where)
+{
+  const double x = number(v, where);
+  if(!(x >= 1 && x == std::floor(x) && x < 1e9)) throw Cli_error(where + " must be a whole number >= 1");
+  return x;
+}
+
+/// A setting spelled by name (CGAL_ext::Setting_names), when `parent` has `key`.
+template <typename Value>
+void named_setting(const json& parent, const char* key, const std::string& where, Value& value)
+{
+  if(!parent.contains(key)) return;
+  const json& v = parent[key];
+  value = setting_value<Value>(v.is_string() ? v.get<std::string>() : v.dump(), where);
+}
+
+/// The "filter" object {"order", "lambda", "mu"} over `filter`.
+void read_filter(const json& f, const std::string& where, CGAL_ext::Detail_filter& filter)
+{
+  check_keys(f, {"order", "lambda", "mu"}, where);
+  named_setting(f, "order", where + ".order", filter.order);
+  if(f.contains("lambda")) filter.lambda = number(f["lambda"], where + ".lambda");
+  if(f.contains("mu")) filter.mu = number(f["mu"], where + ".mu");
+}
+
+/// The edit of the JSON object `edit` (`file` names it in messages, index files are relative to `base`). With
+/// `points`, its selections are evaluated on them; without, everything else is checked and they are left empty.
+Edit_description parse_edit(const json& edit, const std::filesystem::path& base, const std::string& file,
+                            const std::vector<Point>* points)
+{
   check_keys(edit, {"roi", "handles", "filter", "k", "strength_distance", "handle_weight", "rotations", "rigid_iterations",
                     "rigid_rotation_smoothing", "rigid_rotation_smoothing_scale", "rigid_edge_weights",
                     "diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations", "diffusion",
@@ -144,15 +171,15 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     for(const char* flat : {"diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations"})
       if(edit.contains(flat))
         throw Cli_error(file + ": " + flat + " and the older \"diffusion\" object are both given; keep " + flat);
-  const std::filesystem::path base = path.parent_path();
   Edit_description out;
   auto& settings = out.settings;
   if(edit.contains("roi")) {
-    out.roi = selection(edit["roi"], points, base, file + ": roi");
-    if(out.roi.empty()) throw Cli_error(file + ": roi selects none of the " + std::to_string(points.size()) + " points");
-  } else {
-    out.roi.resize(points.size());
-    for(std::size_t i = 0; i < points.size(); ++i) out.roi[i] = i;
+    const std::vector<Region_spec> roi = region_specs(edit["roi"], base, file + ": roi");
+    if(points) out.roi = select_points(*points, roi);
+    if(points && out.roi.empty())
+      throw Cli_error(file + ": roi selects none of the " + std::to_string(points->size()) + " points");
+  } else if(points) {
+    out.roi = all_indices(points->size());
   }
   if(!edit.contains("handles") || !edit["handles"].is_array() || edit["handles"].empty())
     throw Cli_error(file + ": handles must be a non-empty array of handle groups");
@@ -162,32 +189,19 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     check_keys(h, {"select", "translation", "rotation", "quaternion", "matrix", "pivot"}, where);
     if(!h.contains("select")) throw Cli_error(where + " needs select (region specs of its points)");
     Handle_edit handle;
-    handle.points = selection(h["select"], points, base, where + ".select");
-    if(handle.points.empty()) throw Cli_error(where + ".select selects no point");
+    const std::vector<Region_spec> select = region_specs(h["select"], base, where + ".select");
+    if(points) handle.points = select_points(*points, select);
+    if(points && handle.points.empty()) throw Cli_error(where + ".select selects no point");
     handle.rotation = rotation(h, where);
     const Eigen::Vector3d t = h.contains("translation") ? vector3(h["translation"], where + ".translation") : Eigen::Vector3d::Zero();
     const Eigen::Vector3d pivot = h.contains("pivot") ? vector3(h["pivot"], where + ".pivot") : Eigen::Vector3d::Zero();
     handle.translation = pivot - handle.rotation * pivot + t; // p -> R (p - pivot) + pivot + t
     out.handles.push_back(std::move(handle));
   }
-  // A setting spelled by name (CGAL_ext::Setting_names).
-  auto named = [&](const json& parent, const char* key, const std::string& where, auto& value) {
-    if(!parent.contains(key)) return;
-    const json& v = parent[key];
-    value = setting_value<std::decay_t<decltype(value)>>(v.is_string() ? v.get<std::string>() : v.dump(), where);
+  const auto named = [](const json& parent, const char* key, const std::string& where, auto& value) {
+    named_setting(parent, key, where, value);
   };
-  if(edit.contains("filter")) {
-    const json& f = edit["filter"];
-    check_keys(f, {"order", "lambda", "mu"}, file + ": filter");
-    named(f, "order", file + ": filter.order", settings.filter.order);
-    if(f.contains("lambda")) settings.filter.lambda = number(f["lambda"], file + ": filter.lambda");
-    if(f.contains("mu")) settings.filter.mu = number(f["mu"], file + ": filter.mu");
-  }
-  auto whole = [&](const json& v, const std::string& where) {
-    const double x = number(v, where);
-    if(!(x >= 1 && x == std::floor(x) && x < 1e9)) throw Cli_error(where + " must be a whole number >= 1");
-    return x;
-  };
+  if(edit.contains("filter")) read_filter(edit["filter"], file + ": filter", settings.filter);
   if(edit.contains("k")) settings.sample_neighbors = unsigned(whole(edit["k"], file + ": k"));
   named(edit, "strength_distance", file + ": strength_distance", settings.strength_distance);
   if(edit.contains("handle_weight")) settings.handle_weight = number(edit["handle_weight"], file + ": handle_weight");
@@ -228,6 +242,105 @@ Edit_description read_edit_json(const std::filesystem::path& path, const std::ve
     throw Cli_error(file + ": " + e.what());
   }
   return out;
+}
+
+json read_json(const std::filesystem::path& path)
+{
+  std::ifstream in = open_input(path);
+  try {
+    return json::parse(in);
+  } catch(const json::exception& e) { // a syntax error, or a number out of range (1e999)
+    throw Cli_error(path.string() + ": not valid JSON: " + e.what());
+  }
+}
+
+/// A scale or enhance step: {"type", "s", "roi", "filter", "k"}.
+Edit_step detail_step(const json& step, const std::filesystem::path& base, Edit_step out)
+{
+  const std::string& where = out.where;
+  check_keys(step, {"type", "s", "roi", "filter", "k"}, where);
+  if(!step.contains("s")) throw Cli_error(where + " needs s, the factor of the details");
+  out.factor = number(step["s"], where + ".s");
+  if(step.contains("filter")) read_filter(step["filter"], where + ".filter", out.filter);
+  if(step.contains("k")) out.k = unsigned(whole(step["k"], where + ".k"));
+  try {
+    CGAL_ext::Detail_settings settings;
+    settings.filter = out.filter;
+    settings.validate();
+  } catch(const CGAL_ext::Invalid_input& e) {
+    throw Cli_error(where + ": " + e.what());
+  }
+  if(!step.contains("roi")) {
+    out.region = [](const std::vector<Point>& points) { return all_indices(points.size()); };
+    return out;
+  }
+  out.region = [specs = region_specs(step["roi"], base, where + ".roi"), where](const std::vector<Point>& points) {
+    std::vector<std::size_t> region = select_points(points, specs);
+    if(region.empty()) throw Cli_error(where + ".roi selects none of the " + std::to_string(points.size()) + " points");
+    return region;
+  };
+  return out;
+}
+
+} // namespace
+
+std::vector<Edit_step> read_edit_chain(const std::filesystem::path& path)
+{
+  const json document = read_json(path);
+  const std::string file = path.filename().string();
+  const std::filesystem::path base = path.parent_path();
+  const auto edit_step = [&base](const json& edit, const std::string& where) {
+    Edit_step step;
+    step.settings = parse_edit(edit, base, where, nullptr).settings; // everything but the selections, checked now
+    step.where = where;
+    step.edit = [edit, base, where](const std::vector<Point>& points) {
+      return parse_edit(edit, base, where, &points);
+    };
+    return step;
+  };
+  if(!document.is_object() || !document.contains("steps")) return {edit_step(document, file)};
+  check_keys(document, {"steps"}, file);
+  const json& steps = document["steps"];
+  if(!steps.is_array() || steps.empty()) throw Cli_error(file + ": steps must be a non-empty array of steps");
+  std::vector<Edit_step> chain;
+  for(std::size_t i = 0; i < steps.size(); ++i) {
+    const json& step = steps[i];
+    const std::string where = file + ": steps[" + std::to_string(i) + "]";
+    if(!step.is_object() || !step.contains("type") || !step["type"].is_string())
+      throw Cli_error(where + " must be an object with a type (edit, scale, enhance or fill)");
+    const std::string type = step["type"].get<std::string>();
+    if(type == "edit") {
+      json edit = step;
+      edit.erase("type");
+      chain.push_back(edit_step(edit, where));
+    } else if(type == "scale" || type == "enhance") {
+      Edit_step detail;
+      detail.kind = type == "scale" ? Edit_step::Kind::scale : Edit_step::Kind::enhance;
+      detail.where = where;
+      chain.push_back(detail_step(step, base, std::move(detail)));
+    } else if(type == "fill") {
+      check_keys(step, {"type"}, where);
+      if(chain.empty() || chain.back().kind != Edit_step::Kind::edit)
+        throw Cli_error(where +
+                        ": a fill step fills what the edit step just before it stretched; it follows an edit step");
+      Edit_step fill;
+      fill.kind = Edit_step::Kind::fill;
+      fill.where = where;
+      chain.push_back(std::move(fill));
+    } else {
+      throw Cli_error(where + ": unknown type '" + type + "' (expected one of: edit, scale, enhance, fill)");
+    }
+  }
+  return chain;
+}
+
+Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points)
+{
+  const std::vector<Edit_step> chain = read_edit_chain(path);
+  if(chain.size() != 1 || chain[0].kind != Edit_step::Kind::edit)
+    throw Cli_error(path.filename().string() + " holds a chain of " + std::to_string(chain.size()) +
+                    " steps, not one edit");
+  return chain[0].edit(points);
 }
 
 Edit_description read_botsch_sorkine(const std::filesystem::path& sel, const std::filesystem::path& def, std::size_t point_count)

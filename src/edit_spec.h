@@ -8,11 +8,14 @@
 #include "program_basics.h"
 #include "point_io.h"
 
+#include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
 
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <functional>
+#include <string>
 #include <vector>
 
 namespace point_detail {
@@ -32,6 +35,29 @@ struct Edit_description
   std::vector<std::size_t> roi;
   std::vector<Handle_edit> handles;
   CGAL_ext::Detail_preserving_deformation_settings settings;
+};
+
+/// One step of an edit chain (`{"steps": [...]}`, doc/editing.md, "Chains of steps"). Its selections are
+/// evaluated on the points the step starts from: the result of the steps before it.
+struct Edit_step
+{
+  enum class Kind
+  {
+    edit,
+    scale,
+    enhance,
+    fill
+  };
+  Kind kind = Kind::edit;
+  std::string where; ///< "FILE: steps[i]", for messages
+  /// edit: the edit on the points it starts from (its selections evaluated on them).
+  std::function<Edit_description(const std::vector<Point>&)> edit;
+  CGAL_ext::Detail_preserving_deformation_settings settings; ///< edit: its settings (as `edit` gives them)
+  /// scale and enhance: the factor, the detail filter and Laplacian size, the region on the points it starts from.
+  double factor = 1;
+  CGAL_ext::Detail_filter filter;
+  unsigned int k = CGAL_ext::default_laplacian_neighbors;
+  std::function<std::vector<std::size_t>(const std::vector<Point>&)> region;
 };
 
 /// The value of the setting `Enum` that `name` spells (`CGAL_ext::Setting_names`); throws Cli_error naming
@@ -55,10 +81,17 @@ Enum setting_value(const std::string& name, const std::string& where)
     ("uniform" | "cotangent"), "diffusion_samples", "diffusion_origin", "diffusion_turn", "detail_iterations",
     "simplification": {"max_cluster_size", "target_count", "mode_threshold"}}` (older files: "diffusion":
     {"samples", "origin", "turn", "detail_iterations"}). SPECs are region specs (`sphere:`, `box:`, `indices:FILE`, files
-  relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos).
-  Throws Cli_error naming the key and the problem.
+  relative to the JSON file); a missing "roi" is the whole model. Unknown keys are errors (they are typos). A
+  chain of steps (`read_edit_chain`) is read when it is one edit step. Throws Cli_error naming the key and the
+  problem.
 */
 Edit_description read_edit_json(const std::filesystem::path& path, const std::vector<Point>& points);
+
+/// Reads an edit JSON as a chain of steps: `{"steps": [{"type": "edit", ...}, {"type": "scale" | "enhance", "s",
+/// "roi", "filter", "k"}, {"type": "fill"}, ...]}`, or a one-edit file as a chain of one edit step. Every key,
+/// setting and region spec of every step is checked before any step runs (a fill must follow an edit); the
+/// selections are evaluated when the step runs. Throws Cli_error naming the step, the key and the problem.
+std::vector<Edit_step> read_edit_chain(const std::filesystem::path& path);
 
 /// Reads a `.sel` file (one status per point in file order: 0 fixed, 1 deformable, 2 handle; `#` lines are
 /// comments) and a `.def` file (the handle's 4x4 world transform, row by row; `#` comments). A matrix printed

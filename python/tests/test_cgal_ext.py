@@ -1,5 +1,6 @@
 # The Python module against the library's numbers as the point-detail program gives them, on a generated shape
 # and on CGAL's armadillo scan; its errors; progress and cancellation.
+import json
 import threading
 
 import numpy as np
@@ -170,6 +171,66 @@ def test_upsampling_after_an_edit_is_the_programs(sphere, sphere_file, tmp_path)
         cgal_ext.upsample_point_set(edited, edited_normals, spacing_before=spacing)
     with pytest.raises(ValueError, match="spacing_before must have one value per point"):
         cgal_ext.upsample_point_set(edited, edited_normals, roi=moved, spacing_before=spacing[:-1])
+
+
+def test_a_chain_of_steps_is_the_library_calls_one_after_another(sphere, sphere_file, tmp_path):
+    # An edit, a detail scaling, a second edit and a fill of what it stretched, each on the result of the one before
+    # (doc/editing.md, "Chains of steps"), as the studio runs them.
+    points, normals = sphere
+    write = lambda name, mask: (tmp_path / name).write_text("".join("%d\n" % i for i in np.flatnonzero(mask)))
+    write("roi0.txt", points[:, 2] > 0.0)
+    write("handle0.txt", points[:, 2] > 0.8)
+    write("roi1.txt", points[:, 2] > 0.5)
+    write("roi2.txt", points[:, 0] > -0.2)
+    write("handle2.txt", points[:, 0] > 0.7)
+    angle = np.radians(25)
+    R = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])
+    edit = lambda roi, handle, matrix, translation: {
+        "type": "edit", "roi": ["indices:" + roi], "filter": {"order": "cubic"},
+        "handles": [{"select": ["indices:" + handle], "matrix": matrix, "translation": translation}]}
+    chain = {"steps": [edit("roi0.txt", "handle0.txt", np.eye(3).tolist(), [0, 0, 0.3]),
+                       {"type": "scale", "s": 2.0, "roi": ["indices:roi1.txt"]},
+                       edit("roi2.txt", "handle2.txt", R.tolist(), [0.2, 0, 0]),
+                       {"type": "fill"}]}
+    (tmp_path / "chain.json").write_text(json.dumps(chain))
+    run_program("edit", "-i", sphere_file, "--edit", tmp_path / "chain.json", "-o", tmp_path / "chain.ply")
+    out = read_ply(tmp_path / "chain.ply")
+
+    def run_edit(p, n, roi, handle, R, t):
+        d = cgal_ext.Deformation(p, n, order="cubic")
+        d.insert_roi(roi)
+        d.set_handle_transform(d.create_handle_group(handle), R, t)
+        d.deform()
+        d.diffuse()
+        moved, moved_normals = d.restore_details()
+        return moved, moved_normals, d.sample_point_of(np.ones(len(p), bool))
+    p, n, _ = run_edit(points, normals, points[:, 2] > 0.0, points[:, 2] > 0.8, np.eye(3), [0, 0, 0.3])
+    region = np.flatnonzero(points[:, 2] > 0.5)
+    scaled = cgal_ext.scale_geometric_details(p, n, roi=region, s=2.0)
+    n = cgal_ext.refit_normals(scaled, n, np.flatnonzero((scaled != p).any(axis=1)))
+    spacing = cgal_ext.compute_local_spacing(scaled)
+    roi2, handle2 = points[:, 0] > -0.2, points[:, 0] > 0.7
+    p, n2, sample = run_edit(scaled, n, roi2, handle2, R, [0.2, 0, 0])
+    added, added_normals = cgal_ext.upsample_point_set(p, n2, roi=np.flatnonzero((p != scaled).any(axis=1)),
+                                                       spacing_before=spacing)
+    assert len(added) > 0
+    scale = np.abs(points).max()
+    assert_close(xyz(out), np.vstack([p, added]), 10 * scale)
+    assert_close(normals_of(out), np.vstack([n2, added_normals]), 10.0)
+    assert np.array_equal(out["inserted"], np.r_[np.zeros(len(points)), np.ones(len(added))])
+    assert_close(out["displacement"][:len(points)], np.linalg.norm(p - points, axis=1), 10 * scale)
+    assert np.array_equal(out["status"][:len(points)], np.where(handle2, 2, np.where(roi2, 1, 0)))
+    assert np.array_equal(out["ssp_index"][:len(points)], sample)
+
+    # A one-edit file written as a chain of one step is the one-edit file.
+    one = dict(chain["steps"][0])
+    del one["type"]
+    (tmp_path / "one.json").write_text(json.dumps(one))
+    (tmp_path / "one_step.json").write_text(json.dumps({"steps": [chain["steps"][0]]}))
+    for name in ("one", "one_step"):
+        run_program("edit", "-i", sphere_file, "--edit", tmp_path / (name + ".json"), "-o", tmp_path / (name + ".ply"),
+                    "--upsample")
+    assert (tmp_path / "one.ply").read_bytes() == (tmp_path / "one_step.ply").read_bytes()
 
 
 @pytest.mark.parametrize("options, settings", [
