@@ -205,17 +205,17 @@ struct Row
 
 const std::vector<Row>& catalogue()
 {
+  // Each row keeps its name and its lambda on one line, as the manual lists them.
+  // clang-format off
   static const std::vector<Row> rows = {
     // ---- The public functions ----
     {"empty_input", [] { EXPECT_INVALID_INPUT(details_of(Point_set()), "empty"); }},
-    {"one_point",
-     [] {
+    {"one_point", [] {
        Point_set one = with_normals({Point(0, 0, 0)}, {Vector(0, 0, 1)});
        EXPECT_INVALID_INPUT(details_of(one), "k = 10");
        EXPECT_INVALID_INPUT(Detail_preserving_deformation<>(one, {}, one.parameters()), "at least two points");
      }},
-    {"fewer_points_than_k",
-     [] {
+    {"fewer_points_than_k", [] {
        Point_set few = sphere(8);
        EXPECT_INVALID_INPUT(details_of(few, 10), "k = 10");
        std::vector<double> H(few.size());
@@ -226,21 +226,18 @@ const std::vector<Row>& catalogue()
        d.insert_handle_point(d.create_handle_group(), 0);
        EXPECT_INVALID_INPUT(d.preprocess(), "sample_neighbors (10) must be less than the number of sample points (8)");
      }},
-    {"nan_coordinate",
-     [] {
+    {"nan_coordinate", [] {
        Point_set set = sphere();
        set.point(Point_set::Index(5)) = Point(nan, 0, 0);
        EXPECT_INVALID_INPUT(details_of(set), "point #5");
      }},
-    {"inf_coordinate",
-     [] {
+    {"inf_coordinate", [] {
        Point_set set = sphere();
        set.point(Point_set::Index(7)) = Point(0, inf, 0);
        std::vector<double> H(set.size());
        EXPECT_INVALID_INPUT(estimate_mean_curvature(set, 12, CGAL::make_property_map(H), set.parameters()), "point #7");
      }},
-    {"exact_duplicates",
-     [] {
+    {"exact_duplicates", [] {
        // Documented result: accepted. A copy is a separate point of the neighbour graph, so the copies' details
        // need not agree, but all are finite and of the same size as without the copies.
        const auto s = shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.02);
@@ -263,8 +260,7 @@ const std::vector<Row>& catalogue()
        EXPECT_GT(twice, 0.5 * once);
        EXPECT_LT(twice, 2.0 * once);
      }},
-    {"collinear_points",
-     [] {
+    {"collinear_points", [] {
        // No surface to fit: every function names the problem.
        std::vector<Point> line;
        for(int i = 0; i < 100; ++i) line.emplace_back(0.01 * i, 0, 0);
@@ -274,8 +270,7 @@ const std::vector<Row>& catalogue()
                             "100 points are collinear");
        EXPECT_INVALID_INPUT(details_of(set), "collinear");
      }},
-    {"coplanar_curvature",
-     [] {
+    {"coplanar_curvature", [] {
        Point_set grid = plane_grid();
        for(Curvature_fitting fitting : {Curvature_fitting::monge_jet_fitting, Curvature_fitting::closed_form}) {
          std::vector<double> H(grid.size(), nan);
@@ -283,8 +278,7 @@ const std::vector<Row>& catalogue()
          for(double h : H) ASSERT_LT(std::abs(h), 1e-9);
        }
      }},
-    {"coplanar_mean_shift",
-     [] {
+    {"coplanar_mean_shift", [] {
        Point_set grid = plane_grid();
        auto modes = grid.add_property_map<Mean_shift_mode<Kernel>>("mode").first;
        ASSERT_TRUE(compute_mean_shift_modes(grid, default_mean_shift_neighbors, Mean_shift_settings(), modes,
@@ -294,8 +288,7 @@ const std::vector<Row>& catalogue()
          ASSERT_LT(std::abs(modes[i].mean_curvature), 1e-9);
        }
      }},
-    {"coplanar_simplification",
-     [] {
+    {"coplanar_simplification", [] {
        Point_set grid = plane_grid();
        std::vector<std::size_t> sample_of(grid.size());
        Simplification_settings settings;
@@ -306,31 +299,26 @@ const std::vector<Row>& catalogue()
        EXPECT_GE(samples.size(), grid.size() / 20);
        for(std::size_t s : sample_of) ASSERT_LT(s, samples.size());
      }},
-    {"zero_normal",
-     [] {
+    {"zero_normal", [] {
        Point_set set = sphere();
        set.normal(Point_set::Index(3)) = CGAL::NULL_VECTOR;
        EXPECT_INVALID_INPUT(details_of(set), "normal of point #3");
      }},
-    {"missing_normals",
-     [] {
+    {"missing_normals", [] {
        // Documented result: the functions that can estimate normals do; up-sampling needs them.
        const auto s = shapes::bumpy_sphere<Kernel>(1500, 1.0, 0.02);
        std::vector<std::pair<Point, Vector>> inserted;
        EXPECT_INVALID_INPUT(upsample_point_set(s.points, Upsampling_settings(), std::back_inserter(inserted)),
                             "need normals");
      }},
-    {"lambda_not_positive",
-     [] {
+    {"lambda_not_positive", [] {
        EXPECT_INVALID_INPUT((Detail_filter{Detail_order::linear, 0.0, 1.6}.validate()), "lambda");
        EXPECT_INVALID_INPUT((Detail_filter{Detail_order::quadric, -1.0, 1.6}.validate()), "lambda");
      }},
-    {"mu_not_above_lambda",
-     [] {
+    {"mu_not_above_lambda", [] {
        EXPECT_INVALID_INPUT((Detail_filter{Detail_order::cubic, 0.8, 0.8}.validate()), "mu");
      }},
-    {"scale_factor_not_finite",
-     [] {
+    {"scale_factor_not_finite", [] {
        Point_set set = sphere();
        const auto roi = indices_where(set, [](const Point& p) { return p.z() > 0; });
        EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, roi, nan, Detail_scaling_settings(), set.parameters()),
@@ -338,8 +326,7 @@ const std::vector<Row>& catalogue()
        EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, roi, inf, Detail_scaling_settings(), set.parameters()),
                             "s must be finite");
      }},
-    {"empty_roi",
-     [] {
+    {"empty_roi", [] {
        Point_set set = sphere();
        EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, std::vector<std::size_t>(), 2.0, Detail_scaling_settings(),
                                                     set.parameters()),
@@ -348,16 +335,14 @@ const std::vector<Row>& catalogue()
        d.create_handle_group();
        EXPECT_INVALID_INPUT(d.preprocess(), "region of interest is empty");
      }},
-    {"whole_model_scaling_without_anchors",
-     [] {
+    {"whole_model_scaling_without_anchors", [] {
        Point_set set = sphere();
        std::vector<std::size_t> all(set.size());
        std::iota(all.begin(), all.end(), 0);
        EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, all, 2.0, Detail_scaling_settings(), set.parameters()),
                             "whole model and no anchors");
      }},
-    {"anchor_outside_roi",
-     [] {
+    {"anchor_outside_roi", [] {
        Point_set set = sphere();
        const auto roi = indices_where(set, [](const Point& p) { return p.z() > 0; });
        const auto anchors = indices_where(set, [](const Point& p) { return p.z() < -0.9; });
@@ -365,8 +350,7 @@ const std::vector<Row>& catalogue()
                                                     set.parameters()),
                             "is not in the region");
      }},
-    {"index_out_of_range",
-     [] {
+    {"index_out_of_range", [] {
        Point_set set = sphere();
        EXPECT_INVALID_INPUT(scale_geometric_details(set, 10, std::vector<std::size_t>{0, set.size()}, 2.0,
                                                     Detail_scaling_settings(), set.parameters()),
@@ -374,16 +358,14 @@ const std::vector<Row>& catalogue()
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        EXPECT_INVALID_INPUT(d.insert_roi_point(set.size() + 3), "out of range");
      }},
-    {"handle_outside_roi",
-     [] {
+    {"handle_outside_roi", [] {
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        select_cap(d, set);
        d.insert_handle_points(0, indices_where(set, [](const Point& p) { return p.z() < -0.95; }));
        EXPECT_INVALID_INPUT(d.preprocess(), "handle point #");
      }},
-    {"overlapping_handle_groups",
-     [] {
+    {"overlapping_handle_groups", [] {
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        select_cap(d, set);
@@ -392,8 +374,7 @@ const std::vector<Row>& catalogue()
                             "handle groups must not overlap");
        d.insert_handle_points(0, indices_where(set, [](const Point& p) { return p.z() > 0.95; })); // same group: fine
      }},
-    {"non_rigid_handle_matrix",
-     [] {
+    {"non_rigid_handle_matrix", [] {
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        select_cap(d, set);
@@ -407,8 +388,7 @@ const std::vector<Row>& catalogue()
        EXPECT_INVALID_INPUT(d.set_handle_transform(0, Eigen::Matrix3d::Identity(), Eigen::Vector3d(nan, 0, 0)),
                             "not finite");
      }},
-    {"cancelled_callback",
-     [] {
+    {"cancelled_callback", [] {
        // Documented result: false, nothing changed, and the object can run again.
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters().callback(std::function<bool(double)>([](double) { return false; })));
@@ -424,8 +404,7 @@ const std::vector<Row>& catalogue()
        for(std::size_t i = 0; i < set.size(); ++i)
          ASSERT_EQ(smoothed.point(Point_set::Index(i)), set.point(Point_set::Index(i))) << i;
      }},
-    {"spacing_not_positive",
-     [] {
+    {"spacing_not_positive", [] {
        Point_set set = sphere();
        Upsampling_settings settings;
        settings.detection.spacing = -1;
@@ -441,8 +420,7 @@ const std::vector<Row>& catalogue()
                                                Upsampling_settings(), std::back_inserter(inserted), set.parameters()),
                             "the spacing of point 3 is not a positive number");
      }},
-    {"diffuse_into_another_point_set",
-     [] {
+    {"diffuse_into_another_point_set", [] {
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        select_cap(d, set);
@@ -450,8 +428,7 @@ const std::vector<Row>& catalogue()
        Point_set other = sphere(1000);
        EXPECT_INVALID_INPUT(d.diffuse(other, other.parameters()), "was given 1000 points");
      }},
-    {"restore_details_before_diffuse",
-     [] {
+    {"restore_details_before_diffuse", [] {
        Point_set set = sphere();
        Detail_preserving_deformation<> d(set, {}, set.parameters());
        select_cap(d, set);
@@ -463,35 +440,29 @@ const std::vector<Row>& catalogue()
      }},
 
     // ---- The program ----
-    {"cli_empty_file",
-     [] {
+    {"cli_empty_file", [] {
        Workspace w;
        w.expect_failure("details -i " + w.write("empty.xyz", "") + " -o " + w.path("o.ply"), "no points");
      }},
-    {"cli_fewer_points_than_k",
-     [] {
+    {"cli_fewer_points_than_k", [] {
        Workspace w;
        w.expect_failure("details -i " + w.write("one.xyz", "0 0 0 0 0 1\n") + " -o " + w.path("o.ply"), "needs more than k points");
      }},
-    {"cli_nan_in_file",
-     [] {
+    {"cli_nan_in_file", [] {
        Workspace w;
        w.expect_failure("details -i " + w.write("nan.xyz", "0 0 0\n1 0 0\nnan 1 0\n0 1 1\n") + " -o " + w.path("o.ply"), "nan.xyz");
      }},
-    {"cli_ply_truncated_binary",
-     [] {
+    {"cli_ply_truncated_binary", [] {
        Workspace w;
        const std::string in = w.write("cut.ply", binary_ply_header(1000) + binary_xyz(sphere_coordinates(1000)).substr(0, 5000));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "truncated");
      }},
-    {"cli_ply_truncated_ascii",
-     [] {
+    {"cli_ply_truncated_ascii", [] {
        Workspace w;
        const std::string in = w.write("cut.ply", ascii_ply_header(400) + ascii_xyz(sphere_coordinates(300)));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "truncated");
      }},
-    {"cli_ply_corrupted_binary",
-     [] {
+    {"cli_ply_corrupted_binary", [] {
        // A whole file whose coordinates decode to NaN at point 17.
        Workspace w;
        auto points = sphere_coordinates(400);
@@ -499,29 +470,25 @@ const std::vector<Row>& catalogue()
        w.expect_failure("details -i " + w.write("nan.ply", binary_ply_header(400) + binary_xyz(points)) + " -o " + w.path("o.ply"),
                         "point #17");
      }},
-    {"cli_ply_corrupted_ascii",
-     [] {
+    {"cli_ply_corrupted_ascii", [] {
        Workspace w;
        const std::string in = w.write("bad.ply", ascii_ply_header(300) + ascii_xyz(sphere_coordinates(300), 42, "1.0e+x"));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "bad.ply");
      }},
-    {"cli_ply_corrupted_header",
-     [] {
+    {"cli_ply_corrupted_header", [] {
        Workspace w;
        const std::string in = w.write("bad.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty quadruple x\n"
                                                  "end_header\n" + std::string(100, '\x7f'));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "line 4: unknown property type 'quadruple'");
      }},
-    {"cli_ply_property_twice_as_list",
-     [] {
+    {"cli_ply_property_twice_as_list", [] {
        Workspace w;
        const std::string in = w.write("twin.ply", ascii_ply_header(3).substr(0, ascii_ply_header(3).size() - 11) +
                                                   "property uchar blue\nproperty list uchar int blue\nend_header\n" +
                                                   "0 0 0 1 0\n1 0 0 1 0\n0 1 0 1 0\n");
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "property 'blue' appears twice");
      }},
-    {"cli_ply_list_longer_than_the_file",
-     [] {
+    {"cli_ply_list_longer_than_the_file", [] {
        Workspace w;
        std::string face(1, char(200)); // a triangle announced with 200 indices, followed by 3
        for(std::int32_t v : {0, 1, 2}) face.append(reinterpret_cast<const char*>(&v), sizeof v);
@@ -532,39 +499,34 @@ const std::vector<Row>& catalogue()
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"),
                         "element 'face' item 0: a list of 200 values, more than the file holds");
      }},
-    {"cli_ply_ascii_value_that_does_not_read",
-     [] {
+    {"cli_ply_ascii_value_that_does_not_read", [] {
        Workspace w;
        const std::string in = w.write("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
                                                  "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
                                                  "end_header\n0 0 0\n1 0 0\n0 1 0.5.1\n3 0 1 2\n");
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "element 'vertex' item 2: '0.5.1' is not a double");
      }},
-    {"cli_off_bad_counts",
-     [] {
+    {"cli_off_bad_counts", [] {
        Workspace w;
        const std::string in = w.write("bad.off", "OFF\n500 0 0\n" + ascii_xyz(sphere_coordinates(300)));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "announces 500 points");
      }},
-    {"cli_file_too_large",
-     [] {
+    {"cli_file_too_large", [] {
        // The header asks for more memory than any machine here has: refused before reading.
        Workspace w;
        const std::string in = w.write("huge.ply", binary_ply_header(100000000000ull) + binary_xyz(sphere_coordinates(10)));
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + w.write("e.json", edit_json_sphere), "of memory");
      }},
-    {"cli_off_too_large",
-     [] {
+    {"cli_off_too_large", [] {
        Workspace w;
        const std::string in = w.write("huge.off", "OFF\n100000000000 0 0\n" + ascii_xyz(sphere_coordinates(10)));
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "of memory");
      }},
-    {"cli_out_of_memory",
-     [] {
-  // Under an address-space limit (ulimit -v, as batch systems impose) a run of each solver-backed subcommand
-  // either writes what it writes without one, byte for byte, or fails with one line naming the shortage,
-  // exit status 3 and no output, within seconds: never stuck (OpenBLAS retries a failed allocation of its
-  // buffers forever, so a factorisation must not start where they would not fit).
+    {"cli_out_of_memory", [] {
+       // Under an address-space limit (ulimit -v, as batch systems impose) a run of each solver-backed subcommand
+       // either writes what it writes without one, byte for byte, or fails with one line naming the shortage,
+       // exit status 3 and no output, within seconds: never stuck (OpenBLAS retries a failed allocation of its
+       // buffers forever, so a factorisation must not start where they would not fit).
 #if TEST_WITH_ADDRESS_SANITIZER
        GTEST_SKIP() << "AddressSanitizer reserves more address space than these limits allow";
 #else
@@ -604,62 +566,52 @@ const std::vector<Row>& catalogue()
        }
 #endif
      }},
-    {"cli_json_wrong_type",
-     [] {
+    {"cli_json_wrong_type", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        const std::string json = w.write("e.json", R"({"handles": [{"select": ["sphere:0,0,1,0.3"], "translation": "up"}]})");
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "translation");
      }},
-    {"cli_json_missing_field",
-     [] {
+    {"cli_json_missing_field", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        const std::string json = w.write("e.json", R"({"handles": [{"translation": [0, 0, 1]}]})");
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "select");
      }},
-    {"cli_json_overlapping_handles",
-     [] {
+    {"cli_json_overlapping_handles", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        const std::string json = w.write("e.json", R"({"handles": [{"select": ["sphere:0,0,1,0.4"], "translation": [0, 0, 1]},
                                                                   {"select": ["sphere:0,0,1,0.2"], "translation": [0, 1, 0]}]})");
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --edit " + json, "must not overlap");
      }},
-    {"cli_json_chain_bad_step",
-     [] {
+    {"cli_json_chain_bad_step", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
-       const std::string edit =
-         R"({"type": "edit", "handles": [{"select": ["sphere:0,0,1,0.3"], "translation": [0, 0, 0.2]}]})";
+       const std::string edit = R"({"type": "edit", "handles": [{"select": ["sphere:0,0,1,0.3"], "translation": [0, 0, 0.2]}]})";
        const std::string run = "edit -i " + in + " -o " + w.path("o.ply") + " --edit ";
        w.expect_failure(run + w.write("a.json", R"({"steps": [{"type": "fill"}, )" + edit + "]}"),
                         "a.json: steps[0]: a fill step fills what the edit step just before it stretched");
        w.expect_failure(run + w.write("b.json", R"({"steps": [)" + edit + R"(, {"type": "twist"}]})"),
                         "b.json: steps[1]: unknown type 'twist'");
-       w.expect_failure(
-         run + w.write("c.json", R"({"steps": [)" + edit + R"(, {"type": "scale", "roi": ["box:0,0,0,1,1,1"]}]})"),
-         "c.json: steps[1] needs s");
-       w.expect_failure(run +
-                          w.write("d.json", R"({"steps": [)" + edit + R"(, {"type": "scale", "s": 2, "rio": []}]})"),
+       w.expect_failure(run + w.write("c.json", R"({"steps": [)" + edit + R"(, {"type": "scale", "roi": ["box:0,0,0,1,1,1"]}]})"),
+                        "c.json: steps[1] needs s");
+       w.expect_failure(run + w.write("d.json", R"({"steps": [)" + edit + R"(, {"type": "scale", "s": 2, "rio": []}]})"),
                         "d.json: steps[1]: unknown key 'rio'");
        w.expect_failure(run + w.write("e.json", R"({"steps": []})"), "e.json: steps must be a non-empty array");
        // A selection is checked on the points its step starts from: here the second edit's handle selects nothing.
-       w.expect_failure(run +
-                          w.write("f.json", R"({"steps": [)" + edit +
-                                              R"(, {"type": "edit", "handles": [{"select": ["sphere:9,9,9,0.1"]}]}]})"),
+       w.expect_failure(run + w.write("f.json", R"({"steps": [)" + edit +
+                                                  R"(, {"type": "edit", "handles": [{"select": ["sphere:9,9,9,0.1"]}]}]})"),
                         "f.json: steps[1]: handles[0].select selects no point");
      }},
-    {"cli_sel_too_few_lines",
-     [] {
+    {"cli_sel_too_few_lines", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --sel " + w.write("s.sel", "0\n1\n2\n") + " --def " +
                           w.write("d.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"),
                         "has 3 status lines but the model has 400 points");
      }},
-    {"cli_def_not_4x4",
-     [] {
+    {"cli_def_not_4x4", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        std::string sel;
@@ -668,19 +620,16 @@ const std::vector<Row>& catalogue()
                           w.write("d.def", "1 0 0\n0 1 0\n0 0 1\n"),
                         "holds 9 numbers");
      }},
-    {"cli_output_is_input",
-     [] {
+    {"cli_output_is_input", [] {
        Workspace w;
        const std::string in = w.sphere_ply();
        w.expect_failure("details -i " + in + " -o " + in, "is the input file");
      }},
-    {"cli_output_directory_missing",
-     [] {
+    {"cli_output_directory_missing", [] {
        Workspace w;
        w.expect_failure("details -i " + w.sphere_ply() + " -o " + w.path("no/such/o.ply"), "does not exist");
      }},
-    {"cli_output_over_the_file_size_limit",
-     [] {
+    {"cli_output_over_the_file_size_limit", [] {
        // Under ulimit -f (1 KiB blocks), the nearest thing to a full disk: each subcommand's output is larger than
        // 4 KiB, and every one fails with one line naming the file, exit status 1 and no file, not even a temporary.
        Workspace w;
@@ -691,14 +640,14 @@ const std::vector<Row>& catalogue()
                                          "render -i " + in + " -o " + w.path("o.png")})
          w.expect_failure(command, "File too large", "ulimit -f 4; ");
      }},
-    {"cli_output_directory_unwritable",
-     [] {
+    {"cli_output_directory_unwritable", [] {
        // /proc takes no new files, not even from root (CI runs as root, for whom permission bits do not count).
        Workspace w;
        w.expect_failure("details -i " + w.sphere_ply() + " -o /proc/point-detail-out.ply", "is not writable");
        w.expect_failure("details -i " + w.sphere_ply() + " -o " + w.sphere_ply() + "/o.ply", "is not a directory");
      }},
   };
+  // clang-format on
   return rows;
 }
 

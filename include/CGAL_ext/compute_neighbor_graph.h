@@ -59,7 +59,8 @@ Neighbor_lists compute_neighbor_graph(const PointRange& points, unsigned int k,
   const std::function<bool(double)> callback = CGAL::parameters::choose_parameter(
     CGAL::parameters::get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
   internal::Progress progress(callback);
-  const internal::Neighbor_graph graph = internal::k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
+  const internal::Neighbor_graph graph =
+    internal::k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, k, progress);
   Neighbor_lists lists;
   if(graph.size() != n) return lists;
   const std::vector<int> row_of = cloud.spatial_index();
