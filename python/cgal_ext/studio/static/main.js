@@ -169,6 +169,27 @@ Object.assign(studio, {
     return view.screenOf(p.x, p.y, p.z);
   },
   projectAll: () => view.projectAll().screen,
+  // Each point's spacing set from outside (to measure the sprites against another spacing).
+  setSpacing: (values) => {
+    studio.spacing = Float32Array.from(values);
+    studio.geometry.setAttribute('spacing', new THREE.BufferAttribute(studio.spacing, 1));
+    view.requestRender();
+  },
+  // Which canvas pixels show the background, as a string of 0 and 1, rows from the top.
+  backgroundPixels: () => {
+    view.render();
+    const gl = view.webgl.getContext(), width = view.width, height = view.height;
+    const pixels = new Uint8Array(4 * width * height);
+    gl.readPixels(0, 0, width, height, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+    const background = [0x20, 0x24, 0x2a], out = new Array(width * height);
+    for (let y = 0; y < height; ++y) {
+      for (let x = 0; x < width; ++x) {
+        const at = 4 * ((height - 1 - y) * width + x);
+        out[y * width + x] = pixels[at] === background[0] && pixels[at + 1] === background[1] && pixels[at + 2] === background[2] ? '1' : '0';
+      }
+    }
+    return { width, height, mask: out.join('') };
+  },
   cameraMatrices: () => {
     view.camera.updateMatrixWorld();
     return { view: view.camera.matrixWorldInverse.toArray(), projection: view.camera.projectionMatrix.toArray(),

@@ -37,6 +37,7 @@ varying vec3 vColor;
 varying vec3 vNormal;
 varying vec3 vPosition;
 varying float vDepth;
+varying float vRadius;                // the sprite's radius in world units
 
 void accumulate(float s, float w, inout vec4 r0, inout vec4 r1, inout vec4 r2) {
   if (w == 0.0) return;
@@ -99,6 +100,7 @@ void main() {
   gl_Position = projectionMatrix * viewPosition;
   // Perspective-correct: a sprite covers its point's spacing around it at any zoom.
   gl_PointSize = worldSizes ? clamp(pointScale * spacing * pixelsPerUnit / max(vDepth, 1e-6), 1.0, 256.0) : pointSize;
+  vRadius = worldSizes ? 0.5 * pointScale * spacing : 0.0;
 }`;
 }
 
@@ -106,19 +108,29 @@ const fragmentShader = `
 precision highp float;
 uniform int outputMode;
 uniform bool worldSizes;
+uniform mat4 projectionMatrix;
 varying vec3 vColor;
 varying vec3 vNormal;
 varying vec3 vPosition;
 varying float vDepth;
+varying float vRadius;
 void main() {
   if (outputMode == ${OUTPUT.positions}) { gl_FragColor = vec4(vPosition, 1.0); return; }
+  float depth = vDepth;
   if (worldSizes) {
-    // Round sprites: a disc reads as a surface element, a square's corners as noise.
+    // Round sprites, each a dome towards the eye: where neighbours overlap the nearer dome wins pixel by pixel,
+    // so that the depth (and the eye-dome lighting on it) is smooth instead of stepped at every sprite's rim.
     vec2 c = 2.0 * gl_PointCoord - 1.0;
-    if (dot(c, c) > 1.0) discard;
+    float r2 = dot(c, c);
+    if (r2 > 1.0) discard;
+    depth -= vRadius * (1.0 - r2);
+    vec4 clip = projectionMatrix * vec4(0.0, 0.0, -depth, 1.0);
+    gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;
+  } else {
+    gl_FragDepth = gl_FragCoord.z;
   }
   float light = 0.3 + 0.7 * abs(vNormal.z);
-  gl_FragColor = vec4(vColor * light, outputMode == ${OUTPUT.colourDepth} ? vDepth : 1.0);
+  gl_FragColor = vec4(vColor * light, outputMode == ${OUTPUT.colourDepth} ? depth : 1.0);
 }`;
 
 function emptyTexture(width) {

@@ -3,7 +3,7 @@
 // lies within a few local spacings of it.
 import { $, showError, studio } from './shared.js';
 
-const SPACINGS_BEHIND = 3; // how far behind the seen surface a point still counts as on it
+const SPACINGS_BEHIND = 2; // how far behind the seen surface (its sprites bulge a spacing towards the eye) a point still counts as on it
 
 function insideLasso(path, x, y) {
   let inside = false;
