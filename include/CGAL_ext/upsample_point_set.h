@@ -79,7 +79,7 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   if constexpr(!std::is_same<SpacingMap, No_spacing_map>::value) {
     // Only what grew sparser than it was: a region point whose local spacing is now more than 25 % above the
     // given one (an edit stretched it). A part that moved rigidly, or a sampling's own irregular gaps, stay.
-    const std::vector<double> now = local_spacings<ConcurrencyTag>(cloud.positions, input_tree);
+    const std::vector<double> now = local_spacings<ConcurrencyTag>(cloud.positions, input_tree, &examine);
     examine.erase(std::remove_if(examine.begin(), examine.end(),
                                  [&](int row) { return !(now[std::size_t(row)] > stretched_spacing * all_spacing[std::size_t(row)]); }),
                   examine.end());

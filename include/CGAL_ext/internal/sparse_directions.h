@@ -51,23 +51,51 @@ double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
 /// Every point's local spacing: the median, over the point and its 15 nearest neighbours, of their mean
 /// distance to their 6 nearest neighbours. The median over a neighbourhood follows a change of density (an
 /// adaptive mesh, a random sampling) but not one point's luck; at a hole's rim it is that of the rim's side.
+/// With `rows`, only theirs are computed (from their neighbourhoods only) and the others are 0.
 template <typename ConcurrencyTag>
-std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tree& tree)
+std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tree& tree,
+                                   const std::vector<int>* rows = nullptr)
 {
   const std::size_t n = std::size_t(positions.rows()), k = std::min<std::size_t>(6, n - 1),
                     around = std::min<std::size_t>(16, n);
-  std::vector<double> mean(n, 0.0), spacing(n);
-  for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+  std::vector<double> mean(n, 0.0), spacing(n, 0.0);
+  const auto mean_distance = [&](std::size_t i) {
     tree.nearest(Position_tree::point(positions, Eigen::Index(i)), k + 1, [&](int j, double d2) {
       if(std::size_t(j) != i) mean[i] += std::sqrt(d2) / double(k);
     });
+  };
+  const auto median_of = [](std::vector<double>& near) {
+    std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
+    return near[near.size() / 2];
+  };
+  if(!rows) {
+    for_range<ConcurrencyTag>(0, n, mean_distance);
+    for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+      thread_local std::vector<double> near;
+      near.clear();
+      tree.nearest(Position_tree::point(positions, Eigen::Index(i)), around,
+                   [&](int j, double) { near.push_back(mean[std::size_t(j)]); });
+      spacing[i] = median_of(near);
+    });
+    return spacing;
+  }
+  // Only the spacings of `rows` (the others stay 0): the mean distances of their neighbourhoods only.
+  const std::size_t count = rows->size();
+  std::vector<int> near_rows(count * around);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t m) {
+    int* out = near_rows.data() + m * around;
+    tree.nearest(Position_tree::point(positions, Eigen::Index((*rows)[m])), around, [&](int j, double) { *out++ = j; });
   });
+  std::vector<char> needed(n, 0);
+  for(int j : near_rows) needed[std::size_t(j)] = 1;
   for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
+    if(needed[i]) mean_distance(i);
+  });
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t m) {
     thread_local std::vector<double> near;
     near.clear();
-    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), around, [&](int j, double) { near.push_back(mean[std::size_t(j)]); });
-    std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
-    spacing[i] = near[near.size() / 2];
+    for(std::size_t e = 0; e < around; ++e) near.push_back(mean[std::size_t(near_rows[m * around + e])]);
+    spacing[std::size_t((*rows)[m])] = median_of(near);
   });
   return spacing;
 }
@@ -242,14 +270,15 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
 }
 
 // The instances the project compiles once (CGAL_EXT_DECLARE_COMPILED_INSTANCES, internal/compiled_instances.h).
-#define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag) \
-  EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&); \
-  EXTERN template std::vector<double> local_spacings<Tag>(const Matrix_n3&, const Position_tree&); \
-  EXTERN template std::vector<double> empty_radii<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, std::size_t, \
-                                                       const std::vector<double>&, bool); \
-  EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&, \
-                                                       std::size_t, const std::vector<double>&, const std::vector<double>&, \
-                                                       double, const std::vector<int>*, std::vector<int>&);
+#define CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES(EXTERN, Tag)                                                              \
+  EXTERN template double typical_spacing<Tag>(const Matrix_n3&, const Position_tree&);                                 \
+  EXTERN template std::vector<double> local_spacings<Tag>(const Matrix_n3&, const Position_tree&,                      \
+                                                          const std::vector<int>*);                                    \
+  EXTERN template std::vector<double> empty_radii<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&,       \
+                                                       std::size_t, const std::vector<double>&, bool);                 \
+  EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(                                                                \
+    const Matrix_n3&, const Matrix_n3&, const Position_tree&, std::size_t, const std::vector<double>&,                 \
+    const std::vector<double>&, double, const std::vector<int>*, std::vector<int>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES)
 
 inline double median(std::vector<double> values)

@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
@@ -153,7 +154,10 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     for(std::size_t i = 0; i < empty_radius.size(); ++i) empty_radius[i] = all_empty_factor[i] * all_spacing[i];
     progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
     if(!progress.report(0.0)) return false;
-    const Position_tree tree(all, ConcurrencyTag());
+    // The first round's samples are the input: its tree serves.
+    std::unique_ptr<Position_tree> round_tree;
+    if(round > 0) round_tree = std::make_unique<Position_tree>(all, ConcurrencyTag());
+    const Position_tree& tree = round > 0 ? *round_tree : input_tree;
     const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, empty_radius,
                                                                  settings.detection.max_hole_size,
                                                                  round == 0 && !region_given ? nullptr : &examine, sparse);
