@@ -4,6 +4,7 @@
 - the server's time per drag frame, from the command's text in to the frame's bytes out (JSON parsing, the
   handle transform, deform(), the sample points' motions, packing), and the frame's size against 64 bytes per
   sample point + 1 KiB; the release (the full diffusion and restore_details);
+- commit and Fill gaps through the server's handlers at 1M points, the second edit's region 300k points;
 - in headless Chromium (software WebGL): from opening the URL of a scan without normals to the first drag possible
   (reading, normals, sending the geometry, preprocessing; the painting itself left out), and the page's frame time
   while a drag is live, at 100k and 1M points.
@@ -11,6 +12,7 @@
 Medians over the repetitions. Writes OUT/studio_results.csv and OUT/studio_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_studio.py --out DIR [--build build] [--data data] [--quick]
 """
+import asyncio
 import csv
 import json
 import os
@@ -68,6 +70,73 @@ def server_costs(folder, name, frames, releases):
     return {"preprocess_s": preprocess, "frame_s": median(frame_times), "frame_bytes": max(sizes),
             "frame_budget_bytes": 64 * int(setup["sample_points"]) + 1024, "sample_points": int(setup["sample_points"]),
             "release_s": median(release), "region": len(region)}
+
+
+class Recorder:
+    """A WebSocket that keeps what the server sends: the commands' handlers run as the page meets them."""
+    closed = False
+
+    def __init__(self):
+        self.messages = []
+
+    async def send_json(self, message):
+        self.messages.append(message)
+
+    async def send_bytes(self, data):
+        self.messages.append(len(data))
+
+
+def commit_and_fill_costs(folder, name, region_size, repetitions):
+    """Commit, then a second edit of `region_size` points stretched by its handle and Fill gaps, each timed from
+    the command to its last reply, through the server's own handlers (the geometry packed as for the page)."""
+    from cgal_ext.studio.server import Studio
+
+    async def run():
+        studio = Studio(folder)
+        ws = Recorder()
+        session = studio.session
+
+        async def timed(command):
+            start = time.perf_counter()
+            await studio.handle(ws, command)
+            elapsed = time.perf_counter() - start
+            errors = [m for m in ws.messages if isinstance(m, dict) and m.get("type") == "error"]
+            assert not errors, errors
+            return elapsed
+
+        async def edit(region, handle, lift):
+            await studio.handle(ws, {"type": "select", "target": "roi", "mode": "add", "indices": region})
+            await studio.handle(ws, {"type": "new_group"})
+            await studio.handle(ws, {"type": "select", "target": "handle", "mode": "add", "indices": handle, "group": 0})
+            await studio.handle(ws, {"type": "preprocess", "force": True})
+            T = np.eye(4)
+            T[1, 3] = lift
+            await studio.handle(ws, {"type": "drag", "group": 0, "matrix": T.reshape(-1).tolist(), "seq": 0})
+            await studio.handle(ws, {"type": "release"})
+
+        await studio.handle(ws, {"type": "load", "path": name})
+        diagonal = np.linalg.norm(np.ptp(session.points, axis=0))
+        commits, fills, inserted = [], [], []
+        for _ in range(repetitions):
+            region, handle = selection(session.points)
+            await edit(region, handle, 0.05 * diagonal)
+            commits.append(await timed({"type": "commit"}))
+            # The second edit: the region the top `region_size` points, its top tenth pulled up by a tenth of the
+            # diagonal (a stretch the fill then fills).
+            up = session.points[:, 1]
+            order = np.argsort(up, kind="stable")
+            region, handle = order[-region_size:], order[-region_size // 10:]
+            await edit(region, handle, 0.1 * diagonal)
+            before = len(session.points)
+            fills.append(await timed({"type": "fill"}))
+            inserted.append(len(session.points) - before)
+            for _ in range(3):  # back to the scan: fill, the second edit, commit
+                await studio.handle(ws, {"type": "undo"})
+            while session.step > 0:
+                await studio.handle(ws, {"type": "undo"})
+        return median(commits), median(fills), int(median(inserted))
+
+    return asyncio.run(run())
 
 
 def browser_costs(folder, name, frame_seconds):
@@ -131,9 +200,10 @@ def main():
     args = harness_arguments()
     server_sizes, browser_sizes = ([100000], [100000]) if args.quick else ([1000000, 4000000], [100000, 1000000])
     frames, releases, frame_seconds = (20, 1, 2) if args.quick else (200, 5, 8)
+    commit_sizes, region_size, commit_repetitions = ([100000], 30000, 1) if args.quick else ([1000000], 300000, 3)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for n in sorted(set(server_sizes + browser_sizes)):
+        for n in sorted(set(server_sizes + browser_sizes + commit_sizes)):
             name = "armadillo_%d.ply" % n
             subprocess.run([os.path.join(args.build, "benchmark", "sample_scan"),
                             os.path.join(args.data, "meshes", "armadillo.off"), str(n), os.path.join(tmp, name)],
@@ -148,6 +218,12 @@ def main():
                          ("release: diffusion + restore_details (region %d points)" % r["region"], n, r["release_s"], "s",
                           "<= 1 s at 1M"),
                          ("preprocess (with normals)", n, r["preprocess_s"], "s", "")]
+            if n in commit_sizes:
+                commit, fill, inserted = commit_and_fill_costs(tmp, name, region_size, commit_repetitions)
+                rows += [("commit: the shown state the base of the next edit, geometry sent", n, commit, "s",
+                          "<= 1 s at 1M"),
+                         ("fill gaps after an edit of %d points (%d points inserted)" % (region_size, inserted), n, fill,
+                          "s", "<= 2 s at 1M")]
             if n in browser_sizes:
                 r = browser_costs(tmp, "bare_" + name, frame_seconds)
                 rows += [("open URL to scan shown, without normals", n, r["open_to_loaded_s"], "s", ""),

@@ -253,14 +253,32 @@ class Studio:
                   ("labels", s.labels)]
         if s.shown_points is not s.points and not np.array_equal(s.shown_points, s.points):
             arrays += [("rest", s.points.astype("<f4")), ("rest_normals", s.normals.astype("<f4"))]
-        spacing = await self.run(s.spacing)
+        spacing, exact = s.drawn_spacing()
         if spacing is not None:
-            arrays.append(("spacing", spacing.astype("<f4")))
+            arrays.append(("spacing", spacing))
+        if not exact:  # computed in the background: sent when done
+            asyncio.ensure_future(self.send_spacing_when_done(ws, *s.base_spacing()))
         inserted = s.inserted()
         if inserted is not None:
             arrays.append(("inserted", inserted))
         await ws.send_bytes(pack({"type": "geometry", "scan": s.scan, "label_codes": LABEL_CODES,
                                   "max_groups": MAX_GROUPS}, arrays))
+
+    async def send_spacing_when_done(self, ws, points, future):
+        """The local spacing of the base `points` once computed, unless the base changed meanwhile (its next
+        geometry carries its own)."""
+        try:
+            await asyncio.wrap_future(future)
+        except ValueError:
+            return  # the points the library refuses are refused by name where they are needed (fill, selections)
+        async with self.lock:
+            if self.session.points is not points or ws.closed:
+                return
+            spacing, _ = self.session.drawn_spacing()
+            try:
+                await ws.send_bytes(pack({"type": "spacing"}, [("spacing", spacing)]))
+            except ConnectionResetError:
+                pass
 
     async def on_load(self, ws, command):
         await self.run(self.session.load, command["path"], progress=self.progress_reporter(ws, "normals"))

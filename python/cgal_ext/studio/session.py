@@ -47,13 +47,6 @@ def _identity():
     return np.eye(4)
 
 
-def _library(name):
-    """The module's function `name`, or StudioError naming it (a module older than the studio)."""
-    if not hasattr(cgal_ext, name):
-        raise StudioError("this needs cgal_ext.%s, which the module does not have: rebuild it" % name)
-    return getattr(cgal_ext, name)
-
-
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 _EYE3 = np.eye(3)
 
@@ -78,9 +71,11 @@ class Session:
         # One Deformation per base and settings, whose selection-independent part (the mean shift) is computed in
         # the background from the moment the base exists, while its user paints (_editor_for).
         self._editors = collections.OrderedDict()
-        self._graphs = collections.OrderedDict()  # the selection graph per base
-        self._spacing = None  # the shown points and their local spacing
+        # Per base, its local spacing and its selection graph, also computed in the background from the moment the
+        # base exists, on a thread of their own: a fill, a check before an edit or a grown selection finds them done.
+        self._bases = collections.OrderedDict()
         self._worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="studio-analysis")
+        self._base_worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="studio-base")
 
     # ---- files ------------------------------------------------------------------------------------------------
 
@@ -197,7 +192,7 @@ class Session:
         self.points, self.normals = points, normals
         self.chain = ()
         self._editors.clear()
-        self._graphs.clear()
+        self._bases.clear()
         self._blank_edit()
         self.history, self.step = [self._snapshot("open")], 0
         self._start_editor()
@@ -307,6 +302,19 @@ class Session:
 
     def _start_editor(self):
         self._editor_for(self.points, self.normals, dict(self.settings))
+        self._base_analysis(self.points)
+
+    def _base_analysis(self, points):
+        """The futures of the local spacing and the selection graph of a base; the three most recent kept."""
+        key = id(points)
+        if key not in self._bases:
+            spacing = self._base_worker.submit(cgal_ext.compute_local_spacing, points)
+            graph = self._base_worker.submit(Graph, points)
+            self._bases[key] = (points, spacing, graph)  # the points kept: the key's id stays theirs
+            while len(self._bases) > 3:
+                self._bases.popitem(last=False)
+        self._bases.move_to_end(key)
+        return self._bases[key][1:]
 
     def _require_scan(self):
         if self.points is None:
@@ -615,7 +623,7 @@ class Session:
             if apply:
                 moved = np.flatnonzero((result != self.points).any(axis=1))
                 if len(moved):
-                    normals = _library("refit_normals")(result, self.normals, moved)
+                    normals = cgal_ext.refit_normals(result, self.normals, moved)
         except (ValueError, RuntimeError) as error:
             raise StudioError(str(error))
         if apply:
@@ -626,14 +634,11 @@ class Session:
     # ---- selection over the neighbour graph -------------------------------------------------------------------
 
     def graph(self):
-        """The selection graph of the current base, computed once per base."""
-        key = id(self.points)
-        if key not in self._graphs:
-            self._graphs[key] = (self.points, Graph(self.points))  # the points kept: the key's id stays theirs
-            while len(self._graphs) > 2:
-                self._graphs.popitem(last=False)
-        self._graphs.move_to_end(key)
-        return self._graphs[key][1]
+        """The selection graph of the current base (computed in the background from the moment it exists)."""
+        try:
+            return self._base_analysis(self.points)[1].result()
+        except ValueError as error:  # points the library refuses to take neighbourhoods of (a pile of duplicates)
+            raise StudioError(str(error))
 
     def grow(self, target, group=0):
         """The region, or handle group `group`, grown by one ring of neighbours. A handle takes in fixed and region
@@ -726,13 +731,13 @@ class Session:
         of history, two of the chain (the edit, the fill)."""
         self._require_scan()
         self._require_released_edit("fill")
-        spacing = _library("compute_local_spacing")
         moved = np.flatnonzero((self.shown_points != self.points).any(axis=1))
         if not len(moved):
             raise StudioError("fill: the edit moved no point")
         try:
+            spacing = self._base_analysis(self.points)[0].result()
             added = cgal_ext.upsample_point_set(self.shown_points, self.shown_normals, roi=moved,
-                                                spacing_before=spacing(self.points), progress=progress)
+                                                spacing_before=spacing, progress=progress)
         except (ValueError, RuntimeError) as error:
             raise StudioError("fill failed: %s" % error)
         points = np.concatenate([self.shown_points, added.points])
@@ -741,14 +746,25 @@ class Session:
         self._new_base(chain, points, normals, "fill")
         return len(added.points)
 
-    def spacing(self):
-        """Each shown point's local spacing (the page sizes its points by it), None without the binding."""
-        function = getattr(cgal_ext, "compute_local_spacing", None)
-        if function is None:  # a module older than the studio
-            return None
-        if self._spacing is None or self._spacing[0] is not self.shown_points:
-            self._spacing = (self.shown_points, function(self.shown_points))
-        return self._spacing[1]
+    def drawn_spacing(self):
+        """The spacing the page draws each shown point with, and whether it is the base's own: its local spacing
+        once computed (the shown points of an edit keep their input's); until then that of the latest base whose
+        spacing is known and that has no more points (an edit keeps the points' order, a fill appends), with its
+        median for the points it lacks; None before any is known."""
+        n = len(self.points)
+        for key in reversed(self._bases):
+            points, future, _ = self._bases[key]
+            if future.done() and not future.exception() and len(points) <= n:
+                spacing = future.result().astype(np.float32)
+                exact = points is self.points
+                if len(spacing) < n:
+                    spacing = np.concatenate([spacing, np.full(n - len(spacing), np.median(spacing), np.float32)])
+                return spacing, exact
+        return None, False
+
+    def base_spacing(self):
+        """The future of the current base's local spacing (for the page, once computed)."""
+        return self.points, self._base_analysis(self.points)[0]
 
     def inserted(self):
         """Which points a fill inserted (they follow the scan's), None when none did."""
