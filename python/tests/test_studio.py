@@ -201,6 +201,57 @@ def test_paint_drag_save_matches_the_program(page, scan):
     assert stretch.max() <= 3, (stretch.max(), np.quantile(stretch, 0.99))
 
 
+def typed(driver, translation, axis=(0, 0, 1), angle=0, pivot=None):
+    """Types a transform into the panel's fields and applies it."""
+    driver.execute_script("document.getElementById('typed').open = true")
+    values = {"typed-translation": " ".join(map(repr, translation)), "typed-axis": " ".join(map(repr, axis)),
+              "typed-angle": repr(angle)}
+    if pivot is not None:
+        values["typed-pivot"] = " ".join(map(repr, pivot))
+    for field, value in values.items():
+        element = driver.find_element("id", field)
+        element.clear()
+        element.send_keys(value)
+    click(driver, "typed-apply")
+
+
+def test_a_typed_transform_is_the_same_drag_as_the_gizmo(page, scan):
+    server, driver = page
+    wait_for(driver, "studio.state && studio.state.step === 1", what="the previous test's drag")
+    idle(driver)
+    points = cgal_ext.read_points(scan).points
+    diagonal = np.linalg.norm(points.max(0) - points.min(0))
+    shown = lambda: np.array(driver.execute_script(
+        "return Array.from(studio.geometry.getAttribute('shown').array)")).reshape(-1, 3)
+    by_gizmo = shown()
+    T = np.array(driver.execute_script("return studio.state.transforms[0]")).reshape(4, 4)
+    assert np.abs(T[:3, :3] - np.eye(3)).max() < 1e-12  # the gizmo moved it without turning
+    click(driver, "undo")
+    wait_for(driver, "studio.state.step === 0", what="the undo")
+    idle(driver)
+    # The gizmo's translation typed in: the same release.
+    typed(driver, T[:3, 3].tolist())
+    wait_for(driver, "studio.state.step === 1 && !studio.busy", what="the typed transform's release")
+    idle(driver)
+    typed_T = np.array(driver.execute_script("return studio.state.transforms[0]")).reshape(4, 4)
+    assert np.abs(typed_T - T).max() < 1e-12 * diagonal
+    assert np.abs(shown() - by_gizmo).max() < 1e-6 * diagonal
+    # A turn about a typed axis through a typed pivot, then undone.
+    pivot = points[np.argmin(points[:, 0])]
+    typed(driver, [0.0, 0.0, 0.1], axis=[0, 1, 0], angle=30, pivot=pivot.tolist())
+    wait_for(driver, "studio.state.step === 2 && !studio.busy", what="the turn's release")
+    idle(driver)
+    turned = np.array(driver.execute_script("return studio.state.transforms[0]")).reshape(4, 4)
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    assert np.abs(turned[:3, :3] - R).max() < 1e-9
+    assert np.abs(turned[:3, 3] - (pivot + [0, 0, 0.1] - R @ pivot)).max() < 1e-9 * diagonal
+    click(driver, "undo")
+    wait_for(driver, "studio.state.step === 1", what="the undo")
+    idle(driver)
+    assert np.abs(shown() - by_gizmo).max() < 1e-6 * diagonal
+
+
 def test_undo_returns_the_input_and_details_match_the_program(page, scan):
     server, driver = page
     wait_for(driver, "studio.state && studio.state.step === 1", what="the previous test's drag")
@@ -347,6 +398,54 @@ def test_the_brush_takes_only_what_is_seen(page, scan):
     assert through.sum() > 1.6 * painted.sum() and (sign * facing[through] > 0.5).sum() > 0.3 * painted.sum()
     click(driver, "clear")
     wait_for(driver, "studio.state.region === 0", what="the cleared selection")
+
+
+def test_an_island_handle_is_named_with_its_remedy(page, scan):
+    server, driver = page
+    wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", what="the scan")
+    idle(driver)
+    click(driver, "view-front")
+    shown = np.array(driver.execute_script("return Array.from(studio.geometry.getAttribute('shown').array)")).reshape(-1, 3)
+    # The region the upper half again, the handle painted at the base: an island in the fixed part.
+    x0, x1, y0, y1 = screen_box(driver)
+    cut = driver.execute_script("return studio.screenOf(%r, %r, %r)" %
+                                tuple(shown.mean(0)[:2].tolist() + [np.quantile(shown[:, 2], 0.5)]))[1]
+    click(driver, "tool-lasso")
+    click(driver, "paint-roi")
+    click(driver, "xray")
+    pointer_path(driver, [(x0 - 20, y0 - 20), (x1 + 20, y0 - 20), (x1 + 20, cut), (x0 - 20, cut), (x0 - 20, y0 - 19)])
+    wait_for(driver, "studio.state.region > 0", what="the region")
+    click(driver, "new-group")
+    wait_for(driver, "studio.state.groups === 1", what="the handle group")
+    click(driver, "tool-brush")
+    click(driver, "paint-handle")
+    driver.execute_script("document.getElementById('brush-size').value = 25")
+    low = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(shown[np.argmin(shown[:, 2])].tolist()))
+    pointer_path(driver, [(low[0] - 10, low[1] - 30), (low[0] + 10, low[1] - 30)])
+    wait_for(driver, "studio.labels.some(l => l === 2)", what="the handle")
+    click(driver, "xray")
+    labels = np.array(driver.execute_script("return Array.from(studio.labels)"))
+    assert (labels == 2).sum() > 50 and (shown[labels == 2, 2] < np.quantile(shown[:, 2], 0.3)).all()
+    click(driver, "tool-orbit")
+    click(driver, "edit-start")
+    warnings = wait_for(driver, "studio.warnings && studio.warnings.length && studio.warnings", what="the warning")
+    assert [w["kind"] for w in warnings] == ["island"] and warnings[0]["group"] == 0
+    assert not driver.execute_script("return studio.state.preprocessed")
+    text = driver.find_element("id", "warnings").text
+    assert "Grow the region around handle group 0" in text and "Edit anyway" in text
+    driver.execute_script("document.getElementById('warnings').scrollIntoView()")
+    # No stroke's outline left over the view.
+    assert driver.execute_script("return studio.selection.stroke") is None
+    assert driver.execute_script("return document.getElementById('lasso-outline').getAttribute('points')") == ""
+    shot(driver, "8_island_warning")
+    # The remedy: the region grows around the handle, then the edit prepares without a word.
+    region = driver.execute_script("return studio.state.region")
+    click(driver, "grow-around-0")
+    wait_for(driver, "studio.state.region > %d && !studio.busy" % region, what="the grown region")
+    assert driver.find_element("id", "warnings").text == ""
+    click(driver, "edit-start")
+    wait_for(driver, "studio.prepared && studio.state.preprocessed", what="the preprocessing")
+    assert not driver.execute_script("return studio.warnings && studio.warnings.length")
 
 
 def test_the_page_logged_no_error(page):

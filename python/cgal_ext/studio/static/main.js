@@ -21,14 +21,7 @@ let material = null;
 const connection = new Connection(token, { onCommand, onArrays });
 const selection = new Selection(view, connection);
 const gizmo = new Gizmo(view, connection);
-const panel = new Panel({ view, connection, gizmo, material: () => material, onColors });
-
-function resizeOverlay() {
-  $('overlay').width = $('view').clientWidth;
-  $('overlay').height = $('view').clientHeight;
-}
-window.addEventListener('resize', resizeOverlay);
-resizeOverlay();
+const panel = new Panel({ view, connection, gizmo, material: () => material, onColors: () => onColors(plainColours()) });
 
 // ---- messages -----------------------------------------------------------------------------------------------
 
@@ -42,6 +35,7 @@ function onCommand(m) {
     return;
   }
   if (m.type === 'saved') { studio.lastSaved = m.files; status(`saved ${m.files.join(', ')}`); return; }
+  if (m.type === 'warning') { panel.showWarnings(m.warnings); return; }
   if (m.type === 'state') panel.onState(m);
 }
 
@@ -59,11 +53,12 @@ function askToReplace(m) {
 
 function onArrays(header, a) {
   if (header.type === 'geometry') return onGeometry(header, a);
-  if (header.type === 'labels') { setLabels(a.labels); studio.busy = false; return; }
+  if (header.type === 'labels') { setLabels(a.labels); studio.busy = false; selection.drawOverlay(); return; }
   if (header.type === 'renderer') return onPrepared(header, a);
   if (header.type === 'frame') return onFrame(header, a);
   if (header.type === 'shown' || header.type === 'details') return onShown(header, a);
   if (header.type === 'colors') return onColors(a.colors);
+  if (header.type === 'spacing' && a.spacing && a.spacing.length === studio.n) studio.setSpacing(a.spacing);
 }
 
 // ---- geometry -------------------------------------------------------------------------------------------------
@@ -102,6 +97,8 @@ function onGeometry(header, a) {
   const points = new THREE.Points(g, material.material);
   points.frustumCulled = false;
   view.setPoints(points, material);
+  studio.inserted = a.inserted ? a.inserted.slice() : null;
+  if (studio.inserted) onColors(plainColours());
   setLabels(a.labels);
   if (scanChanged) panel.startView(header.scan, size);
   view.requestRender();
@@ -114,6 +111,15 @@ function setLabels(labels) {
   attribute.array.set(labels);
   attribute.needsUpdate = true;
   view.requestRender();
+}
+
+// Plain grey, the points a fill inserted green.
+function plainColours() {
+  const colours = new Uint8Array(3 * studio.n).fill(191);
+  if (studio.inserted) {
+    for (let i = 0; i < studio.n; ++i) if (studio.inserted[i]) colours.set([120, 200, 120], 3 * i);
+  }
+  return colours;
 }
 
 function onColors(colors) {

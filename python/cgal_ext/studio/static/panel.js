@@ -45,7 +45,7 @@ export class Panel {
       view.preset('front');
     };
     $('color').onchange = () => {
-      if ($('color').value === 'plain') onColors(new Uint8Array(3 * studio.n).fill(191));
+      if ($('color').value === 'plain') onColors();
       else send({ type: 'colors', by: $('color').value });
     };
     $('show-selection').onchange = () => { material().uniforms.showSelection.value = $('show-selection').checked; view.requestRender(); };
@@ -68,6 +68,8 @@ export class Panel {
     for (const input of document.querySelectorAll('input[name=gizmo]')) {
       input.onchange = () => { gizmo.controls.setMode(input.value); view.requestRender(); };
     }
+    $('commit').onclick = () => busy({ type: 'commit' });
+    $('fill').onclick = () => busy({ type: 'fill' });
     $('undo').onclick = () => busy({ type: 'undo' });
     $('redo').onclick = () => busy({ type: 'redo' });
     $('details-s').oninput = () => { $('details-value').textContent = Number($('details-s').value).toFixed(1); };
@@ -120,6 +122,8 @@ export class Panel {
     }
     for (const key of ['order', 'rotations', 'strength_distance']) $(key).value = m.settings[key];
     $('history').textContent = `step ${m.step} of ${m.steps}`;
+    this.showHistory(m);
+    if (m.preprocessed || m.groups === 0) this.showWarnings(null);
     status(m.scan ? `${m.scan}: ${m.points} points, region ${m.region}, ${m.groups} handle group(s)` +
                     (m.preprocessed ? ', ready to drag' : '') : 'no scan open');
     $('progress-bar').style.width = '0';
@@ -134,6 +138,44 @@ export class Panel {
     this.showPivot();
     this.updateMirror();
     this.view.requestRender();
+  }
+
+  // The undo list: each step of the history, the shown one marked.
+  showHistory(m) {
+    const list = $('history-list');
+    list.innerHTML = '';
+    (m.history || []).forEach((kind, k) => {
+      const item = document.createElement('li');
+      item.textContent = k === 0 ? 'the scan' : kind;
+      if (k === m.step) item.className = 'current';
+      list.appendChild(item);
+    });
+    if ('committable' in m) $('commit').disabled = !m.committable && !(m.step > 0);
+  }
+
+  // The server's word before an edit that would not make sense: each warning with its remedy, or edit anyway.
+  showWarnings(warnings) {
+    studio.warnings = warnings;
+    const box = $('warnings');
+    box.innerHTML = '';
+    if (!warnings || !warnings.length) return;
+    for (const w of warnings) {
+      const line = document.createElement('div');
+      line.textContent = w.message;
+      box.appendChild(line);
+      if (w.kind === 'island') {
+        const grow = document.createElement('button');
+        grow.textContent = `Grow the region around handle group ${w.group}`;
+        grow.id = `grow-around-${w.group}`;
+        grow.onclick = () => { this.showWarnings(null); studio.busy = true; this.connection.send({ type: 'grow_region_around', group: w.group }); };
+        box.appendChild(grow);
+      }
+    }
+    const anyway = document.createElement('button');
+    anyway.textContent = 'Edit anyway';
+    anyway.id = 'edit-anyway';
+    anyway.onclick = () => { this.showWarnings(null); studio.busy = true; this.connection.send({ type: 'preprocess', force: true }); };
+    box.appendChild(anyway);
   }
 
   // ---- typed transforms -----------------------------------------------------------------------------------

@@ -46,7 +46,7 @@ export class Selection {
       input.value = Math.min(Number(input.max), Math.max(Number(input.min), radius + delta));
       this.drawBrush(this.lastPointer);
     }, { capture: true, passive: false });
-    canvas.addEventListener('pointerleave', () => { this.lastPointer = null; this.drawOverlay(); });
+    canvas.addEventListener('pointerleave', () => { this.lastPointer = null; this.drawBrush(null); });
     for (const input of document.querySelectorAll('input[name=tool]')) input.addEventListener('change', () => this.drawOverlay());
   }
 
@@ -165,27 +165,21 @@ export class Selection {
                            group: this.group(), seed: best });
   }
 
+  // The outlines are SVG over the view (a 2D canvas kept a cleared lasso on the screen in headless Chromium).
   drawBrush(at) {
     this.drawOverlay();
-    if (!at || this.tool() !== 'brush') return;
-    const context = $('overlay').getContext('2d');
-    context.strokeStyle = 'rgba(255, 255, 255, 0.6)';
-    context.beginPath();
-    context.arc(at[0], at[1], Number($('brush-size').value), 0, 2 * Math.PI);
-    context.stroke();
+    const circle = $('brush-outline');
+    if (!at || this.tool() !== 'brush') { circle.setAttribute('visibility', 'hidden'); return; }
+    circle.setAttribute('cx', at[0]);
+    circle.setAttribute('cy', at[1]);
+    circle.setAttribute('r', $('brush-size').value);
+    circle.setAttribute('visibility', 'visible');
   }
 
   drawOverlay() {
-    const overlay = $('overlay');
-    const context = overlay.getContext('2d');
-    context.clearRect(0, 0, overlay.width, overlay.height);
     const s = this.stroke;
-    if (!s || s.kind !== 'lasso' || s.path.length < 2) return;
-    context.strokeStyle = '#ff0';
-    context.beginPath();
-    context.moveTo(...s.path[0]);
-    for (const p of s.path) context.lineTo(...p);
-    context.closePath();
-    context.stroke();
+    const lasso = s && s.kind === 'lasso' && s.path.length >= 2;
+    $('lasso-outline').setAttribute('points', lasso ? s.path.map((p) => p.join(',')).join(' ') : '');
+    if (!s && this.tool() !== 'brush') $('brush-outline').setAttribute('visibility', 'hidden');
   }
 }
