@@ -448,6 +448,28 @@ def test_an_island_handle_is_named_with_its_remedy(page, scan):
     assert not driver.execute_script("return studio.warnings && studio.warnings.length")
 
 
+def test_the_point_budget_draws_a_subset_while_the_view_moves(page):
+    server, driver = page
+    idle(driver)
+    n = driver.execute_script("return studio.n")
+    budget = driver.find_element("id", "budget")
+    budget.clear()
+    budget.send_keys("20000")
+    click(driver, "tool-orbit")  # also takes the focus off the field, which applies it
+    assert driver.execute_script("return studio.drawn") == n
+    x0, x1, y0, y1 = screen_box(driver)
+    middle = ((x0 + x1) / 2, (y0 + y1) / 2)
+    pointer_path(driver, [middle, (middle[0] + 40, middle[1])], release=False)
+    assert driver.execute_script("return studio.drawn") == 20000
+    fraction, _ = hole_fraction(driver)
+    assert fraction <= 0.02, fraction  # the subset's sprites grow to cover for the others
+    pointer_path(driver, [(middle[0] + 40, middle[1])], press=False, release=True)
+    wait_for(driver, "studio.drawn === %d" % n, what="every point drawn again")
+    budget.clear()
+    budget.send_keys("1000000")
+    click(driver, "view-front")
+
+
 def test_the_page_logged_no_error(page):
     server, driver = page
     severe = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]

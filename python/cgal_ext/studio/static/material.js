@@ -20,6 +20,7 @@ uniform mat4 groupT[${maxGroups}];
 uniform bool worldSizes;             // sprites of the point's local spacing in world units, else pointSize pixels
 uniform float pointSize;
 uniform float pointScale;
+uniform float budgetScale;            // sprites grow while a subset is drawn, so that it still covers
 uniform float pixelsPerUnit;         // pixels per world unit at view depth 1
 uniform bool showSelection;
 uniform int outputMode;
@@ -99,8 +100,8 @@ void main() {
   vDepth = -viewPosition.z;
   gl_Position = projectionMatrix * viewPosition;
   // Perspective-correct: a sprite covers its point's spacing around it at any zoom.
-  gl_PointSize = worldSizes ? clamp(pointScale * spacing * pixelsPerUnit / max(vDepth, 1e-6), 1.0, 256.0) : pointSize;
-  vRadius = worldSizes ? 0.5 * pointScale * spacing : 0.0;
+  gl_PointSize = worldSizes ? clamp(budgetScale * pointScale * spacing * pixelsPerUnit / max(vDepth, 1e-6), 1.0, 256.0) : pointSize;
+  vRadius = worldSizes ? 0.5 * budgetScale * pointScale * spacing : 0.0;
 }`;
 }
 
@@ -147,7 +148,7 @@ export class DeformingMaterial {
       uniforms: {
         live: { value: false }, records: { value: emptyTexture(3) }, collarSteps: { value: emptyTexture(2) },
         groupT: { value: Array.from({ length: maxGroups }, () => new THREE.Matrix4()) },
-        worldSizes: { value: true }, pointSize: { value: 2 }, pointScale: { value: 1 }, pixelsPerUnit: { value: 1 },
+        worldSizes: { value: true }, pointSize: { value: 2 }, pointScale: { value: 1 }, budgetScale: { value: 1 }, pixelsPerUnit: { value: 1 },
         showSelection: { value: true }, outputMode: { value: OUTPUT.colour }, readbackWidth: { value: 1 },
       },
     });

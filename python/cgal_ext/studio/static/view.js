@@ -48,6 +48,8 @@ export class View {
     this.points = null;
     this.up = '+z';
     this.edl = { enabled: true, strength: 1, radius: 1.4 };
+    this.budget = 1000000;
+    this.moving = false; this.orbiting = false; this.dragging = false;
     this.orbitEnabled = true;
     this.orbit = null;
     this.makeOrbit();
@@ -77,6 +79,13 @@ export class View {
     this.orbit.target.copy(target);
     this.orbit.enabled = this.orbitEnabled;
     this.orbit.addEventListener('change', () => this.requestRender());
+    this.orbit.addEventListener('start', () => { this.orbiting = true; this.setMoving(true); });
+    this.orbit.addEventListener('end', () => { this.orbiting = false; this.setMoving(this.dragging); });
+  }
+
+  setDragging(dragging) {
+    this.dragging = dragging;
+    this.setMoving(dragging || this.orbiting);
   }
 
   setOrbitEnabled(enabled) {
@@ -105,6 +114,40 @@ export class View {
     this.points = points;
     this.material = material;
     this.scene.add(points);
+    this.order = null;
+    this.applyBudget();
+  }
+
+  // The point budget (Potree's): while the view or a handle moves, at most `budget` points are drawn, a random
+  // subset (spatially even on average) with sprites grown to cover for the others; every point when idle. The
+  // points are drawn through an index in a shuffled order, so that the subset is the index's first `budget`.
+  setMoving(moving) {
+    if (this.moving === moving) return;
+    this.moving = moving;
+    this.applyBudget();
+  }
+
+  applyBudget() {
+    if (!this.points) return;
+    const geometry = this.points.geometry, n = studio.n;
+    const limited = this.moving && this.budget > 0 && n > this.budget;
+    if (limited && !this.order) {
+      // A fixed shuffle (xorshift from a constant seed): the same subset every time.
+      const order = new Uint32Array(n);
+      for (let i = 0; i < n; ++i) order[i] = i;
+      let x = 2463534242;
+      for (let i = n - 1; i > 0; --i) {
+        x ^= x << 13; x >>>= 0; x ^= x >>> 17; x ^= x << 5; x >>>= 0;
+        const j = x % (i + 1);
+        const t = order[i]; order[i] = order[j]; order[j] = t;
+      }
+      this.order = new THREE.BufferAttribute(order, 1);
+      geometry.setIndex(this.order);
+    }
+    geometry.setDrawRange(0, limited ? this.budget : Infinity);
+    if (this.material) this.material.uniforms.budgetScale.value = limited ? Math.sqrt(n / this.budget) : 1;
+    studio.drawn = limited ? this.budget : n;
+    this.requestRender();
   }
 
   // Drawn on demand (a camera move, new motions, new attributes), never in an idle loop: a million points drawn
