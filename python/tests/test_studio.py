@@ -448,6 +448,79 @@ def test_an_island_handle_is_named_with_its_remedy(page, scan):
     assert not driver.execute_script("return studio.warnings && studio.warnings.length")
 
 
+def edit_upper_half(driver, drag):
+    """One edit by hand: the region the upper half (X-ray lasso), a handle group at the tip, Edit, a drag of the
+    gizmo by `drag` pixels, release."""
+    shown = np.array(driver.execute_script("return Array.from(studio.geometry.getAttribute('shown').array)")).reshape(-1, 3)
+    step = driver.execute_script("return studio.state.step")
+    x0, x1, y0, y1 = screen_box(driver)
+    cut = driver.execute_script("return studio.screenOf(%r, %r, %r)" %
+                                tuple(shown.mean(0)[:2].tolist() + [np.quantile(shown[:, 2], 0.5)]))[1]
+    click(driver, "tool-lasso")
+    click(driver, "paint-roi")
+    click(driver, "xray")
+    pointer_path(driver, [(x0 - 20, y0 - 20), (x1 + 20, y0 - 20), (x1 + 20, cut), (x0 - 20, cut), (x0 - 20, y0 - 19)])
+    wait_for(driver, "studio.state.region > 0", what="the region")
+    click(driver, "new-group")
+    wait_for(driver, "studio.state.groups === 1", what="the handle group")
+    click(driver, "tool-brush")
+    driver.execute_script("document.getElementById('brush-size').value = 25")
+    tip = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(shown[np.argmin(shown[:, 0])].tolist()))
+    pointer_path(driver, [(tip[0] + 10, tip[1] - 10), (tip[0] + 10, tip[1] + 10)])
+    wait_for(driver, "studio.labels.some(l => l === 2)", what="the handle")
+    click(driver, "xray")
+    click(driver, "tool-orbit")
+    click(driver, "edit-start")
+    wait_for(driver, "studio.prepared && studio.state.preprocessed", what="the preprocessing")
+    px, py = driver.execute_script("return studio.pivotScreen()")
+    pointer_path(driver, [(px, py)] + [(px + drag[0] * t / 20, py + drag[1] * t / 20) for t in range(1, 21)])
+    wait_for(driver, "studio.state.step === %d && !studio.busy" % (step + 1), what="the release")
+    idle(driver)
+
+
+def test_two_commits_and_a_fill_are_what_the_program_reproduces(page, scan):
+    server, driver = page
+    wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", what="the scan")
+    idle(driver)
+    if driver.execute_script("return studio.state.preprocessed"):
+        click(driver, "undo")  # the island test's prepared edit has no drag: back to its selection's start
+        idle(driver)
+    click(driver, "clear")
+    wait_for(driver, "studio.state.region === 0 && studio.state.groups === 0", what="the cleared selection")
+    click(driver, "view-front")
+    chain = driver.execute_script("return studio.state.chain")
+    n = driver.execute_script("return studio.n")
+    edit_upper_half(driver, (100, -40))
+    click(driver, "commit")
+    wait_for(driver, "studio.state.chain.length === %d && studio.state.groups === 0" % (len(chain) + 1), what="the commit")
+    idle(driver)
+    edit_upper_half(driver, (-160, -30))  # a pull: the region stretches, the fill has gaps to fill
+    shot(driver, "9_second_edit")
+    click(driver, "fill")
+    wait_for(driver, "studio.state.chain.length === %d && studio.n > %d && !studio.busy" % (len(chain) + 3, n),
+             timeout=300, what="the fill")
+    idle(driver)
+    assert driver.execute_script("return studio.state.chain").count("edit") == chain.count("edit") + 2
+    assert driver.execute_script("return studio.state.chain")[-1] == "fill"
+    inserted = driver.execute_script("return studio.inserted ? studio.inserted.reduce((a, b) => a + b, 0) : 0")
+    assert inserted == driver.execute_script("return studio.n") - n > 0
+    shot(driver, "10_filled")
+
+    driver.execute_script("studio.lastSaved = null")
+    driver.find_element("id", "save-name").clear()
+    driver.find_element("id", "save-name").send_keys("chain")
+    click(driver, "save")
+    wait_for(driver, "studio.lastSaved", what="the save")
+    folder = scan.parent
+    saved = read_ply(folder / "chain.ply")
+    run_program("edit", "-i", scan, "--edit", folder / "chain.json", "-o", folder / "chain_program.ply")
+    program = read_ply(folder / "chain_program.ply")
+    points = cgal_ext.read_points(scan).points
+    diagonal = np.linalg.norm(points.max(0) - points.min(0))
+    assert len(saved) == len(program) == driver.execute_script("return studio.n")
+    assert np.abs(xyz(saved) - xyz(program)).max() < 1e-9 * diagonal
+
+
 def test_the_point_budget_draws_a_subset_while_the_view_moves(page):
     server, driver = page
     idle(driver)

@@ -65,7 +65,8 @@ function onArrays(header, a) {
 
 function onGeometry(header, a) {
   const n = a.positions.length / 3;
-  const scanChanged = !studio.state || studio.state.scan !== header.scan || studio.n !== n;
+  // A new scan starts at its own view; a commit or a fill (the same scan, more points) keeps the view.
+  const scanChanged = !studio.geometry || !studio.state || studio.state.scan !== header.scan;
   studio.n = n;
   if (header.label_codes) studio.labelCodes = header.label_codes;
   if (header.max_groups) studio.maxGroups = header.max_groups;
