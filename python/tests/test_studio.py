@@ -521,6 +521,64 @@ def test_two_commits_and_a_fill_are_what_the_program_reproduces(page, scan):
     assert np.abs(xyz(saved) - xyz(program)).max() < 1e-9 * diagonal
 
 
+def test_mirrored_editing_moves_the_second_group_as_the_mirror_image(page):
+    from selenium.webdriver.support.ui import Select
+    server, driver = page
+    wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", what="the scan")
+    idle(driver)
+    click(driver, "clear")
+    wait_for(driver, "studio.state.region === 0 && studio.state.groups === 0", what="the cleared selection")
+    click(driver, "view-side")  # looking along x: y across the screen, z up
+    shown = np.array(driver.execute_script("return Array.from(studio.geometry.getAttribute('shown').array)")).reshape(-1, 3)
+    # The region: the upper half all around; two handle groups on either side of the tube at three quarters' height.
+    x0, x1, y0, y1 = screen_box(driver)
+    cut = driver.execute_script("return studio.screenOf(%r, %r, %r)" %
+                                tuple(shown.mean(0)[:2].tolist() + [np.quantile(shown[:, 2], 0.5)]))[1]
+    click(driver, "tool-lasso")
+    click(driver, "paint-roi")
+    click(driver, "xray")
+    pointer_path(driver, [(x0 - 20, y0 - 20), (x1 + 20, y0 - 20), (x1 + 20, cut), (x0 - 20, cut), (x0 - 20, y0 - 19)])
+    wait_for(driver, "studio.state.region > 0", what="the region")
+    click(driver, "xray")
+    z = np.quantile(shown[:, 2], 0.75)
+    ring = shown[np.abs(shown[:, 2] - z) < 0.01]
+    click(driver, "tool-brush")
+    driver.execute_script("document.getElementById('brush-size').value = 15")
+    for g, side in enumerate((ring[np.argmin(ring[:, 1])], ring[np.argmax(ring[:, 1])])):
+        click(driver, "new-group")
+        wait_for(driver, "studio.state.groups === %d" % (g + 1), what="the handle group")
+        Select(driver.find_element("id", "group")).select_by_index(g)
+        click(driver, "paint-handle")
+        at = driver.execute_script("return studio.screenOf(%r, %r, %r)" % tuple(side.tolist()))
+        pointer_path(driver, [(at[0] + (6 if g == 0 else -6), at[1] - 5), (at[0] + (6 if g == 0 else -6), at[1] + 5)])
+        wait_for(driver, "studio.labels.some(l => l === %d)" % (2 + g), what="handle group %d" % g)
+    Select(driver.find_element("id", "group")).select_by_index(0)
+    driver.execute_script("document.getElementById('mirroring').open = true")
+    Select(driver.find_element("id", "mirror-group")).select_by_index(1)
+    Select(driver.find_element("id", "mirror-axis")).select_by_value("1")
+    click(driver, "mirror")
+    click(driver, "tool-orbit")
+    click(driver, "edit-start")
+    wait_for(driver, "studio.prepared && studio.state.preprocessed", what="the preprocessing")
+    step = driver.execute_script("return studio.state.step")
+    px, py = driver.execute_script("return studio.pivotScreen()")
+    pointer_path(driver, [(px, py)] + [(px - 3 * t, py - 2 * t) for t in range(1, 21)])
+    wait_for(driver, "studio.state.step === %d && !studio.busy" % (step + 1), what="the release")
+    idle(driver)
+    shot(driver, "11_mirrored")
+    labels = np.array(driver.execute_script("return Array.from(studio.labels)"))
+    rest = np.array(driver.execute_script("return Array.from(studio.rest)")).reshape(-1, 3)
+    centres = [rest[labels == 2 + g].mean(0) for g in (0, 1)]
+    M = np.eye(4)
+    M[1, 1] = -1
+    M[1, 3] = centres[0][1] + centres[1][1]  # the plane y = the centres' midpoint
+    T0, T1 = (np.array(t).reshape(4, 4) for t in driver.execute_script("return studio.state.transforms"))
+    assert np.abs(T0[:3, 3]).max() > 0.01  # the drag moved group 0
+    assert np.abs(T1 - M @ T0 @ M).max() < 1e-5
+    assert T0[1, 3] * T1[1, 3] < 0 and abs(T0[2, 3] - T1[2, 3]) < 1e-5  # across the plane opposite, up the same
+    click(driver, "mirror")
+
+
 def test_the_point_budget_draws_a_subset_while_the_view_moves(page):
     server, driver = page
     idle(driver)
