@@ -117,3 +117,14 @@ def screen_box(driver):
 def idle(driver):
     """Waits until the page has no command in flight."""
     wait_for(driver, "!studio.busy && !studio.inFlight && !studio.pending", what="the server's reply")
+
+
+def hole_fraction(driver):
+    """The fraction of the model's silhouette (the drawn pixels, gaps of a few pixels closed, holes filled) where
+    the background shows, and the silhouette's pixels."""
+    import numpy as np
+    from scipy import ndimage
+    r = driver.execute_script("return studio.backgroundPixels()")
+    background = (np.frombuffer(r["mask"].encode(), np.uint8) == ord("1")).reshape(r["height"], r["width"])
+    silhouette = ndimage.binary_fill_holes(ndimage.binary_closing(~background, np.ones((5, 5), bool)))
+    return (silhouette & background).sum() / max(silhouette.sum(), 1), silhouette.sum()

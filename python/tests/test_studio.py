@@ -10,7 +10,7 @@ import pytest
 
 import cgal_ext
 from conftest import read_ply, run_program, xyz
-from studio_support import Server, chromium, idle, make_tentacle, pointer_path, screen_box, wait_for
+from studio_support import Server, chromium, hole_fraction, idle, make_tentacle, pointer_path, screen_box, wait_for
 
 SHOTS = pathlib.Path(os.environ.get("CGAL_EXT_STUDIO_SHOTS") or
                      pathlib.Path(os.environ.get("CGAL_EXT_CMAKE_BUILD_DIR", "build")) / "studio_screenshots")
@@ -40,16 +40,6 @@ def shot(driver, name):
 
 def click(driver, element_id):
     driver.find_element("id", element_id).click()
-
-
-def hole_fraction(driver):
-    """The fraction of the model's silhouette (the drawn pixels, gaps of a few pixels closed, holes filled) where
-    the background shows, and the silhouette's pixels."""
-    from scipy import ndimage
-    r = driver.execute_script("return studio.backgroundPixels()")
-    background = (np.frombuffer(r["mask"].encode(), np.uint8) == ord("1")).reshape(r["height"], r["width"])
-    silhouette = ndimage.binary_fill_holes(ndimage.binary_closing(~background, np.ones((5, 5), bool)))
-    return (silhouette & background).sum() / max(silhouette.sum(), 1), silhouette.sum()
 
 
 def rings(points, seeds, count, within=None, k=10):
@@ -147,7 +137,8 @@ def test_paint_drag_save_matches_the_program(page, scan):
     # The live preview is the library's diffuse() in float32.
     shader = np.array(driver.execute_script("return studio.readback()")).reshape(-1, 3)
     matrix = np.array(driver.execute_script("return studio.lastDrag")).reshape(4, 4)
-    reference = cgal_ext.Deformation(points, cgal_ext.read_points(scan).normals, order="cubic")
+    reference = cgal_ext.Deformation(points, cgal_ext.read_points(scan).normals,
+                                     order=driver.execute_script("return studio.state.settings.order"))
     reference.insert_roi(labels != 0)
     reference.create_handle_group(handle)
     reference.set_handle_transform(0, transform=_rigid(matrix))

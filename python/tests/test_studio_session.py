@@ -308,3 +308,35 @@ def test_a_chain_of_details_an_edit_and_a_fill_is_reproduced_by_the_program(tmp_
     for field in ("status", "ssp_index", "inserted"):
         assert np.array_equal(out[field], ply[field]), field
     assert np.abs(out["displacement"] - ply["displacement"]).max() < 1e-9
+
+
+def test_a_release_that_swings_the_region_is_told_and_the_default_order_does_not(tmp_path):
+    # CGAL's bunny with its ear tip as the handle and the upper part as the region: the cubic order swings the
+    # head five times as far as the handle moves; the studio's default (the program's, quadric) does not.
+    import os
+    import shutil
+    from scipy.spatial import cKDTree
+    from conftest import DATA
+    mesh = os.path.join(DATA, "meshes", "bunny00.off")
+    if not os.path.exists(mesh):
+        pytest.skip("no " + mesh + " (scripts/fetch_data.sh)")
+    shutil.copy(mesh, tmp_path / "bunny00.off")
+    session = Session(tmp_path)
+    session.load("bunny00.off")
+    p = session.points
+    diagonal = np.linalg.norm(np.ptp(p, axis=0))
+    handle = np.zeros(len(p), bool)
+    handle[cKDTree(p).query(p[np.argmax(p[:, 1])], 859)[1]] = True
+    region = p[:, 1] >= np.quantile(p[:, 1], 0.6)
+    move = translation(0.1 * diagonal, 0.05 * diagonal, 0)
+    assert session.settings["order"] == "quadric"
+    edit(session, region, handle, move)
+    assert session.swing_warnings() == []
+    session.undo()
+    session.clear()
+    session.set_settings(order="cubic")
+    edit(session, region, handle, move)
+    warnings = session.swing_warnings()
+    assert [w["kind"] for w in warnings] == ["swing"] and "times as far as any handle" in warnings[0]["message"]
+    moved = np.linalg.norm(session.shown_points - p, axis=1)
+    assert moved[~handle].max() > 2 * moved[handle].mean()  # what it tells

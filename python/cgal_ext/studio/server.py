@@ -356,6 +356,9 @@ class Studio:
     async def on_release(self, ws, command):
         await self.run(self.session.release)
         await self.send_shown(ws)
+        warnings = self.session.swing_warnings()
+        if warnings:
+            await ws.send_json({"type": "warning", "warnings": warnings})
 
     async def send_step(self, ws, whole):
         """After undo or redo: the whole geometry when the base, the selection or the preparation changed, else

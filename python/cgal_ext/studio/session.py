@@ -30,6 +30,7 @@ HISTORY_STEPS = 100
 HISTORY_BYTES = 1 << 30
 COLOURINGS = ("relief", "magnitude", "curvature", "clusters")
 ORDERS = ("linear", "quadric", "cubic")
+SWING_RATIO = 2.0  # above it, a release warns that the region swung past its handles (as point-detail edit does)
 ROTATIONS = ("propagate", "arap")  # as the edit JSON and the Python package spell them
 STRENGTHS = ("euclidean", "geodesic")
 
@@ -64,7 +65,9 @@ class Session:
         self._scan_file = None  # the scan as read: its resolved path and (st_dev, st_ino)
         self._written = {}  # file name -> (st_dev, st_ino) of each file this session saved
         self.scan_points = self.points = self.normals = None  # the scan as read; the current edit's input
-        self.settings = {"order": "cubic", "rotations": "propagate", "strength_distance": "euclidean"}
+        # The program's defaults: the cubic order keeps sharper details but can swing a region far past its
+        # handle (swing_warnings), so it is a choice, not the default.
+        self.settings = {"order": "quadric", "rotations": "propagate", "strength_distance": "euclidean"}
         self.deformation = self.renderer = None
         self.chain = ()  # the committed steps: edits, detail scalings, fills (the saved JSON's "steps")
         self.history, self.step = [], 0
@@ -546,6 +549,18 @@ class Session:
             return
         self._show(self.transforms)
         self._record("drag")
+
+    def swing_warnings(self):
+        """After a release: a warning when parts of the region moved more than SWING_RATIO times as far as any
+        handle (the solve swings them; point-detail edit warns alike), else none."""
+        if self.deformation is None or self.step == 0 or self.history[self.step]["kind"] != "drag":
+            return []
+        ratio = self.deformation.statistics()["displacement_ratio"]
+        if not ratio > SWING_RATIO:
+            return []
+        return [{"kind": "swing", "message": (
+            "parts of the region moved %.1f times as far as any handle: the solve swings them; undo, then choose "
+            "the quadric order or as-rigid-as-possible rotations" % ratio)}]
 
     def _show(self, transforms):
         """Shows the edit under `transforms`, or raises StudioError with the session unchanged."""

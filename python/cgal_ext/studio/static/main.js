@@ -167,6 +167,8 @@ function onShown(header, a) {
 
 Object.assign(studio, {
   view, gizmo, selection, panel,
+  send: (command) => connection.send(command),
+  sendIndices: (header, indices) => connection.sendIndices(header, indices),
   requestRender: () => view.requestRender(),
   readback: () => Array.from(view.readPositions(studio.n)),
   screenOf: (x, y, z) => view.screenOf(x, y, z),

@@ -154,12 +154,26 @@ export class Panel {
     if ('committable' in m) $('commit').disabled = !m.committable && !(m.step > 0);
   }
 
-  // The server's word before an edit that would not make sense: each warning with its remedy, or edit anyway.
+  // The server's word before an edit that would not make sense (each warning with its remedy, or edit anyway),
+  // or after a release that swung the region (with an undo).
   showWarnings(warnings) {
     studio.warnings = warnings;
     const box = $('warnings');
     box.innerHTML = '';
     if (!warnings || !warnings.length) return;
+    if (warnings.every((w) => w.kind === 'swing')) {
+      for (const w of warnings) {
+        const line = document.createElement('div');
+        line.textContent = w.message;
+        box.appendChild(line);
+      }
+      const undo = document.createElement('button');
+      undo.textContent = 'Undo the drag';
+      undo.id = 'undo-swing';
+      undo.onclick = () => { this.showWarnings(null); studio.busy = true; this.connection.send({ type: 'undo' }); };
+      box.appendChild(undo);
+      return;
+    }
     for (const w of warnings) {
       const line = document.createElement('div');
       line.textContent = w.message;

@@ -73,10 +73,21 @@ export class Selection {
     for (let i = 0; i < n; ++i) {
       const x = Math.floor(screen[2 * i]), y = Math.floor(screen[2 * i + 1]);
       if (!(x >= 0 && y >= 0 && x < width && y < height) || depth[i] <= 0) continue;
-      const seen = pass.depth[y * width + x];
-      // One pixel's footprint at that depth added: a pixel's depth is a sprite's, not the point's own.
-      const tolerance = SPACINGS_BEHIND * spacingOf(i) + depth[i] / perUnit;
-      if (seen > 0 && depth[i] <= seen + tolerance) visible[i] = 1;
+      // The nearest surface at the pixel and the 8 around it: a point of the far side seen through a pixel-wide
+      // gap between the near side's sprites is behind its neighbours' surface.
+      let seen = Infinity;
+      for (let dy = -1; dy <= 1; ++dy) {
+        for (let dx = -1; dx <= 1; ++dx) {
+          const px = x + dx, py = y + dy;
+          if (px < 0 || py < 0 || px >= width || py >= height) continue;
+          const d = pass.depth[py * width + px];
+          if (d > 0 && d < seen) seen = d;
+        }
+      }
+      // Two pixels' footprint at that depth added: a pixel's depth is a sprite's, not the point's own, and the
+      // nearest of the window may lie a pixel away on a slope.
+      const tolerance = SPACINGS_BEHIND * spacingOf(i) + 2 * depth[i] / perUnit;
+      if (seen < Infinity && depth[i] <= seen + tolerance) visible[i] = 1;
     }
     return visible;
   }

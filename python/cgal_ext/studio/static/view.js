@@ -112,15 +112,15 @@ export class View {
   setPoints(points, material) {
     if (this.points) this.scene.remove(this.points);
     this.points = points;
+    this.geometry = points.geometry; // every point's; while moving, the points draw the budget's subset
     this.material = material;
     this.scene.add(points);
-    this.order = null;
+    this.subset = null;
     this.applyBudget();
   }
 
   // The point budget (Potree's): while the view or a handle moves, at most `budget` points are drawn, a random
-  // subset (spatially even on average) with sprites grown to cover for the others; every point when idle. The
-  // points are drawn through an index in a shuffled order, so that the subset is the index's first `budget`.
+  // subset (spatially even on average) with sprites grown to cover for the others; every point when idle.
   setMoving(moving) {
     if (this.moving === moving) return;
     this.moving = moving;
@@ -129,10 +129,21 @@ export class View {
 
   applyBudget() {
     if (!this.points) return;
-    const geometry = this.points.geometry, n = studio.n;
+    const n = studio.n;
     const limited = this.moving && this.budget > 0 && n > this.budget;
-    if (limited && !this.order) {
-      // A fixed shuffle (xorshift from a constant seed): the same subset every time.
+    this.points.geometry = limited ? this.subsetGeometry() : this.geometry;
+    if (this.material) this.material.uniforms.budgetScale.value = limited ? Math.sqrt(n / this.budget) : 1;
+    studio.drawn = limited ? this.budget : n;
+    this.requestRender();
+  }
+
+  // The budget's points as a geometry of their own: the first `budget` of a fixed shuffle (xorshift from a
+  // constant seed: the same subset every time), their attributes gathered in increasing order into arrays of
+  // their own, so that the vertex stage reads them in sequence (software GL spends most of a frame there). An
+  // attribute is gathered again when it changed since (a new array or a new version).
+  subsetGeometry() {
+    const full = this.geometry, n = studio.n;
+    if (!this.subset || this.subset.full !== full || this.subset.indices.length !== this.budget) {
       const order = new Uint32Array(n);
       for (let i = 0; i < n; ++i) order[i] = i;
       let x = 2463534242;
@@ -141,13 +152,30 @@ export class View {
         const j = x % (i + 1);
         const t = order[i]; order[i] = order[j]; order[j] = t;
       }
-      this.order = new THREE.BufferAttribute(order, 1);
-      geometry.setIndex(this.order);
+      const indices = order.slice(0, this.budget).sort();
+      if (this.subset) this.subset.geometry.dispose();
+      this.subset = { full, indices, geometry: new THREE.BufferGeometry(), sources: {} };
     }
-    geometry.setDrawRange(0, limited ? this.budget : Infinity);
-    if (this.material) this.material.uniforms.budgetScale.value = limited ? Math.sqrt(n / this.budget) : 1;
-    studio.drawn = limited ? this.budget : n;
-    this.requestRender();
+    const { indices, geometry, sources } = this.subset;
+    for (const [name, attribute] of Object.entries(full.attributes)) {
+      const known = sources[name];
+      if (known && known.attribute === attribute && known.version === attribute.version) continue;
+      const size = attribute.itemSize, from = attribute.array;
+      let gathered = geometry.getAttribute(name);
+      if (gathered && gathered.array.constructor === from.constructor && gathered.itemSize === size) {
+        gathered.needsUpdate = true; // the same buffer, new values
+      } else {
+        gathered = new THREE.BufferAttribute(new from.constructor(indices.length * size), size, attribute.normalized);
+        geometry.setAttribute(name, gathered);
+      }
+      const to = gathered.array;
+      for (let k = 0; k < indices.length; ++k) {
+        const i = indices[k] * size;
+        for (let c = 0; c < size; ++c) to[k * size + c] = from[i + c];
+      }
+      sources[name] = { attribute, version: attribute.version };
+    }
+    return geometry;
   }
 
   // Drawn on demand (a camera move, new motions, new attributes), never in an idle loop: a million points drawn
