@@ -10,10 +10,11 @@ region is the half on the positive side of the second-longest axis, its handle t
 stretch of a 10-nearest-neighbour edge of the region outside the handle's collar (3 rings) after each edit, the
 points the fill added, and the largest distance between the saved PLY and the program's result.
 
-Usage: PYTHONPATH=build/python benchmark/studio_on_models.py [--data data] [--program build/src/point-detail] [MODEL...]
-(a MODEL is a name in data/meshes or a point file, such as a sampling by build/benchmark/sample_scan)
+Usage: PYTHONPATH=build/python benchmark/studio_on_models.py [--data data] [--build build] [--out DIR] [--quick] [MODEL...]
+(a MODEL is a name in data/meshes or a point file; by default CGAL's models and seeded samplings of three of them)
 """
 import argparse
+import csv
 import os
 import shutil
 import subprocess
@@ -27,6 +28,15 @@ from cgal_ext.studio.session import FIXED, FIRST_HANDLE, Session
 
 MODELS = ["fandisk", "bunny00", "ChineseDragon-10kv", "mech-holes-shark", "lion-head", "elephant-with-holes", "turbine",
           "anchor_dense", "camel", "blobby_3cc", "cactus", "refined_elephant"]
+SAMPLINGS = [("blobby_3cc", 300000), ("fandisk", 1000000), ("armadillo", 1000000)]
+
+
+def sampled(build, data, folder, model, n):
+    """CGAL's `model` sampled to `n` points with normals (benchmark/sample_scan, seeded)."""
+    path = os.path.join(folder, "%s_%d.ply" % (model, n))
+    subprocess.run([os.path.join(build, "benchmark", "sample_scan"), os.path.join(data, "meshes", model + ".off"), str(n),
+                    path], check=True, stdout=subprocess.DEVNULL)
+    return path
 
 
 def rotation(axis, degrees):
@@ -110,19 +120,42 @@ def run_model(path, program, folder):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--data", default="data")
-    parser.add_argument("--program", default=os.path.join("build", "src", "point-detail"))
-    parser.add_argument("models", nargs="*", default=MODELS)
+    parser.add_argument("--build", default="build")
+    parser.add_argument("--out", help="writes studio_models_results.csv and .md there")
+    parser.add_argument("--quick", action="store_true", help="three small models only")
+    parser.add_argument("models", nargs="*")
     args = parser.parse_args()
-    print("| model | points | checks before the edits | stretch, edit 1 | stretch, edit 2 | points filled | "
-          "saved vs program (of the diagonal) | session time |")
-    print("|---|---|---|---|---|---|---|---|")
-    for model in args.models:
-        with tempfile.TemporaryDirectory() as folder:
-            path = model if os.path.isfile(model) else os.path.join(args.data, "meshes", model + ".off")
-            r = run_model(path, args.program, folder)
-        print("| %s | %d | %s | %.2f | %.2f | %d | %.1e | %.1f s |" % (
+    program = os.path.join(args.build, "src", "point-detail")
+    with tempfile.TemporaryDirectory() as samplings:
+        models = args.models or (MODELS[:3] if args.quick else MODELS + [
+            sampled(args.build, args.data, samplings, model, n) for model, n in SAMPLINGS])
+        rows = []
+        for model in models:
+            with tempfile.TemporaryDirectory() as folder:
+                path = model if os.path.isfile(model) else os.path.join(args.data, "meshes", model + ".off")
+                rows.append(run_model(path, program, folder))
+    lines = ["# The studio on CGAL's models", "",
+             "Written by `benchmark/studio_on_models.py`%s (%d threads): two edits with a commit between them, a fill, a "
+             "save and the program on the saved chain, per model (doc/studio.md, \"Tried on other models\")." %
+             (" --quick" if args.quick else "", cgal_ext.get_num_threads()), "",
+             "| model | points | checks before the edits | stretch, edit 1 | stretch, edit 2 | points filled | "
+             "saved vs program (of the diagonal) | session s |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append("| %s | %d | %s | %.2f | %.2f | %d | %.1e | %.1f |" % (
             r["model"], r["points"], r["warnings"], r["stretch1"], r["stretch2"], r["inserted"], r["difference"],
             r["seconds"]))
+    print("\n".join(lines))
+    if args.out:
+        os.makedirs(args.out, exist_ok=True)
+        with open(os.path.join(args.out, "studio_models_results.csv"), "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["model", "points", "warnings", "stretch_edit1", "stretch_edit2", "inserted", "difference",
+                        "session_s"])
+            for r in rows:
+                w.writerow([r["model"], r["points"], r["warnings"], "%.4g" % r["stretch1"], "%.4g" % r["stretch2"],
+                            r["inserted"], "%.3g" % r["difference"], "%.3g" % r["seconds"]])
+        with open(os.path.join(args.out, "studio_models_results.md"), "w") as f:
+            f.write("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -84,7 +84,7 @@ export class Panel {
     $('mirror-axis').onchange = () => this.updateMirror();
 
     gizmo.onDragging = (dragging) => { this.updateOrbit(); view.setDragging(dragging); };
-    $('budget').onchange = () => { view.budget = Math.max(0, Math.round(Number($('budget').value) || 0)); view.order = null; view.applyBudget(); };
+    $('budget').onchange = () => { view.budget = Math.max(0, Math.round(Number($('budget').value) || 0)); view.applyBudget(); };
     window.addEventListener('keydown', (event) => {
       if (event.target.tagName === 'INPUT' && !['checkbox', 'radio', 'range'].includes(event.target.type)) return;
       if (event.ctrlKey && event.key === 'z') $('undo').click();
