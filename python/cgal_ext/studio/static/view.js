@@ -115,6 +115,7 @@ export class View {
     this.geometry = points.geometry; // every point's; while moving, the points draw the budget's subset
     this.material = material;
     this.scene.add(points);
+    if (this.subset) this.subset.geometry.dispose(); // its buffers, made for the geometry replaced
     this.subset = null;
     this.applyBudget();
   }
