@@ -14,6 +14,7 @@ import pytest
 from conftest import run_program
 
 CHROMEDRIVER = "/usr/bin/chromedriver"
+MAX_STRETCH = 3  # the most a 10-nearest-neighbour edge of a bending region may stretch (doc/studio.md)
 
 
 def make_tentacle(folder, points):
@@ -128,3 +129,50 @@ def hole_fraction(driver):
     background = (np.frombuffer(r["mask"].encode(), np.uint8) == ord("1")).reshape(r["height"], r["width"])
     silhouette = ndimage.binary_fill_holes(ndimage.binary_closing(~background, np.ones((5, 5), bool)))
     return (silhouette & background).sum() / max(silhouette.sum(), 1), silhouette.sum()
+
+
+def lasso_above(driver, cut):
+    """A lasso around the model's part above the screen row `cut`, with X-ray on (its far side too; X-ray is left
+    on, as a person leaves it)."""
+    x0, x1, y0, y1 = screen_box(driver)
+    driver.find_element("id", "tool-lasso").click()
+    driver.find_element("id", "paint-roi").click()
+    driver.find_element("id", "xray").click()
+    pointer_path(driver, [(x0 - 20, y0 - 20), (x1 + 20, y0 - 20), (x1 + 20, cut), (x0 - 20, cut), (x0 - 20, y0 - 19)])
+    wait_for(driver, "studio.state.region > 0", what="the region")
+
+
+def rings(points, seeds, count, within=None, k=10):
+    """The points within `count` rings of `seeds` over the k-nearest-neighbour graph (as a mask), walking only
+    through `within` when given."""
+    from scipy.spatial import cKDTree
+    _, neighbours = cKDTree(points).query(points, k + 1)
+    reached = seeds.copy()
+    for _ in range(count):
+        grown = reached.copy()
+        grown[neighbours[reached].ravel()] = True
+        if within is not None:
+            grown &= within | seeds
+        reached = grown
+    return reached
+
+
+def assert_the_region_bends(points, deformed, handle, in_region, motion, least_near):
+    """An edit whose region bends (doc/studio.md, "Step by step", 4): the region's points within 3 rings of the
+    handle follow at least half of the handle's `motion`, and no 10-nearest-neighbour edge of the region outside
+    that collar stretches past MAX_STRETCH."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+    moved = deformed - points
+    near = rings(points, handle, 3, within=in_region) & ~handle
+    follow = moved[near] @ motion / (motion @ motion)
+    assert near.sum() > least_near and follow.min() >= 0.5, (near.sum(), follow.min())
+    _, neighbours = cKDTree(points).query(points, 11)
+    collar = rings(points, handle, 3)
+    rows = np.flatnonzero(in_region & ~collar)
+    i, j = np.repeat(rows, 10), neighbours[rows, 1:].ravel()
+    keep = in_region[j] & ~collar[j]
+    i, j = i[keep], j[keep]
+    after, before = np.linalg.norm(deformed[i] - deformed[j], axis=1), np.linalg.norm(points[i] - points[j], axis=1)
+    stretch = after / np.maximum(before, 1e-12)
+    assert stretch.max() <= MAX_STRETCH, (stretch.max(), np.quantile(stretch, 0.99))

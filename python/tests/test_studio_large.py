@@ -1,7 +1,6 @@
 # The studio in Chromium on a scan of 10M points, ten times the page's point budget: it opens, and while the view
 # is turned by the mouse it draws the budget only, a subset that still covers the surface; every point again
 # when the mouse is released. (The frame times with and without the budget are the benchmark's: bench_studio.py.)
-import numpy as np
 import pytest
 
 import cgal_ext
