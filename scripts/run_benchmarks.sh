@@ -40,6 +40,9 @@ BUILD_DIR="$build" bash benchmark/measure_raw_scan.sh --out "$out" "${raw_scan[@
 echo "== bench_python.py" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_python.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_python.log"
+echo "== bench_drag.py" >&2
+PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_drag.py "${flags[@]}" --build "$build" --data data --out "$out" \
+  > "$build/benchmark/logs/bench_drag.log"
 echo "== bench_studio.py" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_studio.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_studio.log"

@@ -236,6 +236,7 @@ public:
     m_diffused = true;
     m_diffused_elsewhere = false;
     m_statistics.diffuse_seconds = seconds_since(start);
+    m_statistics.diffuse_bytes = m_diffusion.moved_bytes(false);
   }
 
   /// The first half of `diffuse()`: each sample point's motion for the last `deform()`, which `diffusion_view()`
@@ -261,11 +262,10 @@ public:
     internal::write_points_and_normals(points, np, m_row_of, m_deformed_points, m_deformed_normals);
   }
 
-  /// `diffuse()` into arrays in input order (numpy's, a renderer's): writes each point a drag can move straight to row
-  /// `i` of `points` and `normals` (input point `i`, three doubles per row), walking them in input order; the other
-  /// rows must hold the input points (as after one `diffuse(points, np)`). The same bits as `diffuse()`, but the
-  /// internal arrays keep the last `diffuse()`'s: until the next one, `deformed_point()`, `for_each_deformed_point()`
-  /// and `restore_details()` throw Invalid_input.
+  /// `diffuse()` into arrays in input order, as numpy keeps them: writes each point a drag can move to row `i` of
+  /// `points` and `normals` (three doubles a row); the other rows must hold the input points (as after one
+  /// `diffuse(points, np)`). The same bits as `diffuse()`, but the internal arrays keep the last `diffuse()`'s: until
+  /// the next one, `deformed_point()`, `for_each_deformed_point()` and `restore_details()` throw Invalid_input.
   void diffuse_in_input_order(double* points, double* normals)
   {
     check_preprocessed("diffuse_in_input_order()");
@@ -277,6 +277,7 @@ public:
     m_diffused = false;
     m_diffused_elsewhere = true;
     m_statistics.diffuse_seconds = seconds_since(start);
+    m_statistics.diffuse_bytes = m_diffusion.moved_bytes(true);
   }
 
   /*!

@@ -309,6 +309,10 @@ struct Detail_preserving_deformation_statistics
   /// cactus").
   double displacement_ratio = 0;
   double diffuse_seconds = 0; ///< last `diffuse()`: deformed frames and every point's new position and normal
+  /// Last `diffuse()`: the bytes it read and wrote for the points it moved, as its data's layout counts them
+  /// (each moved point's stencil, rest position and normal read, its new position and normal written; not the
+  /// cache lines a store reads first): over `diffuse_seconds`, the memory bandwidth a drag achieved.
+  std::size_t diffuse_bytes = 0;
   /// Last `restore_details()`, with the search for the points' neighbours when it was the first after preprocessing.
   double restore_seconds = 0;
   unsigned int restore_iterations = 0; ///< last `restore_details()`: conjugate-gradient iterations

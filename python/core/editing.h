@@ -223,17 +223,17 @@ public:
   py::dict statistics() const
   {
     const Detail_preserving_deformation_statistics& s = m_deformation->statistics();
-    return py::dict("points"_a = s.points, "samples"_a = s.samples, "requested_samples"_a = s.requested_samples,
-                    "roi_samples"_a = s.roi_samples, "handle_samples"_a = s.handle_samples,
-                    "clustering_seconds"_a = s.clustering_seconds, "preprocess_seconds"_a = s.preprocess_seconds,
-                    "deform_seconds"_a = s.deform_seconds, "diffuse_seconds"_a = s.diffuse_seconds,
-                    "restore_seconds"_a = s.restore_seconds, "restore_iterations"_a = s.restore_iterations,
-                    "restore_residual"_a = s.restore_residual, "rigid_iterations"_a = s.rigid_iterations,
-                    "displacement_ratio"_a = s.displacement_ratio, "factor_seconds"_a = s.least_squares.factor_seconds,
-                    "operator_nonzeros"_a = s.least_squares.operator_nonzeros,
-                    "normal_nonzeros"_a = s.least_squares.normal_nonzeros,
-                    "solve_seconds"_a = s.least_squares.solve_seconds, "solve_iterations"_a = s.least_squares.iterations,
-                    "relative_residual"_a = s.least_squares.relative_residual);
+    return py::dict(
+      "points"_a = s.points, "samples"_a = s.samples, "requested_samples"_a = s.requested_samples,
+      "roi_samples"_a = s.roi_samples, "handle_samples"_a = s.handle_samples,
+      "clustering_seconds"_a = s.clustering_seconds, "preprocess_seconds"_a = s.preprocess_seconds,
+      "deform_seconds"_a = s.deform_seconds, "diffuse_seconds"_a = s.diffuse_seconds,
+      "diffuse_bytes"_a = s.diffuse_bytes, "restore_seconds"_a = s.restore_seconds,
+      "restore_iterations"_a = s.restore_iterations, "restore_residual"_a = s.restore_residual,
+      "rigid_iterations"_a = s.rigid_iterations, "displacement_ratio"_a = s.displacement_ratio,
+      "factor_seconds"_a = s.least_squares.factor_seconds, "operator_nonzeros"_a = s.least_squares.operator_nonzeros,
+      "normal_nonzeros"_a = s.least_squares.normal_nonzeros, "solve_seconds"_a = s.least_squares.solve_seconds,
+      "solve_iterations"_a = s.least_squares.iterations, "relative_residual"_a = s.least_squares.relative_residual);
   }
 
   /// The settings under their keyword names, as the constructor takes them.

@@ -277,6 +277,12 @@ def test_an_edit_is_the_programs(sphere, sphere_file, tmp_path, options, setting
     returned = deformation.diffuse(P, N)
     assert returned[0] is P and returned[1] is N
     assert np.array_equal(P, diffused) and np.array_equal(N, moved_normals)
+    # What the drag read and wrote for its points: at least each moved point's rest and new position and normal
+    # and its stencil (the handles read and write no stencil), at most a packed record and the rows per point.
+    moved_count = np.count_nonzero(np.any(P != points, axis=1))
+    width = settings.get("diffusion_samples", 6)
+    traffic = deformation.statistics()["diffuse_bytes"]
+    assert moved_count * 96 <= traffic <= len(points) * (4 * 48 + 12 * width) + 128 * stats["samples"]
     with pytest.raises(ValueError, match="rows"):
         deformation.diffuse(P[:10], N)
     P.flags.writeable = False

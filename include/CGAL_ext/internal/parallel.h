@@ -36,13 +36,14 @@ constexpr bool is_parallel()
 #endif
 }
 
-/// Runs `body(i)` for i in [begin, end), in parallel when ConcurrencyTag says so.
+/// Runs `body(i)` for i in [begin, end), in parallel when ConcurrencyTag says so, in tasks of at least `grain`
+/// (when there are that many).
 template <typename ConcurrencyTag, typename Body>
-void for_range(std::size_t begin, std::size_t end, const Body& body)
+void for_range(std::size_t begin, std::size_t end, const Body& body, std::size_t grain = 256)
 {
 #ifdef CGAL_LINKED_WITH_TBB
   if constexpr(is_parallel<ConcurrencyTag>()) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, grain),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for(std::size_t i = r.begin(); i != r.end(); ++i) body(i);
                       });

@@ -89,8 +89,8 @@ public:
   /// `apply` into arrays in input order (row i: input point i, three doubles; `cloud` and its rest `normals`), in
   /// input order: the exact handles put on their transforms, then the other movable points blended a block at a
   /// time, the block's collar points stepped while it is in cache. The same results bit for bit, written where
-  /// the caller keeps them instead of copied there. The first call after `setup` copies the points' rest
-  /// positions, normals and stencils into input order.
+  /// the caller keeps them instead of copied there. The first call after `setup` packs the points' rest
+  /// positions, normals and stencils in input order (Packed_diffusion_rows).
   template <typename ConcurrencyTag>
   void apply_in_input_order(const Spatial_point_cloud& cloud, const Matrix_n3& normals, const Matrix_n3& samples,
                             const Matrix_n3& deformed_samples, Diffusion_origin origin,
@@ -98,7 +98,6 @@ public:
   {
     Stencil_in_input_order& ordered = m_in_input_order;
     if(!ordered.ready) copy_in_input_order<ConcurrencyTag>(cloud, normals);
-    ordered.stencil.copy_motions(stencil);
     collar.template set_walk_steps<ConcurrencyTag>(stencil, cloud.positions, normals, samples, deformed_samples, origin,
                                                    m_group_rotations, transforms);
     collar.template apply_to_handle_points<ConcurrencyTag>(m_group_rotations, transforms, out_points, out_normals);
@@ -107,9 +106,25 @@ public:
       collar_of_block = [&](std::size_t first, std::size_t last) {
         collar.apply_to_walk_collar(first, last, ordered.destinations, out_points, out_normals);
       };
-    ordered.stencil.template move_points<ConcurrencyTag>(
-      ordered.points, ordered.normals, samples, deformed_samples, origin, out_points, out_normals, nullptr,
-      &ordered.destinations, collar_of_block ? &collar_of_block : nullptr);
+    stencil.template move_packed_points<ConcurrencyTag>(ordered.packed, samples, deformed_samples, origin, out_points,
+                                                        out_normals, collar_of_block ? &collar_of_block : nullptr);
+  }
+
+  /// The bytes a drag's `apply` (`in_input_order`: `apply_in_input_order`) reads and writes for its points, as
+  /// the data's layout counts them: per blended point its stencil, rest position and normal read (and its
+  /// destination row, in input order) and its position and normal written; per exact handle its rest position
+  /// and normal read and its new ones written; the sample points' motion records once. Neither the cache lines
+  /// a store reads before it writes them nor the collar's steps are counted.
+  std::size_t moved_bytes(bool in_input_order) const
+  {
+    const std::size_t row = 3 * sizeof(double), handles = collar.handle_rows.size();
+    const std::size_t records = stencil.samples.size() ? sizeof(Eigen::Matrix4d) * turns.maps.size() : 0;
+    const std::size_t blended =
+      in_input_order && m_in_input_order.ready ? m_in_input_order.packed.size() : moving_rows.size();
+    const std::size_t stencil_row = stencil.width() * (sizeof(double) + sizeof(int));
+    const std::size_t read =
+      in_input_order && m_in_input_order.ready ? m_in_input_order.packed.record_bytes() : 2 * row + stencil_row;
+    return blended * (read + 2 * row) + handles * 4 * row + records;
   }
 
   /// Puts back the fine details of the region's moved rows of `deformed` (from their rest `points`) that the
@@ -135,8 +150,7 @@ private:
   struct Stencil_in_input_order
   {
     bool ready = false;
-    Matrix_n3 points, normals;
-    Diffusion_stencil stencil;
+    Packed_diffusion_rows packed;
     std::vector<int> destinations;
   };
 
@@ -148,21 +162,11 @@ private:
     for(int row : m_movable_rows)               // every handle row among them
       (std::binary_search(collar.handle_rows.begin(), collar.handle_rows.end(), row) ? handle_rows : blended_rows)
         .push_back(row);
-    const std::size_t count = blended_rows.size(), width = stencil.width();
-    ordered.points.resize(Eigen::Index(count), 3);
-    ordered.normals.resize(Eigen::Index(count), 3);
-    ordered.stencil.samples = fixed_degree_graph(count, width);
-    ordered.stencil.weights.resize(count * width);
-    ordered.stencil.use_wide_vectors = stencil.use_wide_vectors;
-    ordered.destinations.resize(count);
-    for_range<ConcurrencyTag>(0, count, [&](std::size_t r) {
-      const std::size_t row = std::size_t(blended_rows[r]);
-      ordered.points.row(Eigen::Index(r)) = cloud.positions.row(Eigen::Index(row));
-      ordered.normals.row(Eigen::Index(r)) = normals.row(Eigen::Index(row));
-      stencil.copy_row(row, ordered.stencil.samples.indices.data() + r * width,
-                       ordered.stencil.weights.data() + r * width);
-      ordered.destinations[r] = cloud.input_index[row];
-    });
+    ordered.destinations.resize(blended_rows.size());
+    for(std::size_t r = 0; r < blended_rows.size(); ++r)
+      ordered.destinations[r] = cloud.input_index[std::size_t(blended_rows[r])];
+    ordered.packed.template pack<ConcurrencyTag>(blended_rows, ordered.destinations, cloud.positions, normals,
+                                                 stencil.weights, stencil.samples.indices, stencil.width());
     collar.prepare_walk(blended_rows, handle_rows, cloud.positions, normals, cloud.input_index);
     ordered.ready = true;
   }

@@ -20,7 +20,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -107,7 +109,113 @@ inline Eigen::Matrix3d Ssp_frames::frame(const Matrix_n3& positions, std::size_t
 }
 #endif
 
+/// An allocator whose blocks start on a cache line (64 bytes), for the records a drag reads by the million.
+template <typename T>
+struct Cache_line_allocator
+{
+  using value_type = T;
+  Cache_line_allocator() = default;
+  template <typename U>
+  Cache_line_allocator(const Cache_line_allocator<U>&)
+  {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64))); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, std::align_val_t(64)); }
+  template <typename U>
+  bool operator==(const Cache_line_allocator<U>&) const
+  {
+    return true;
+  }
+  template <typename U>
+  bool operator!=(const Cache_line_allocator<U>&) const
+  {
+    return false;
+  }
+};
+
 constexpr std::size_t diffusion_block = 256; // points per task of Diffusion_stencil::apply
+constexpr std::size_t diffusion_prefetch = 32; // how many points ahead a block asks for the rows it walks
+
+/// Where Diffusion_stencil's blocks find the a-th point they move: `width` sample points and weights per stencil
+/// row, the row `active[a]` (row a without `active`), written to row `destination[a]` (its own row without).
+struct Diffusion_rows
+{
+  const double *points, *normals, *weights;
+  const int* samples;
+  std::size_t width;
+  const int *active, *destination;
+
+  std::size_t row(std::size_t a) const { return active ? std::size_t(active[a]) : a; }
+  const double* point(std::size_t a) const { return points + 3 * row(a); }
+  const double* normal(std::size_t a) const { return normals + 3 * row(a); }
+  const double* weights_of(std::size_t a) const { return weights + width * row(a); }
+  /// The k-th sample point of the a-th point's stencil (nearest first).
+  std::size_t sample(std::size_t a, std::size_t k) const { return std::size_t(samples[width * row(a) + k]); }
+  std::size_t destination_of(std::size_t a) const { return destination ? std::size_t(destination[a]) : row(a); }
+  /// Asks the cache for the a-th point's data (a < the number of points moved).
+  void prefetch(std::size_t a) const
+  {
+    const std::size_t i = row(a);
+    for(const void* line :
+        {static_cast<const void*>(points + 3 * i), static_cast<const void*>(normals + 3 * i),
+         static_cast<const void*>(weights + width * i), static_cast<const void*>(samples + width * i)})
+      __builtin_prefetch(line);
+  }
+};
+
+/// The diffusion's per-point data in the order a drag walks it, one record per point: rest position, rest
+/// normal and weights as doubles, then the sample points and the destination row as 32-bit integers, padded
+/// to 32 bytes (128 bytes for the default six sample points, two cache lines). A drag then reads one stream
+/// instead of five, whose next records it asks for ahead (doc/editing_at_scale.md, "A drag's memory traffic").
+class Packed_diffusion_rows
+{
+public:
+  /// Record a holds row `rows[a]` of `points`, `normals` and the stencil's `weights` and `samples` (`width`
+  /// per row), to be written to row `destinations[a]`.
+  template <typename ConcurrencyTag>
+  void pack(const std::vector<int>& rows, const std::vector<int>& destinations, const Matrix_n3& points,
+            const Matrix_n3& normals, const std::vector<double>& weights, const std::vector<int>& samples,
+            std::size_t width)
+  {
+    m_width = width;
+    m_count = rows.size();
+    const std::size_t doubles = 6 + width + (width + 2) / 2; // the integers two to a double
+    m_stride = (doubles + 3) / 4 * 4;
+    m_records.assign(m_count * m_stride, 0.0);
+    for_range<ConcurrencyTag>(0, m_count, [&](std::size_t a) {
+      double* record = m_records.data() + a * m_stride;
+      const Eigen::Index row = rows[a];
+      for(int c = 0; c < 3; ++c) record[c] = points(row, c), record[3 + c] = normals(row, c);
+      std::copy_n(weights.data() + width * std::size_t(row), width, record + 6);
+      char* integers = reinterpret_cast<char*>(record + 6 + width); // by bytes: the storage holds doubles
+      std::memcpy(integers, samples.data() + width * std::size_t(row), width * sizeof(int));
+      std::memcpy(integers + width * sizeof(int), &destinations[a], sizeof(int));
+    });
+  }
+
+  std::size_t size() const { return m_count; }
+  /// The bytes of one record.
+  std::size_t record_bytes() const { return m_stride * sizeof(double); }
+  const double* point(std::size_t a) const { return m_records.data() + a * m_stride; }
+  const double* normal(std::size_t a) const { return point(a) + 3; }
+  const double* weights_of(std::size_t a) const { return point(a) + 6; }
+  std::size_t sample(std::size_t a, std::size_t k) const { return integer(a, k); }
+  std::size_t destination_of(std::size_t a) const { return integer(a, m_width); }
+  void prefetch(std::size_t a) const
+  {
+    for(std::size_t line = 0; line < m_stride; line += 8) __builtin_prefetch(point(a) + line);
+  }
+
+private:
+  std::size_t integer(std::size_t a, std::size_t k) const
+  {
+    int value;
+    std::memcpy(&value, reinterpret_cast<const char*>(point(a) + 6 + m_width) + k * sizeof(int), sizeof(int));
+    return std::size_t(value);
+  }
+
+  std::vector<double, Cache_line_allocator<double>> m_records;
+  std::size_t m_width = 0, m_stride = 0, m_count = 0;
+};
 
 /// The per-point data of the diffusion, fixed at preprocessing: the `m` nearest sample points and their weights.
 class Diffusion_stencil
@@ -147,9 +255,6 @@ public:
   void set_motions(const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
                    const std::vector<Eigen::Matrix3d>& map);
 
-  /// Takes the motion records of `other`, a stencil over the same sample points.
-  void copy_motions(const Diffusion_stencil& other) { m_records = other.m_records; }
-
   /// Called after each block of moved points, `[first, last)` of the points listed (of `active`, or of all rows),
   /// while its rows are still in cache; blocks may run in parallel.
   using Block_visitor = std::function<void(std::size_t first, std::size_t last)>;
@@ -162,6 +267,13 @@ public:
                    const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
                    double* out_normals, const std::vector<int>* active, const std::vector<int>* destination,
                    const Block_visitor* after_block = nullptr) const;
+
+  /// move_points() for the points of `packed`, the a-th written to its destination row; `after_block` is
+  /// called with ranges of the records.
+  template <typename ConcurrencyTag>
+  void move_packed_points(const Packed_diffusion_rows& packed, const Matrix_n3& sample_positions,
+                          const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
+                          double* out_normals, const Block_visitor* after_block = nullptr) const;
 
   /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `(A_j - I) p + c_j`
   /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
@@ -184,7 +296,8 @@ public:
   {
     Eigen::Matrix3d turn;
     Eigen::Vector3d displacement;
-    blend(i, points, sample_positions, deformed_sample_positions, origin, turn, displacement);
+    blend(rows(points, normals, nullptr, nullptr), i, sample_positions, deformed_sample_positions, origin, turn,
+          displacement);
     moved_point = points.row(Eigen::Index(i)).transpose() + displacement;
     moved_normal = cofactor_times(Eigen::Matrix3d::Identity() + turn, normals.row(Eigen::Index(i)).transpose()).normalized();
   }
@@ -202,21 +315,35 @@ private:
   // Per sample point, its displacement as an affine function of the point: the 4x4 matrix [A - I, c; 0, 1] with
   // c = (s' - s) - (A - I) s (column-major, 128 bytes). Blending the records of a point's stencil by weight
   // blends the maps, the constants and, in the corner, the weights' sum.
-  std::vector<Eigen::Matrix4d> m_records;
+  std::vector<Eigen::Matrix4d, Cache_line_allocator<Eigen::Matrix4d>> m_records; // each on two cache lines
 
-  // Point i's blended turn `sum_j w_j (A_j - I)` and displacement.
-  void blend(std::size_t i, const Matrix_n3& points, const Matrix_n3& sample_positions,
+  // This stencil's rows of `points` and `normals`, picked by `active` and written to `destination` (both optional).
+  Diffusion_rows rows(const Matrix_n3& points, const Matrix_n3& normals, const std::vector<int>* active,
+                      const std::vector<int>* destination) const
+  {
+    return {points.data(),
+            normals.data(),
+            weights.data(),
+            samples.indices.data(),
+            width(),
+            active ? active->data() : nullptr,
+            destination ? destination->data() : nullptr};
+  }
+
+  // The a-th point's blended turn `sum_j w_j (A_j - I)` and displacement.
+  template <typename Layout>
+  void blend(const Layout& layout, std::size_t a, const Matrix_n3& sample_positions,
              const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, Eigen::Matrix3d& turn,
              Eigen::Vector3d& displacement) const
   {
     Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
-    for(int e = samples.offsets[i]; e < samples.offsets[i + 1]; ++e)
-      blended.noalias() += weights[std::size_t(e)] * m_records[std::size_t(samples.indices[std::size_t(e)])];
+    const double* w = layout.weights_of(a);
+    for(std::size_t k = 0, kept = width(); k < kept; ++k) blended.noalias() += w[k] * m_records[layout.sample(a, k)];
     turn = blended.topLeftCorner<3, 3>();
-    const Eigen::Vector3d p = points.row(Eigen::Index(i)).transpose();
+    const Eigen::Vector3d p = Eigen::Map<const Eigen::Vector3d>(layout.point(a));
     if(origin == Diffusion_origin::nearest_sample) {
       // The paper's: every frame decodes p - s_0 from s'_0.
-      const Eigen::Index o = *samples.begin(i);
+      const Eigen::Index o = Eigen::Index(layout.sample(a, 0));
       displacement = blended(3, 3) * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
                      turn * (p - sample_positions.row(o).transpose());
     } else {
@@ -230,15 +357,29 @@ private:
     return n.x() * M.col(1).cross(M.col(2)) + n.y() * M.col(2).cross(M.col(0)) + n.z() * M.col(0).cross(M.col(1));
   }
 
-  void apply_block(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
+  // Asks the cache for the data of the point `diffusion_prefetch` points after the a-th: the hardware's own
+  // prefetchers left a drag waiting on memory a good part of its time.
+  template <typename Layout>
+  static void prefetch_ahead(const Layout& layout, std::size_t a, std::size_t count)
+  {
+    if(a + diffusion_prefetch < count) layout.prefetch(a + diffusion_prefetch);
+  }
+
+  // The first `count` points of `layout`, a block of them per task.
+  template <typename ConcurrencyTag, typename Layout>
+  void move_blocks(const Layout& layout, std::size_t count, const Matrix_n3& sample_positions,
+                   const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
+                   double* out_normals, const Block_visitor* after_block) const;
+
+  template <typename Layout>
+  void apply_block(const Layout& layout, std::size_t first, std::size_t last, std::size_t count,
                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
-                   Diffusion_origin origin, double* out_points, double* out_normals, const std::vector<int>* active,
-                   const std::vector<int>* destination) const;
+                   Diffusion_origin origin, double* out_points, double* out_normals) const;
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
-  void apply_block_wide(std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
+  template <typename Layout>
+  void apply_block_wide(const Layout& layout, std::size_t first, std::size_t last, std::size_t count,
                         const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
-                        Diffusion_origin origin, double* out_points, double* out_normals,
-                        const std::vector<int>* active, const std::vector<int>* destination) const;
+                        Diffusion_origin origin, double* out_points, double* out_normals) const;
 #endif
 };
 
@@ -294,24 +435,46 @@ void Diffusion_stencil::move_points(const Matrix_n3& points, const Matrix_n3& no
                                     const std::vector<int>* active, const std::vector<int>* destination,
                                     const Block_visitor* after_block) const
 {
+  move_blocks<ConcurrencyTag>(rows(points, normals, active, destination), active ? active->size() : samples.size(),
+                              sample_positions, deformed_sample_positions, origin, out_points, out_normals,
+                              after_block);
+}
+
+template <typename ConcurrencyTag>
+void Diffusion_stencil::move_packed_points(const Packed_diffusion_rows& packed, const Matrix_n3& sample_positions,
+                                           const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
+                                           double* out_points, double* out_normals,
+                                           const Block_visitor* after_block) const
+{
+  move_blocks<ConcurrencyTag>(packed, packed.size(), sample_positions, deformed_sample_positions, origin, out_points,
+                              out_normals, after_block);
+}
+
+template <typename ConcurrencyTag, typename Layout>
+void Diffusion_stencil::move_blocks(const Layout& layout, std::size_t count, const Matrix_n3& sample_positions,
+                                    const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
+                                    double* out_points, double* out_normals, const Block_visitor* after_block) const
+{
   // Blocks of points: first every point's position and unnormalised normal, then the block's normalisations,
   // which are independent of each other and so overlap (one point's square root and division after another
   // left the processor waiting for each in turn: a third of the time).
-  const std::size_t total = active ? active->size() : samples.size();
   const bool wide = use_wide_vectors && wide_vectors_available();
-  for_range<ConcurrencyTag>(0, (total + diffusion_block - 1) / diffusion_block, [&](std::size_t b) {
-    const std::size_t first = b * diffusion_block, last = std::min(total, first + diffusion_block);
+  for_range<ConcurrencyTag>(
+    0, (count + diffusion_block - 1) / diffusion_block,
+    [&](std::size_t b) {
+      const std::size_t first = b * diffusion_block, last = std::min(count, first + diffusion_block);
 #ifdef CGAL_EXT_DIFFUSION_WIDE_VECTORS
-    if(wide)
-      apply_block_wide(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
-                       out_normals, active, destination);
-    else
+      if(wide)
+        apply_block_wide(layout, first, last, count, sample_positions, deformed_sample_positions, origin, out_points,
+                         out_normals);
+      else
 #endif
-      apply_block(first, last, points, normals, sample_positions, deformed_sample_positions, origin, out_points,
-                  out_normals, active, destination);
-    CGAL_USE(wide);
-    if(after_block) (*after_block)(first, last);
-  });
+        apply_block(layout, first, last, count, sample_positions, deformed_sample_positions, origin, out_points,
+                    out_normals);
+      CGAL_USE(wide);
+      if(after_block) (*after_block)(first, last);
+    },
+    8); // tasks of 8 blocks: the collar's points, which cost more, crowd into a few of them in scan order
 }
 
 template <typename ConcurrencyTag>
@@ -330,30 +493,30 @@ void Diffusion_stencil::set_motions(const Matrix_n3& sample_positions, const Mat
   });
 }
 
-inline void Diffusion_stencil::apply_block(std::size_t first, std::size_t last, const Matrix_n3& points,
-                                           const Matrix_n3& normals, const Matrix_n3& sample_positions,
-                                           const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
-                                           double* out_points, double* out_normals, const std::vector<int>* active,
-                                           const std::vector<int>* destination) const
+template <typename Layout>
+void Diffusion_stencil::apply_block(const Layout& layout, std::size_t first, std::size_t last, std::size_t count,
+                                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                                    Diffusion_origin origin, double* out_points, double* out_normals) const
 {
   using Row = Eigen::Map<Eigen::RowVector3d>;
+  using Rest = Eigen::Map<const Eigen::RowVector3d>;
   std::size_t turned[diffusion_block];
   std::size_t turned_count = 0;
   for(std::size_t a = first; a < last; ++a) {
-    const std::size_t i = active ? std::size_t((*active)[a]) : a;
-    const std::size_t o = destination ? std::size_t((*destination)[a]) : i;
+    prefetch_ahead(layout, a, count);
+    const std::size_t o = layout.destination_of(a);
     Row out_point(out_points + 3 * o), out_normal(out_normals + 3 * o);
+    const Rest point(layout.point(a)), normal(layout.normal(a));
     Eigen::Matrix3d turn;
     Eigen::Vector3d displacement;
-    blend(i, points, sample_positions, deformed_sample_positions, origin, turn, displacement);
+    blend(layout, a, sample_positions, deformed_sample_positions, origin, turn, displacement);
     if(turn.isZero(0) && displacement.isZero(0)) {
-      out_point = points.row(Eigen::Index(i));
-      out_normal = normals.row(Eigen::Index(i));
+      out_point = point;
+      out_normal = normal;
       continue;
     }
-    out_point = points.row(Eigen::Index(i)) + displacement.transpose();
-    out_normal =
-      cofactor_times(Eigen::Matrix3d::Identity() + turn, normals.row(Eigen::Index(i)).transpose()).transpose();
+    out_point = point + displacement.transpose();
+    out_normal = cofactor_times(Eigen::Matrix3d::Identity() + turn, normal.transpose()).transpose();
     turned[turned_count++] = o;
   }
   for(std::size_t t = 0; t < turned_count; ++t) Row(out_normals + 3 * turned[t]).normalize();
@@ -382,29 +545,31 @@ __attribute__((target("avx2,fma"))) inline __m256d cross_wide(__m256d u, __m256d
 // apply_block() with one 4-wide register per column of the records: a stencil of 6 sample points blends in 24
 // fused multiply-adds instead of 96 multiplications and additions, and the cross products of the cofactor
 // matrix are two permutations and a multiply-subtract each.
-__attribute__((target("avx2,fma"))) inline void Diffusion_stencil::apply_block_wide(
-  std::size_t first, std::size_t last, const Matrix_n3& points, const Matrix_n3& normals,
-  const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions, Diffusion_origin origin,
-  double* out_points, double* out_normals, const std::vector<int>* active, const std::vector<int>* destination) const
+template <typename Layout>
+__attribute__((target("avx2,fma"))) void
+Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std::size_t last, std::size_t count,
+                                    const Matrix_n3& sample_positions, const Matrix_n3& deformed_sample_positions,
+                                    Diffusion_origin origin, double* out_points, double* out_normals) const
 {
   const __m256d zero = _mm256_setzero_pd();
   std::size_t turned[diffusion_block];
   alignas(32) double normal_x[diffusion_block], normal_y[diffusion_block], normal_z[diffusion_block];
   std::size_t turned_count = 0;
-  // setup() gives every point the same number of sample points: the stencil's rows need no offsets.
-  const std::size_t kept = std::size_t(samples.offsets[1]);
+  const std::size_t kept = width();
+  const Eigen::Matrix4d* records = m_records.data();
   for(std::size_t a = first; a < last; ++a) {
-    const std::size_t i = active ? std::size_t((*active)[a]) : a;
+    prefetch_ahead(layout, a, count);
     __m256d column[4] = {zero, zero, zero, zero};
-    for(std::size_t e = i * kept, end = e + kept; e < end; ++e) {
-      const __m256d w = _mm256_broadcast_sd(&weights[std::size_t(e)]);
-      const double* record = m_records[std::size_t(samples.indices[std::size_t(e)])].data();
+    const double* weight = layout.weights_of(a);
+    for(std::size_t k = 0; k < kept; ++k) {
+      const __m256d w = _mm256_broadcast_sd(weight + k);
+      const double* record = records[layout.sample(a, k)].data();
       for(int c = 0; c < 4; ++c) column[c] = _mm256_fmadd_pd(w, _mm256_loadu_pd(record + 4 * c), column[c]);
     }
-    const double* p = points.data() + 3 * i;
+    const double* p = layout.point(a);
     __m256d displacement;
     if(origin == Diffusion_origin::nearest_sample) {
-      const std::size_t o = std::size_t(*samples.begin(i));
+      const std::size_t o = layout.sample(a, 0);
       const double* s = sample_positions.data() + 3 * o;
       const double* moved = deformed_sample_positions.data() + 3 * o;
       const __m256d weight_sum = _mm256_permute4x64_pd(column[3], _MM_SHUFFLE(3, 3, 3, 3));
@@ -414,10 +579,10 @@ __attribute__((target("avx2,fma"))) inline void Diffusion_stencil::apply_block_w
       displacement = column[3];
       for(int c = 0; c < 3; ++c) displacement = _mm256_fmadd_pd(_mm256_set1_pd(p[c]), column[c], displacement);
     }
-    const std::size_t o = destination ? std::size_t((*destination)[a]) : i;
+    const std::size_t o = layout.destination_of(a);
     double* out_p = out_points + 3 * o;
     double* out_n = out_normals + 3 * o;
-    const double* n = normals.data() + 3 * i;
+    const double* n = layout.normal(a);
     // Still: a zero map (its fourth lanes are zero too) and a zero displacement (its fourth lane is not).
     const __m256d any = _mm256_or_pd(_mm256_or_pd(column[0], column[1]), column[2]);
     if((_mm256_movemask_pd(_mm256_cmp_pd(any, zero, _CMP_NEQ_UQ)) | (_mm256_movemask_pd(_mm256_cmp_pd(displacement, zero, _CMP_NEQ_UQ)) & 7)) == 0) {
@@ -471,7 +636,10 @@ inline bool Diffusion_stencil::wide_vectors_available() { return false; }
     Diffusion_origin, Matrix_n3&, Matrix_n3&, const std::vector<int>*);                                                \
   EXTERN template void Diffusion_stencil::move_points<Tag>(                                                            \
     const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, const Matrix_n3&, Diffusion_origin, double*, double*,        \
-    const std::vector<int>*, const std::vector<int>*, const Block_visitor*) const;
+    const std::vector<int>*, const std::vector<int>*, const Block_visitor*) const;                                     \
+  EXTERN template void Diffusion_stencil::move_packed_points<Tag>(const Packed_diffusion_rows&, const Matrix_n3&,      \
+                                                                  const Matrix_n3&, Diffusion_origin, double*,         \
+                                                                  double*, const Block_visitor*) const;
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SSP_DIFFUSION_INSTANCES)
 
 /// The rows that a drag can move: those with a region sample point in their stencil and, with `exact_handles`, the
