@@ -21,7 +21,7 @@ import numpy as np
 import cgal_ext
 from cgal_ext import _core
 
-from bench_python import harness_arguments, median, turn
+from bench_python import harness_arguments, median, timed_drags
 
 MODELS = ("armadillo", "ChineseDragon-10kv", "fandisk", "elephant-with-holes")
 
@@ -37,7 +37,7 @@ def one_case(points, normals, preprocesses, drags):
     up = points[:, 1]
     region, handle = up > np.quantile(up, 0.5), up >= np.quantile(up, 0.95)  # >=: a flat top (fandisk) ties
     pivot = points[handle].mean(axis=0)
-    pre, wall, diffuse_s, diffuse_bytes = [], [], [], []
+    pre = []
     for _ in range(preprocesses):
         d = cgal_ext.Deformation(points, normals)
         d.insert_roi(region)
@@ -46,19 +46,11 @@ def one_case(points, normals, preprocesses, drags):
         d.preprocess()
         pre.append(time.perf_counter() - start)
     clustering = d.statistics()["clustering_seconds"]
-    P, N = np.empty_like(points), np.empty_like(normals)
-    for step in range(drags + 1):
-        start = time.perf_counter()
-        d.set_handle_transform(group, turn(step), pivot=pivot)
-        d.deform()
-        d.diffuse(P, N)
-        if step:  # the first writes every point; the drags after it only what the edit can move
-            wall.append(time.perf_counter() - start)
-            s = d.statistics()
-            diffuse_s.append(s["diffuse_seconds"])
-            diffuse_bytes.append(s["diffuse_bytes"])
-    return dict(preprocess=median(pre), clustering=clustering, drag=median(wall), diffuse=median(diffuse_s),
-                bytes=median(diffuse_bytes), region=int(region.sum()), samples=d.statistics()["samples"])
+    wall, statistics = timed_drags(d, group, pivot, drags, points, normals)
+    return dict(preprocess=median(pre), clustering=clustering, drag=median(wall),
+                diffuse=median([s["diffuse_seconds"] for s in statistics]),
+                bytes=median([s["diffuse_bytes"] for s in statistics]), region=int(region.sum()),
+                samples=statistics[-1]["samples"])
 
 
 def main():

@@ -46,6 +46,23 @@ def turn(step):
     return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
 
 
+def timed_drags(d, group, pivot, drags, points, normals):
+    """`drags` drags of `group` about `pivot` as a Python user makes them (into arrays reused from drag to drag, in
+    the caller's order) after an untimed first one, which writes every point (the others only what the edit can
+    move): their wall times and the statistics after each."""
+    P, N = np.empty_like(points), np.empty_like(normals)
+    times, statistics = [], []
+    for step in range(drags + 1):
+        start = time.perf_counter()
+        d.set_handle_transform(group, turn(step), pivot=pivot)
+        d.deform()
+        d.diffuse(P, N)
+        if step:
+            times.append(time.perf_counter() - start)
+            statistics.append(d.statistics())
+    return times, statistics
+
+
 Drag = collections.namedtuple("Drag", "wall inside library movable")
 
 
@@ -61,17 +78,10 @@ def drag_times(points, normals, drags, reps):
         d.insert_roi(region)  # the upper half deforms
         g = d.create_handle_group(top)  # its top is dragged
         d.preprocess()
-        P, N = np.empty_like(points), np.empty_like(normals)
         pivot = points[top].mean(axis=0)
-        for step in range(drags + 1):
-            start = time.perf_counter()
-            d.set_handle_transform(g, turn(step), pivot=pivot)
-            d.deform()
-            d.diffuse(P, N)
-            if step:  # the first writes every point; the drags after it only what the edit can move
-                wall.append(time.perf_counter() - start)
-                s = d.statistics()
-                inside.append(s["deform_seconds"] + s["diffuse_seconds"])
+        times, statistics = timed_drags(d, g, pivot, drags, points, normals)
+        wall += times
+        inside += [s["deform_seconds"] + s["diffuse_seconds"] for s in statistics]
         for step in range(drags):
             d.set_handle_transform(g, turn(step), pivot=pivot)
             d.deform()

@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from conftest import run_program
+from conftest import read_ply, run_program
 
 CHROMEDRIVER = "/usr/bin/chromedriver"
 MAX_STRETCH = 3  # the most a 10-nearest-neighbour edge of a bending region may stretch (doc/studio.md)
@@ -176,3 +176,21 @@ def assert_the_region_bends(points, deformed, handle, in_region, motion, least_n
     after, before = np.linalg.norm(deformed[i] - deformed[j], axis=1), np.linalg.norm(points[i] - points[j], axis=1)
     stretch = after / np.maximum(before, 1e-12)
     assert stretch.max() <= MAX_STRETCH, (stretch.max(), np.quantile(stretch, 0.99))
+
+
+def save_as(driver, name):
+    """Saves the shown state as `name` by the panel's Save button and waits for the save."""
+    driver.execute_script("studio.lastSaved = null")
+    driver.find_element("id", "save-name").clear()
+    driver.find_element("id", "save-name").send_keys(name)
+    driver.find_element("id", "save").click()
+    return wait_for(driver, "studio.lastSaved", what="the save")
+
+
+def saved_and_reproduced(scan, name):
+    """The PLY the studio saved as `name` beside `scan`, and what point-detail edit makes of the scan with the JSON
+    saved with it."""
+    folder = scan.parent
+    program = folder / (name + "_program.ply")
+    run_program("edit", "-i", scan, "--edit", folder / (name + ".json"), "-o", program)
+    return read_ply(folder / (name + ".ply")), read_ply(program)

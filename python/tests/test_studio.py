@@ -11,7 +11,7 @@ import pytest
 import cgal_ext
 from conftest import read_ply, run_program, xyz
 from studio_support import (Server, assert_the_region_bends, chromium, hole_fraction, idle, lasso_above, make_tentacle,
-                            pointer_path, rings, screen_box, wait_for)
+                            pointer_path, rings, save_as, saved_and_reproduced, screen_box, wait_for)
 
 SHOTS = pathlib.Path(os.environ.get("CGAL_EXT_STUDIO_SHOTS") or
                      pathlib.Path(os.environ.get("CGAL_EXT_CMAKE_BUILD_DIR", "build")) / "studio_screenshots")
@@ -133,15 +133,10 @@ def test_paint_drag_save_matches_the_program(page, scan):
     idle(driver)
     shot(driver, "4_released")
 
-    driver.find_element("id", "save-name").clear()
-    driver.find_element("id", "save-name").send_keys("edited")
-    click(driver, "save")
-    wait_for(driver, "studio.lastSaved", what="the save")
+    save_as(driver, "edited")
     folder = scan.parent
-    saved = read_ply(folder / "edited.ply")
+    saved, program = saved_and_reproduced(scan, "edited")
     edit = json.loads((folder / "edited.json").read_text())
-    run_program("edit", "-i", scan, "--edit", folder / "edited.json", "-o", folder / "program.ply")
-    program = read_ply(folder / "program.ply")
     assert np.abs(xyz(saved) - xyz(program)).max() < 1e-9 * diagonal
     for field in ("status", "ssp_index"):
         assert np.array_equal(saved[field], program[field])
@@ -217,11 +212,7 @@ def test_undo_returns_the_input_and_details_match_the_program(page, scan):
     shown = np.array(driver.execute_script("return Array.from(studio.geometry.getAttribute('shown').array)"))
     points = cgal_ext.read_points(scan).points
     assert np.array_equal(shown.reshape(-1, 3), points.astype(np.float32))
-    driver.find_element("id", "save-name").clear()
-    driver.find_element("id", "save-name").send_keys("undone")
-    driver.execute_script("studio.lastSaved = null")
-    click(driver, "save")
-    wait_for(driver, "studio.lastSaved", what="the save")
+    save_as(driver, "undone")
     folder = scan.parent
     assert np.array_equal(xyz(read_ply(folder / "undone.ply")), points)  # bit for bit
 
@@ -233,11 +224,7 @@ def test_undo_returns_the_input_and_details_match_the_program(page, scan):
     click(driver, "details-apply")
     wait_for(driver, "studio.state.base_changed", what="the details")
     idle(driver)
-    driver.execute_script("studio.lastSaved = null")
-    driver.find_element("id", "save-name").clear()
-    driver.find_element("id", "save-name").send_keys("scaled")
-    click(driver, "save")
-    wait_for(driver, "studio.lastSaved", what="the save")
+    save_as(driver, "scaled")
     roi = next(folder / name for name in ("undone.step0.roi.txt", "undone.roi.txt") if (folder / name).exists())
     run_program("scale", "-i", scan, "--roi", "indices:%s" % roi, "-s", 2,
                 "-o", folder / "program_scaled.ply")
@@ -449,15 +436,8 @@ def test_two_commits_and_a_fill_are_what_the_program_reproduces(page, scan):
     assert inserted == driver.execute_script("return studio.n") - n > 0
     shot(driver, "10_filled")
 
-    driver.execute_script("studio.lastSaved = null")
-    driver.find_element("id", "save-name").clear()
-    driver.find_element("id", "save-name").send_keys("chain")
-    click(driver, "save")
-    wait_for(driver, "studio.lastSaved", what="the save")
-    folder = scan.parent
-    saved = read_ply(folder / "chain.ply")
-    run_program("edit", "-i", scan, "--edit", folder / "chain.json", "-o", folder / "chain_program.ply")
-    program = read_ply(folder / "chain_program.ply")
+    save_as(driver, "chain")
+    saved, program = saved_and_reproduced(scan, "chain")
     points = cgal_ext.read_points(scan).points
     diagonal = np.linalg.norm(points.max(0) - points.min(0))
     assert len(saved) == len(program) == driver.execute_script("return studio.n")

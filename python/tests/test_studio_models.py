@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import cgal_ext
-from conftest import DATA, read_ply, run_program, xyz
+from conftest import DATA, xyz
 from studio_support import (Server, assert_the_region_bends, chromium, hole_fraction, idle, lasso_above, pointer_path,
-                            screen_box, wait_for)
+                            save_as, saved_and_reproduced, screen_box, wait_for)
 from test_studio import click, first_hits, seen_from, shot
 
 
@@ -115,13 +115,8 @@ def test_an_edit_of_its_upper_part_bends_and_the_program_reproduces_it(page, sca
     idle(driver)
     shot(driver, "bunny_3_edited")
 
-    driver.find_element("id", "save-name").clear()
-    driver.find_element("id", "save-name").send_keys("edited")
-    click(driver, "save")
-    wait_for(driver, "studio.lastSaved", what="the save")
-    folder = scan.parent
-    run_program("edit", "-i", scan, "--edit", folder / "edited.json", "-o", folder / "program.ply")
-    saved, program = read_ply(folder / "edited.ply"), read_ply(folder / "program.ply")
+    save_as(driver, "edited")
+    saved, program = saved_and_reproduced(scan, "edited")
     assert np.abs(xyz(saved) - xyz(program)).max() < 1e-9 * diagonal
     motion = (xyz(saved) - points)[handle].mean(axis=0)
     assert np.linalg.norm(motion) > 0.02 * diagonal

@@ -207,15 +207,16 @@ public:
   }
 
   /// apply()'s collar points among the walk's rows `[begin, end)`, once they hold their blends: row
-  /// `destination[w]` of `out_points` and `out_normals` (rows of three doubles) for the walk's row w.
-  void apply_to_walk_collar(std::size_t begin, std::size_t end, const std::vector<int>& destination, double* out_points,
+  /// `walk.destination_of(w)` of `out_points` and `out_normals` (rows of three doubles) for the walk's row w.
+  template <typename Walk_rows>
+  void apply_to_walk_collar(std::size_t begin, std::size_t end, const Walk_rows& rows, double* out_points,
                             double* out_normals) const
   {
     const Walk& walk = m_walk;
     const auto first = std::lower_bound(walk.collar.begin(), walk.collar.end(), int(begin)) - walk.collar.begin();
     for(std::size_t c = std::size_t(first); c < walk.collar.size() && std::size_t(walk.collar[c]) < end; ++c) {
       const int entry = walk.collar_entries.offsets[c];
-      const std::size_t i = std::size_t(destination[std::size_t(walk.collar[c])]);
+      const std::size_t i = rows.destination_of(std::size_t(walk.collar[c]));
       take_steps(walk.collar_entries.indices.data() + entry, walk.collar_weights.data() + entry,
                  walk.collar_entries.degree(c), walk.steps, walk.normal_steps, out_points + 3 * i, out_normals + 3 * i);
     }

@@ -104,7 +104,7 @@ public:
     Diffusion_stencil::Block_visitor collar_of_block;
     if(!collar.rows.empty())
       collar_of_block = [&](std::size_t first, std::size_t last) {
-        collar.apply_to_walk_collar(first, last, ordered.destinations, out_points, out_normals);
+        collar.apply_to_walk_collar(first, last, ordered.packed, out_points, out_normals);
       };
     stencil.template move_packed_points<ConcurrencyTag>(ordered.packed, samples, deformed_samples, origin, out_points,
                                                         out_normals, collar_of_block ? &collar_of_block : nullptr);
@@ -117,14 +117,14 @@ public:
   /// a store reads before it writes them nor the collar's steps are counted.
   std::size_t moved_bytes(bool in_input_order) const
   {
-    const std::size_t row = 3 * sizeof(double), handles = collar.handle_rows.size();
-    const std::size_t records = stencil.samples.size() ? sizeof(Eigen::Matrix4d) * turns.maps.size() : 0;
-    const std::size_t blended =
-      in_input_order && m_in_input_order.ready ? m_in_input_order.packed.size() : moving_rows.size();
+    const std::size_t row = 3 * sizeof(double), records = sizeof(Eigen::Matrix4d) * turns.maps.size();
+    const std::size_t handles = collar.handle_rows.size();
+    if(in_input_order && m_in_input_order.ready) {
+      const Packed_diffusion_rows& packed = m_in_input_order.packed;
+      return packed.size() * (packed.record_bytes() + 2 * row) + handles * 4 * row + records;
+    }
     const std::size_t stencil_row = stencil.width() * (sizeof(double) + sizeof(int));
-    const std::size_t read =
-      in_input_order && m_in_input_order.ready ? m_in_input_order.packed.record_bytes() : 2 * row + stencil_row;
-    return blended * (read + 2 * row) + handles * 4 * row + records;
+    return moving_rows.size() * (4 * row + stencil_row) + handles * 4 * row + records;
   }
 
   /// Puts back the fine details of the region's moved rows of `deformed` (from their rest `points`) that the
@@ -151,7 +151,6 @@ private:
   {
     bool ready = false;
     Packed_diffusion_rows packed;
-    std::vector<int> destinations;
   };
 
   template <typename ConcurrencyTag>
@@ -162,10 +161,7 @@ private:
     for(int row : m_movable_rows)               // every handle row among them
       (std::binary_search(collar.handle_rows.begin(), collar.handle_rows.end(), row) ? handle_rows : blended_rows)
         .push_back(row);
-    ordered.destinations.resize(blended_rows.size());
-    for(std::size_t r = 0; r < blended_rows.size(); ++r)
-      ordered.destinations[r] = cloud.input_index[std::size_t(blended_rows[r])];
-    ordered.packed.template pack<ConcurrencyTag>(blended_rows, ordered.destinations, cloud.positions, normals,
+    ordered.packed.template pack<ConcurrencyTag>(blended_rows, cloud.input_index, cloud.positions, normals,
                                                  stencil.weights, stencil.samples.indices, stencil.width());
     collar.prepare_walk(blended_rows, handle_rows, cloud.positions, normals, cloud.input_index);
     ordered.ready = true;

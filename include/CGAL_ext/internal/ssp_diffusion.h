@@ -164,35 +164,34 @@ struct Diffusion_rows
 
 /// The diffusion's per-point data in the order a drag walks it, one record per point: rest position, rest
 /// normal and weights as doubles, then the sample points and the destination row as 32-bit integers, padded
-/// to 32 bytes (128 bytes for the default six sample points, two cache lines). A drag then reads one stream
+/// to a multiple of 32 bytes (128 bytes for the default six sample points, two cache lines). A drag then reads one stream
 /// instead of five, whose next records it asks for ahead (doc/editing_at_scale.md, "A drag's memory traffic").
 class Packed_diffusion_rows
 {
 public:
   /// Record a holds row `rows[a]` of `points`, `normals` and the stencil's `weights` and `samples` (`width`
-  /// per row), to be written to row `destinations[a]`.
+  /// per row), to be written to row `destination_of_row[rows[a]]`.
   template <typename ConcurrencyTag>
-  void pack(const std::vector<int>& rows, const std::vector<int>& destinations, const Matrix_n3& points,
+  void pack(const std::vector<int>& rows, const std::vector<int>& destination_of_row, const Matrix_n3& points,
             const Matrix_n3& normals, const std::vector<double>& weights, const std::vector<int>& samples,
             std::size_t width)
   {
     m_width = width;
-    m_count = rows.size();
     const std::size_t doubles = 6 + width + (width + 2) / 2; // the integers two to a double
     m_stride = (doubles + 3) / 4 * 4;
-    m_records.assign(m_count * m_stride, 0.0);
-    for_range<ConcurrencyTag>(0, m_count, [&](std::size_t a) {
+    m_records.assign(rows.size() * m_stride, 0.0);
+    for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t a) {
       double* record = m_records.data() + a * m_stride;
       const Eigen::Index row = rows[a];
       for(int c = 0; c < 3; ++c) record[c] = points(row, c), record[3 + c] = normals(row, c);
       std::copy_n(weights.data() + width * std::size_t(row), width, record + 6);
       char* integers = reinterpret_cast<char*>(record + 6 + width); // by bytes: the storage holds doubles
       std::memcpy(integers, samples.data() + width * std::size_t(row), width * sizeof(int));
-      std::memcpy(integers + width * sizeof(int), &destinations[a], sizeof(int));
+      std::memcpy(integers + width * sizeof(int), &destination_of_row[std::size_t(row)], sizeof(int));
     });
   }
 
-  std::size_t size() const { return m_count; }
+  std::size_t size() const { return m_stride ? m_records.size() / m_stride : 0; }
   /// The bytes of one record.
   std::size_t record_bytes() const { return m_stride * sizeof(double); }
   const double* point(std::size_t a) const { return m_records.data() + a * m_stride; }
@@ -214,7 +213,7 @@ private:
   }
 
   std::vector<double, Cache_line_allocator<double>> m_records;
-  std::size_t m_width = 0, m_stride = 0, m_count = 0;
+  std::size_t m_width = 0, m_stride = 0;
 };
 
 /// The per-point data of the diffusion, fixed at preprocessing: the `m` nearest sample points and their weights.
