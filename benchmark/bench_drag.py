@@ -6,13 +6,15 @@ upper half along y is the region, its top 5 % the handle, turned a degree more e
 preprocess (median of 3; --quick: 1), the drag as a Python user gets it (`set_handle_transform`, `deform`,
 `diffuse(P, N)` into arrays reused from drag to drag: median of 40 drags), the diffusion's bytes
 (`statistics()["diffuse_bytes"]`) over its time, and STREAM's triad on the same threads, measured before and after
-the cases (`_triad_bandwidth`). Writes OUT/drag_results.csv and OUT/drag_results.md.
+the cases (`_triad_bandwidth`). It runs in the environment it is given, as a Python user's script does: glibc's
+malloc on transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, which point-detail sets for itself) made
+the preprocess at 4M slower and the drags no faster (doc/editing_at_scale.md). Writes OUT/drag_results.csv and
+OUT/drag_results.md.
 """
 
 import csv
 import os
 import subprocess
-import sys
 import tempfile
 import time
 
@@ -54,8 +56,6 @@ def one_case(points, normals, preprocesses, drags):
 
 
 def main():
-    if "GLIBC_TUNABLES" not in os.environ:
-        os.execve(sys.executable, [sys.executable] + sys.argv, dict(os.environ, GLIBC_TUNABLES="glibc.malloc.hugetlb=1"))
     args = harness_arguments()
     n, models, preprocesses, drags = (100000, MODELS[:2], 1, 10) if args.quick else (4000000, MODELS, 3, 40)
     triad_elements = 4000000 if args.quick else 40000000
@@ -90,14 +90,14 @@ def main():
                         "%.3f" % r["clustering"], "%.5f" % r["drag"], "%.5f" % r["diffuse"], r["bytes"], "%.1f" % rate,
                         "%.1f" % triad, "%.2f" % (rate / triad)])
     lines = ["# Drags at scale against the memory's bandwidth", "",
-             "Written by `benchmark/bench_drag.py`%s (%d threads, GLIBC_TUNABLES=%s as point-detail sets it). Each model "
+             "Written by `benchmark/bench_drag.py`%s (%d threads, GLIBC_TUNABLES=%s: as a Python user runs it). Each model "
              "sampled to %d points with normals, in the sampling's random order and in a scan-like one; the upper half "
              "along y is the region, its top 5 %% the handle. Preprocess: median of %d; drag (`set_handle_transform`, "
              "`deform`, `diffuse(P, N)` into the caller's arrays): median of %d; bytes: what the diffusion read and "
              "wrote for the points (`diffuse_bytes`, not counting the lines a store reads first), over its time. "
              "Triad (STREAM's, 24 bytes per element, the same threads): %.1f GB/s before the cases, %.1f after (medians "
              "of 6 passes); the slower is the reference." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(),
-                                                             os.environ["GLIBC_TUNABLES"], n, preprocesses, drags,
+                                                             os.environ.get("GLIBC_TUNABLES", "unset"), n, preprocesses, drags,
                                                              triad_before[0], triad_after[0]),
              "",
              "| model | order | region | sample points | preprocess | of it clustering | drag | of it diffusion | "

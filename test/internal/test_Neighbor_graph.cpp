@@ -259,3 +259,85 @@ TEST(NeighborGraph, TheSpatialOrderIsTheSameWhateverTheCallersOrder)
   }
   EXPECT_EQ(groups, 30u);
 }
+
+namespace {
+
+// A sphere sampled along a Fibonacci spiral, its upper half four times as densely, with exact duplicates and a few
+// points far off it, in spatial order as the library's calls have them.
+Matrix_n3 uneven_sphere_in_spatial_order(std::size_t n)
+{
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  std::vector<SC_point> points;
+  const double golden = 3.14159265358979323846 * (3 - std::sqrt(5.0));
+  for(std::size_t i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (double(i) + 0.5) / double(n), r = std::sqrt(1 - z * z);
+    if(z < 0 && i % 4 != 0) continue;
+    points.emplace_back(r * std::cos(golden * double(i)), r * std::sin(golden * double(i)), z);
+  }
+  for(std::size_t c = 0; c < 40; ++c) points.push_back(points[c * 131 % points.size()]);
+  for(int c = 0; c < 5; ++c) points.emplace_back(3.0 + c, -2.0 * c, 7.5);
+  return sort_spatially<CGAL::Parallel_if_available_tag>(points, "test").positions;
+}
+
+} // namespace
+
+// The grid's blocks answer most rows of a sampled surface, and each ball a block certifies is the brute-force
+// ball; the graph (grid, wider blocks and tree together) is every row's tree ball.
+TEST(NeighborGraph, GridBlocksCertifyTheBallsOfASampledSurface)
+{
+  const Matrix_n3 points = uneven_sphere_in_spatial_order(40000);
+  const std::size_t n = std::size_t(points.rows());
+  const Position_tree tree(points, CGAL::Sequential_tag());
+  Progress progress;
+  for(const std::size_t k : {6u, 15u}) {
+    const Cell_grid grid(points, grid_cell_size(points, k));
+    Cell_grid::Block block;
+    Ball_scratch scratch;
+    std::vector<Ranked_row> ball;
+    std::size_t certified[2] = {0, 0}; // by the block of 3 x 3 x 3 cells, then by that of 5 x 5 x 5
+    for(std::size_t c = 0; c < grid.cell_count(); ++c)
+      for(int at = grid.first(c); at < grid.first(c + 1); ++at) {
+        const double p[3] = {grid.x()[at], grid.y()[at], grid.z()[at]};
+        const int row = grid.rows()[std::size_t(at)];
+        for(int reach = 1; reach <= 2; ++reach) {
+          ASSERT_TRUE(grid.gather(c, reach, n, block));
+          if(!nearest_ball_in_block(block, grid.margin(), p, row, k, scratch, ball)) continue;
+          ++certified[reach - 1];
+          if(row % 23 == 0) {
+            std::vector<int> rows;
+            for(const Ranked_row& entry : ball) rows.push_back(entry.second);
+            ASSERT_EQ(rows, brute_force_ball(points, std::size_t(row), k)) << "k " << k << ", row " << row;
+          }
+          break;
+        }
+      }
+    // The cell size fits the denser half; most of the sparser half's balls reach past the smaller block.
+    EXPECT_GT(certified[0], n * 3 / 4) << "k " << k;
+    EXPECT_GT(certified[0] + certified[1], n * 99 / 100) << "k " << k;
+    EXPECT_LT(certified[0] + certified[1], n) << "the points off the sphere lie past their blocks, k " << k;
+
+    const Neighbor_graph graph = k_nearest_neighbor_graph<CGAL::Parallel_if_available_tag>(points, k, progress);
+    for(std::size_t i = 0; i < n; ++i) {
+      tree.nearest_ball(i, k, ball);
+      std::vector<int> rows;
+      for(const Ranked_row& entry : ball) rows.push_back(entry.second);
+      ASSERT_EQ(std::vector<int>(graph.begin(i), graph.end(i)), rows) << "k " << k << ", row " << i;
+    }
+  }
+}
+
+// A block holding more candidates than asked gathers nothing (such rows go to the tree).
+TEST(NeighborGraph, AGridBlockRefusesMoreCandidatesThanAsked)
+{
+  const Matrix_n3 points = lattice_with_duplicates(9);
+  const Cell_grid grid(points, 0.3);
+  Cell_grid::Block block;
+  const std::size_t cell = grid.cell_of_row(100);
+  ASSERT_TRUE(grid.gather(cell, 1, std::size_t(points.rows()), block));
+  const std::size_t all = block.size();
+  EXPECT_GT(all, 9u);
+  EXPECT_FALSE(grid.gather(cell, 1, all - 1, block));
+  EXPECT_EQ(block.size(), 0u);
+  EXPECT_TRUE(grid.gather(cell, 1, all, block));
+  EXPECT_EQ(block.size(), all);
+}

@@ -4,6 +4,7 @@
 #define CGAL_EXT_INTERNAL_NEIGHBOR_GRAPH_H
 
 #include <CGAL_ext/exceptions.h>
+#include <CGAL_ext/internal/Cell_grid.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
@@ -19,8 +20,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -191,22 +194,100 @@ inline Neighbor_graph fixed_degree_graph(std::size_t n, std::size_t k)
 /// as a pile of duplicates (whose neighbourhoods would grow with the square of the pile).
 constexpr std::size_t max_tied_neighbors = 256;
 
+/// The cell size of the grid that answers a k-nearest graph: on a sampled surface about 1.3 times the distance of
+/// a point's (k + 1)-th nearest, from the median distance between consecutive rows (in spatial order mostly near
+/// neighbours) and the area a ball of k + 1 points covers. Only the time depends on it; 0 when it cannot tell.
+inline double grid_cell_size(const Matrix_n3& positions, std::size_t k)
+{
+  std::vector<double> steps;
+  for(Eigen::Index i = 0; i + 1 < positions.rows(); i += 4)
+    steps.push_back(std::sqrt(squared_distance(positions(i, 0), positions(i, 1), positions(i, 2), positions(i + 1, 0),
+                                               positions(i + 1, 1), positions(i + 1, 2))));
+  if(steps.empty()) return 0;
+  const auto middle = steps.begin() + std::ptrdiff_t(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
+  const double size = 0.71 * std::sqrt(double(k + 1)) * *middle;
+  return std::isfinite(size) ? size : 0;
+}
+
+/// What ranking a query's candidates needs besides its result, kept from one query to the next.
+struct Ball_scratch
+{
+  std::vector<double> squared_distances;
+  std::vector<int> kept, kept_rows;
+  std::vector<double> kept_distances;
+  double estimate = 0;  ///< where the ranking starts looking: the last query's k-th squared distance, widened a little
+  double cell_size = 0; ///< of the grid the estimate was made on
+};
+
+/*
+  `ball` = the closed ball of the k-th nearest candidate of `block` other than row `self` at `p`, ranked by (squared
+  distance, row), as `Position_tree::nearest_ball` ranks all rows. Returns whether the block certifies it: the
+  ball stays inside the block's box by `margin`, so that no point outside the block can belong to it. Only the
+  candidates within the scratch's estimate are sorted (widened until k others are in).
+*/
+inline bool nearest_ball_in_block(const Cell_grid::Block& block, double margin, const double* p, int self,
+                                  std::size_t k, Ball_scratch& scratch, std::vector<Ranked_row>& ball)
+{
+  const std::size_t m = block.size();
+  if(m < k + 1) return false;
+  scratch.squared_distances.resize(m);
+  scratch.kept.resize(m);
+  double* d2 = scratch.squared_distances.data();
+  int* kept = scratch.kept.data();
+  for(std::size_t j = 0; j < m; ++j) d2[j] = squared_distance(p[0], p[1], p[2], block.x[j], block.y[j], block.z[j]);
+  double limit = scratch.estimate > 0 ? scratch.estimate : std::numeric_limits<double>::infinity();
+  std::size_t count = 0;
+  for(;;) {
+    count = 0;
+    for(std::size_t j = 0; j < m; ++j) kept[count] = int(j), count += d2[j] <= limit; // the query itself among them
+    if(count > k) break;
+    limit = limit > 1e-100 ? 2 * limit : std::numeric_limits<double>::infinity();
+  }
+  // The kept others ranked by counting, without branches: in no order as they come, they would make a sort's
+  // comparisons mispredict half the time.
+  scratch.kept_distances.clear();
+  scratch.kept_rows.clear();
+  for(std::size_t q = 0; q < count; ++q)
+    if(block.rows[std::size_t(kept[q])] != self) {
+      scratch.kept_distances.push_back(d2[kept[q]]);
+      scratch.kept_rows.push_back(block.rows[std::size_t(kept[q])]);
+    }
+  const std::size_t others = scratch.kept_rows.size();
+  const double* kd = scratch.kept_distances.data();
+  const int* kr = scratch.kept_rows.data();
+  ball.resize(others);
+  for(std::size_t q = 0; q < others; ++q) {
+    std::size_t rank = 0;
+    for(std::size_t o = 0; o < others; ++o) rank += (kd[o] < kd[q]) | ((kd[o] == kd[q]) & (kr[o] < kr[q]));
+    ball[rank] = Ranked_row(kd[q], kr[q]);
+  }
+  const double kth = ball[k - 1].first;
+  if(kth > 0) scratch.estimate = 1.1 * kth;
+  std::size_t end = k;
+  while(end < ball.size() && ball[end].first <= kth) ++end;
+  ball.resize(end);
+  double reach = std::numeric_limits<double>::infinity();
+  for(int a = 0; a < 3; ++a) reach = std::min({reach, p[a] - block.low[a], block.high[a] - p[a]});
+  reach -= margin;
+  return reach > 0 && kth < reach * reach;
+}
+
 /// Directed k-nearest-neighbour graph under the package's one rule: each row holds the closed ball of its k-th
-/// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Built
-/// with CGAL's kd-tree, queried in parallel. Returns an empty graph when cancelled.
+/// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Each row
+/// ranks the points of the 3 x 3 x 3 cells of a grid around its own, then 5 x 5 x 5 where its ball reaches past
+/// them; CGAL's kd-tree answers the rows a block cannot (doc/editing_at_scale.md, "The k-nearest graph on a grid").
+/// Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
 {
   const std::size_t n = std::size_t(positions.rows());
-  const Position_tree tree(positions, ConcurrencyTag());
   Neighbor_graph graph = fixed_degree_graph(n, k);
   // Rows with ties past the k-th: rare but for lattices and duplicates, kept aside and merged after the loop.
   std::mutex tied_mutex;
   std::vector<std::pair<int, std::vector<int>>> tied;
   std::atomic<std::size_t> pile{n};
-  const bool completed = for_each_index<ConcurrencyTag>(n, progress, [&](std::size_t i) {
-    thread_local std::vector<Ranked_row> ball;
-    tree.nearest_ball(i, k, ball);
+  const auto keep = [&](std::size_t i, const std::vector<Ranked_row>& ball) {
     int* out = graph.indices.data() + i * k;
     for(std::size_t m = 0; m < k; ++m) out[m] = ball[m].second;
     if(ball.size() == k) return;
@@ -218,10 +299,79 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
     for(std::size_t m = k; m < ball.size(); ++m) rest.push_back(ball[m].second);
     const std::lock_guard<std::mutex> lock(tied_mutex);
     tied.emplace_back(int(i), std::move(rest));
-  });
-  if(!completed) return {};
+  };
+  std::vector<int> unanswered; // rows left to the tree
+  const Progress::Range whole = progress.range();
+  progress.stage(whole.begin, whole.at(0.9));
+  const double cell_size = grid_cell_size(positions, k);
+  if(cell_size > 0) {
+    const Cell_grid grid(positions, cell_size);
+    const std::size_t most_candidates = 32 * (k + 1); // past this a block is a cluster the tree ranks faster
+    std::vector<int> wider; // places in the grid whose ball reached past their block of 3 x 3 x 3 cells
+    std::mutex left_mutex;
+    // Ranks the places of `cells[t]` (or the one place `(*only)[t]` there) in the block of `reach`; the places
+    // whose ball leaves the block go to `past`, those in too full a block to the tree.
+    const auto rank_in_blocks = [&](const std::vector<std::size_t>& cells, int reach, const std::vector<int>* only,
+                                    std::vector<int>& past) {
+      return for_each_index<ConcurrencyTag>(cells.size(), progress, [&](std::size_t t) {
+        thread_local Cell_grid::Block block;
+        thread_local Ball_scratch scratch;
+        thread_local std::vector<Ranked_row> ball;
+        thread_local std::vector<int> left, full;
+        const std::size_t cell = cells[t];
+        if(scratch.cell_size != cell_size) // a new grid: about the k-th squared distance its cell size assumes
+          scratch.cell_size = cell_size, scratch.estimate = 0.6 * cell_size * cell_size;
+        left.clear(), full.clear();
+        const bool gathered = grid.gather(cell, reach, most_candidates, block);
+        const auto answer = [&](int at) {
+          const double p[3] = {grid.x()[at], grid.y()[at], grid.z()[at]};
+          const int row = grid.rows()[std::size_t(at)];
+          if(!gathered)
+            full.push_back(row);
+          else if(nearest_ball_in_block(block, grid.margin(), p, row, k, scratch, ball))
+            keep(std::size_t(row), ball);
+          else
+            left.push_back(at);
+        };
+        if(only)
+          answer((*only)[t]);
+        else
+          for(int at = grid.first(cell); at < grid.first(cell + 1); ++at) answer(at);
+        if(left.empty() && full.empty()) return;
+        const std::lock_guard<std::mutex> lock(left_mutex);
+        past.insert(past.end(), left.begin(), left.end());
+        unanswered.insert(unanswered.end(), full.begin(), full.end());
+      });
+    };
+    std::vector<std::size_t> cells(grid.cell_count());
+    std::iota(cells.begin(), cells.end(), std::size_t(0));
+    if(!rank_in_blocks(cells, 1, nullptr, wider)) return {};
+    progress.stage(whole.at(0.9), whole.at(0.95));
+    std::sort(wider.begin(), wider.end());
+    cells.resize(wider.size());
+    for(std::size_t t = 0; t < wider.size(); ++t)
+      cells[t] = grid.cell_of_row(std::size_t(grid.rows()[std::size_t(wider[t])]));
+    std::vector<int> beyond;
+    if(!rank_in_blocks(cells, 2, &wider, beyond)) return {};
+    for(const int at : beyond) unanswered.push_back(grid.rows()[std::size_t(at)]);
+    std::sort(unanswered.begin(), unanswered.end());
+  } else {
+    unanswered.resize(n);
+    std::iota(unanswered.begin(), unanswered.end(), 0);
+  }
+  progress.stage(whole.at(0.95), whole.end);
+  if(!unanswered.empty()) {
+    const Position_tree tree(positions, ConcurrencyTag());
+    if(!for_each_index<ConcurrencyTag>(unanswered.size(), progress, [&](std::size_t t) {
+         thread_local std::vector<Ranked_row> ball;
+         tree.nearest_ball(std::size_t(unanswered[t]), k, ball);
+         keep(std::size_t(unanswered[t]), ball);
+       }))
+      return {};
+  }
   if(pile.load() < n) {
     const std::size_t i = pile.load();
+    const Position_tree tree(positions, ConcurrencyTag());
     std::vector<Ranked_row> ball;
     tree.nearest_ball(i, k, ball);
     const Position_tree::Point& p = tree[i];
