@@ -263,8 +263,10 @@ TEST(NeighborGraph, TheSpatialOrderIsTheSameWhateverTheCallersOrder)
 namespace {
 
 // A sphere sampled along a Fibonacci spiral, its upper half four times as densely, with exact duplicates and a few
-// points far off it, in spatial order as the library's calls have them.
-Matrix_n3 uneven_sphere_in_spatial_order(std::size_t n)
+// points far off it, moved by `offset`, in spatial order as the library's calls have them; `pile` more copies of
+// its first point.
+Matrix_n3 uneven_sphere_in_spatial_order(std::size_t n, const Eigen::RowVector3d& offset = Eigen::RowVector3d::Zero(),
+                                         std::size_t pile = 0)
 {
   using SC_point = CGAL::Simple_cartesian<double>::Point_3;
   std::vector<SC_point> points;
@@ -272,11 +274,26 @@ Matrix_n3 uneven_sphere_in_spatial_order(std::size_t n)
   for(std::size_t i = 0; i < n; ++i) {
     const double z = 1 - 2 * (double(i) + 0.5) / double(n), r = std::sqrt(1 - z * z);
     if(z < 0 && i % 4 != 0) continue;
-    points.emplace_back(r * std::cos(golden * double(i)), r * std::sin(golden * double(i)), z);
+    points.emplace_back(offset(0) + r * std::cos(golden * double(i)), offset(1) + r * std::sin(golden * double(i)),
+                        offset(2) + z);
   }
   for(std::size_t c = 0; c < 40; ++c) points.push_back(points[c * 131 % points.size()]);
-  for(int c = 0; c < 5; ++c) points.emplace_back(3.0 + c, -2.0 * c, 7.5);
+  for(int c = 0; c < 5; ++c) points.emplace_back(offset(0) + 3.0 + c, offset(1) - 2.0 * c, offset(2) + 7.5);
+  for(std::size_t c = 0; c < pile; ++c) points.push_back(points[0]);
   return sort_spatially<CGAL::Parallel_if_available_tag>(points, "test").positions;
+}
+
+// Each row's closed ball as the kd-tree alone finds it.
+std::vector<std::vector<int>> tree_balls(const Matrix_n3& points, std::size_t k)
+{
+  const Position_tree tree(points, CGAL::Sequential_tag());
+  std::vector<std::vector<int>> balls(std::size_t(points.rows()));
+  std::vector<Ranked_row> ball;
+  for(std::size_t i = 0; i < balls.size(); ++i) {
+    tree.nearest_ball(i, k, ball);
+    for(const Ranked_row& entry : ball) balls[i].push_back(entry.second);
+  }
+  return balls;
 }
 
 } // namespace
@@ -287,7 +304,6 @@ TEST(NeighborGraph, GridBlocksCertifyTheBallsOfASampledSurface)
 {
   const Matrix_n3 points = uneven_sphere_in_spatial_order(40000);
   const std::size_t n = std::size_t(points.rows());
-  const Position_tree tree(points, CGAL::Sequential_tag());
   Progress progress;
   for(const std::size_t k : {6u, 15u}) {
     const Cell_grid grid(points, grid_cell_size(points, k));
@@ -317,13 +333,32 @@ TEST(NeighborGraph, GridBlocksCertifyTheBallsOfASampledSurface)
     EXPECT_LT(certified[0] + certified[1], n) << "the points off the sphere lie past their blocks, k " << k;
 
     const Neighbor_graph graph = k_nearest_neighbor_graph<CGAL::Parallel_if_available_tag>(points, k, progress);
-    for(std::size_t i = 0; i < n; ++i) {
-      tree.nearest_ball(i, k, ball);
-      std::vector<int> rows;
-      for(const Ranked_row& entry : ball) rows.push_back(entry.second);
-      ASSERT_EQ(std::vector<int>(graph.begin(i), graph.end(i)), rows) << "k " << k << ", row " << i;
-    }
+    const std::vector<std::vector<int>> expected = tree_balls(points, k);
+    for(std::size_t i = 0; i < n; ++i)
+      ASSERT_EQ(std::vector<int>(graph.begin(i), graph.end(i)), expected[i]) << "k " << k << ", row " << i;
   }
+}
+
+// Far from the origin (where the binning's rounding is largest), on one thread or several, the graph is the tree's;
+// a pile of duplicates that a block of cells holds is refused as the tree refuses it.
+TEST(NeighborGraph, TheGridsGraphIsTheTreesFarFromTheOriginOnAnyThreadsAndRefusesAPile)
+{
+  const std::size_t k = 15;
+  Progress progress;
+  const Matrix_n3 points = uneven_sphere_in_spatial_order(20000, Eigen::RowVector3d(1e7, -3e6, 5e5));
+  const Neighbor_graph parallel = k_nearest_neighbor_graph<CGAL::Parallel_if_available_tag>(points, k, progress);
+  const Neighbor_graph sequential = k_nearest_neighbor_graph<CGAL::Sequential_tag>(points, k, progress);
+  EXPECT_EQ(parallel.offsets, sequential.offsets);
+  EXPECT_EQ(parallel.indices, sequential.indices);
+  const std::vector<std::vector<int>> expected = tree_balls(points, k);
+  for(std::size_t i = 0; i < expected.size(); ++i)
+    ASSERT_EQ(std::vector<int>(parallel.begin(i), parallel.end(i)), expected[i]) << "row " << i;
+
+  // 300 coinciding points, more than k + max_tied_neighbors, in a block of fewer than 32 (k + 1) points.
+  const Matrix_n3 piled = uneven_sphere_in_spatial_order(20000, Eigen::RowVector3d::Zero(), 300);
+  const std::string message = thrown_message<CGAL_ext::Invalid_input>(
+    [&] { k_nearest_neighbor_graph<CGAL::Parallel_if_available_tag>(piled, k, progress); });
+  EXPECT_NE(message.find("duplicate"), std::string::npos) << message;
 }
 
 // A block holding more candidates than asked gathers nothing (such rows go to the tree).

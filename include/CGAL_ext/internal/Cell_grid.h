@@ -48,7 +48,8 @@ public:
       changes += i > 0 && key[i] != key[i - 1];
     }
     std::size_t capacity = 16;
-    while(capacity < 2 * changes) capacity <<= 1;
+    m_slot_shift = 60;
+    while(capacity < 2 * changes) capacity <<= 1, --m_slot_shift;
     m_slot_key.assign(capacity, empty_key);
     m_slot_cell.assign(capacity, -1);
     std::vector<int> cell_of(n);
@@ -78,8 +79,8 @@ public:
       m_x[at] = positions(Eigen::Index(i), 0), m_y[at] = positions(Eigen::Index(i), 1);
       m_z[at] = positions(Eigen::Index(i), 2), m_rows[at] = int(i);
     }
-    // Within this of a block's face a point may have been binned across it by rounding.
-    m_margin = 1e-9 * m_size + 1e-14 * std::max(m_origin.cwiseAbs().maxCoeff(), std::abs(m_origin.maxCoeff() + extent));
+    // Within this of a block's face a point may have been binned across it, or the face placed, by rounding.
+    m_margin = 4e-9 * m_size + 1e-14 * std::max(m_origin.cwiseAbs().maxCoeff(), std::abs(m_origin.maxCoeff() + extent));
   }
 
   std::size_t cell_count() const { return m_cell_key.size(); }
@@ -148,10 +149,8 @@ private:
   {
     return std::uint64_t(c[0]) | (std::uint64_t(c[1]) << axis_bits) | (std::uint64_t(c[2]) << (2 * axis_bits));
   }
-  std::size_t slot(std::uint64_t key) const
-  {
-    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (m_slot_key.size() - 1);
-  }
+  // Fibonacci hashing: the product's top bits, which every bit of the key reaches.
+  std::size_t slot(std::uint64_t key) const { return std::size_t((key * 0x9E3779B97F4A7C15ull) >> m_slot_shift); }
   int find(std::uint64_t key) const
   {
     for(std::size_t s = slot(key); m_slot_key[s] != empty_key; s = (s + 1) & (m_slot_key.size() - 1))
@@ -161,6 +160,7 @@ private:
 
   Eigen::RowVector3d m_origin;
   double m_size = 0, m_inverse = 0, m_margin = 0;
+  int m_slot_shift = 60; // 64 less the bits of the table's size
   std::vector<std::uint64_t> m_slot_key, m_cell_key;
   std::vector<int> m_slot_cell, m_first, m_cell_of_row, m_rows;
   std::vector<double> m_x, m_y, m_z;

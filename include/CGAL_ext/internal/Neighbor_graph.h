@@ -195,19 +195,23 @@ inline Neighbor_graph fixed_degree_graph(std::size_t n, std::size_t k)
 constexpr std::size_t max_tied_neighbors = 256;
 
 /// The cell size of the grid that answers a k-nearest graph: on a sampled surface about 1.3 times the distance of
-/// a point's (k + 1)-th nearest, from the median distance between consecutive rows (in spatial order mostly near
-/// neighbours) and the area a ball of k + 1 points covers. Only the time depends on it; 0 when it cannot tell.
+/// a point's k-th nearest other point, from the median distance between consecutive distinct rows (in spatial
+/// order mostly near neighbours) and the area a ball of k + 1 points covers. Only the time depends on it; 0 when
+/// it cannot tell (then the tree answers every row).
 inline double grid_cell_size(const Matrix_n3& positions, std::size_t k)
 {
   std::vector<double> steps;
-  for(Eigen::Index i = 0; i + 1 < positions.rows(); i += 4)
-    steps.push_back(std::sqrt(squared_distance(positions(i, 0), positions(i, 1), positions(i, 2), positions(i + 1, 0),
-                                               positions(i + 1, 1), positions(i + 1, 2))));
+  for(Eigen::Index i = 0; i + 1 < positions.rows(); i += 4) {
+    const double step = std::sqrt(squared_distance(positions(i, 0), positions(i, 1), positions(i, 2),
+                                                   positions(i + 1, 0), positions(i + 1, 1), positions(i + 1, 2)));
+    if(step > 0) steps.push_back(step); // coinciding points stand one after another
+  }
   if(steps.empty()) return 0;
   const auto middle = steps.begin() + std::ptrdiff_t(steps.size() / 2);
   std::nth_element(steps.begin(), middle, steps.end());
   const double size = 0.71 * std::sqrt(double(k + 1)) * *middle;
-  return std::isfinite(size) ? size : 0;
+  const double extent = (positions.colwise().maxCoeff() - positions.colwise().minCoeff()).maxCoeff();
+  return std::isfinite(size) && std::isfinite(1 / size) && std::isfinite(extent) ? size : 0;
 }
 
 /// What ranking a query's candidates needs besides its result, kept from one query to the next.
@@ -369,6 +373,7 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
        }))
       return {};
   }
+  progress.stage(whole.begin, whole.end);
   if(pile.load() < n) {
     const std::size_t i = pile.load();
     const Position_tree tree(positions, ConcurrencyTag());
