@@ -194,10 +194,10 @@ inline Neighbor_graph fixed_degree_graph(std::size_t n, std::size_t k)
 /// as a pile of duplicates (whose neighbourhoods would grow with the square of the pile).
 constexpr std::size_t max_tied_neighbors = 256;
 
-/// The cell size of the grid that answers a k-nearest graph: on a sampled surface about 1.3 times the distance of
-/// a point's k-th nearest other point, from the median distance between consecutive distinct rows (in spatial
-/// order mostly near neighbours) and the area a ball of k + 1 points covers. Only the time depends on it; 0 when
-/// it cannot tell (then the tree answers every row).
+/// The cell size of the grid that answers a k-nearest graph: on a sampled surface a little more than the distance
+/// of a point's k-th nearest other point, from the median distance between consecutive distinct rows (in spatial
+/// order mostly near neighbours) and the area a ball of k + 1 points covers (doc/editing_at_scale.md, "The
+/// k-nearest graph on a grid"). Only the time depends on it; 0 when it cannot tell (then the tree answers every row).
 inline double grid_cell_size(const Matrix_n3& positions, std::size_t k)
 {
   std::vector<double> steps;
@@ -279,8 +279,8 @@ inline bool nearest_ball_in_block(const Cell_grid::Block& block, double margin, 
 
 /// Directed k-nearest-neighbour graph under the package's one rule: each row holds the closed ball of its k-th
 /// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Each row
-/// ranks the points of the 3 x 3 x 3 cells of a grid around its own, then 5 x 5 x 5 where its ball reaches past
-/// them; CGAL's kd-tree answers the rows a block cannot (doc/editing_at_scale.md, "The k-nearest graph on a grid").
+/// ranks the points of the block of grid cells around its own, then of a wider block where its ball reaches past
+/// it; CGAL's kd-tree answers the rows no block can (doc/editing_at_scale.md, "The k-nearest graph on a grid").
 /// Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
