@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cstdint>
 #include <numeric>
 #include <vector>
 
@@ -188,22 +189,25 @@ public:
     }
   }
 
-  /// apply()'s handle points, in input order, into arrays in input order (row i: input point i, three doubles).
-  template <typename ConcurrencyTag>
-  void apply_to_handle_points(const std::vector<Eigen::Matrix3d>& rotations,
+  /// apply()'s handle points whose input indices lie in `[begin, end)`, into arrays in input order (row i: input
+  /// point i, three doubles).
+  void apply_to_handle_points(std::int64_t begin, std::int64_t end, const std::vector<Eigen::Matrix3d>& rotations,
                               const std::vector<Rigid_transform>& transforms, double* out_points,
                               double* out_normals) const
   {
     using Row = Eigen::Map<Eigen::RowVector3d>;
     const Walk& walk = m_walk;
-    for_range<ConcurrencyTag>(0, walk.handle_points.size(), [&](std::size_t h) {
-      const std::size_t g = std::size_t(walk.handle_groups[h]), i = std::size_t(walk.handle_points[h]);
+    const auto first = std::lower_bound(walk.handle_points.begin(), walk.handle_points.end(), begin);
+    const auto last = std::lower_bound(first, walk.handle_points.end(), end);
+    for(auto at = first; at != last; ++at) {
+      const std::size_t h = std::size_t(at - walk.handle_points.begin());
+      const std::size_t g = std::size_t(walk.handle_groups[h]), i = std::size_t(*at);
       Eigen::RowVector3d exact, exact_normal;
       on_transform(rotations[g], transforms[g], walk.handle_positions.row(Eigen::Index(h)),
                    walk.handle_normals.row(Eigen::Index(h)), exact, exact_normal);
       Row(out_points + 3 * i) = exact;
       Row(out_normals + 3 * i) = exact_normal;
-    });
+    }
   }
 
   /// apply()'s collar points among the walk's rows `[begin, end)`, once they hold their blends: row
@@ -215,6 +219,13 @@ public:
     const Walk& walk = m_walk;
     const auto first = std::lower_bound(walk.collar.begin(), walk.collar.end(), int(begin)) - walk.collar.begin();
     for(std::size_t c = std::size_t(first); c < walk.collar.size() && std::size_t(walk.collar[c]) < end; ++c) {
+      // The steps of the collar point a few ahead: consecutive collar points step from handles far apart, whose
+      // steps the caches do not hold, and each point's normalisation leaves little room to wait for them.
+      if(c + collar_prefetch < walk.collar.size()) {
+        const int ahead = walk.collar_entries.indices[std::size_t(walk.collar_entries.offsets[c + collar_prefetch])];
+        __builtin_prefetch(walk.steps.data() + 3 * ahead);
+        __builtin_prefetch(walk.normal_steps.data() + 3 * ahead);
+      }
       const int entry = walk.collar_entries.offsets[c];
       const std::size_t i = rows.destination_of(std::size_t(walk.collar[c]));
       take_steps(walk.collar_entries.indices.data() + entry, walk.collar_weights.data() + entry,
@@ -252,6 +263,8 @@ public:
   }
 
 private:
+  static constexpr std::size_t collar_prefetch = 8; // collar points ahead
+
   // A handle point's rest `position` and `normal` on its group's transform `T` (`R`: its rotation as a matrix).
   template <typename Position, typename Normal>
   static void on_transform(const Eigen::Matrix3d& R, const Rigid_transform& T, const Position& position,

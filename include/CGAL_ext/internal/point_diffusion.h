@@ -16,6 +16,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace CGAL_ext {
@@ -87,8 +89,8 @@ public:
   }
 
   /// `apply` into arrays in input order (row i: input point i, three doubles; `cloud` and its rest `normals`), in
-  /// input order: the exact handles put on their transforms, then the other movable points blended a block at a
-  /// time, the block's collar points stepped while it is in cache. The same results bit for bit, written where
+  /// input order: the other movable points blended a block at a time, then the block's exact handles put on
+  /// their transforms and its collar points stepped while its lines are in cache. The same results bit for bit, written where
   /// the caller keeps them instead of copied there. The first call after `setup` packs the points' rest
   /// positions, normals and stencils in input order (Packed_diffusion_rows).
   template <typename ConcurrencyTag>
@@ -100,14 +102,21 @@ public:
     if(!ordered.ready) copy_in_input_order<ConcurrencyTag>(cloud, normals);
     collar.template set_walk_steps<ConcurrencyTag>(stencil, cloud.positions, normals, samples, deformed_samples, origin,
                                                    m_group_rotations, transforms);
-    collar.template apply_to_handle_points<ConcurrencyTag>(m_group_rotations, transforms, out_points, out_normals);
-    Diffusion_stencil::Block_visitor collar_of_block;
-    if(!collar.rows.empty())
-      collar_of_block = [&](std::size_t first, std::size_t last) {
-        collar.apply_to_walk_collar(first, last, ordered.packed, out_points, out_normals);
-      };
-    stencil.template move_packed_points<ConcurrencyTag>(ordered.packed, samples, deformed_samples, origin, out_points,
-                                                        out_normals, collar_of_block ? &collar_of_block : nullptr);
+    // Each block of the walk also puts on their transforms the exact handles whose rows lie among its own, so
+    // that a cache line of the caller's arrays holding both is read once, not once per pass
+    // (doc/editing_at_scale.md, "A drag's memory traffic").
+    const Packed_diffusion_rows& packed = ordered.packed;
+    const auto handles_and_collar = [&](std::size_t first, std::size_t last) {
+      const std::int64_t begin = first == 0 ? 0 : std::int64_t(packed.destination_of(first));
+      const std::int64_t end =
+        last == packed.size() ? std::numeric_limits<std::int64_t>::max() : std::int64_t(packed.destination_of(last));
+      collar.apply_to_handle_points(begin, end, m_group_rotations, transforms, out_points, out_normals);
+      if(!collar.rows.empty()) collar.apply_to_walk_collar(first, last, packed, out_points, out_normals);
+    };
+    if(packed.size() == 0) handles_and_collar(0, 0);
+    const Diffusion_stencil::Block_visitor after_block = handles_and_collar;
+    stencil.template move_packed_points<ConcurrencyTag>(packed, samples, deformed_samples, origin, out_points,
+                                                        out_normals, &after_block);
   }
 
   /// The bytes a drag's `apply` (`in_input_order`: `apply_in_input_order`) reads and writes for its points, as
