@@ -46,20 +46,32 @@ std::map<int, double> weights_at(const Eigen::RowVector3d& point, const Matrix_n
 
 TEST(DiffusionStencil, WeightsArePositiveSumToOneAndFallWithDistance)
 {
-  const Matrix_n3 samples = random_samples(60, 1), points = random_samples(500, 2);
-  Diffusion_stencil stencil;
-  stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, 4);
-  for(std::size_t i = 0; i < stencil.samples.size(); ++i) {
-    ASSERT_EQ(stencil.samples.degree(i), 4);
-    double sum = 0, previous = 2;
-    for(int e = stencil.samples.offsets[i]; e < stencil.samples.offsets[i + 1]; ++e) {
-      const double w = stencil.weights[std::size_t(e)];
-      EXPECT_GE(w, 0.0);
-      EXPECT_LE(w, previous + 1e-15); // nearest first, so weights never grow along the row
-      previous = w;
-      sum += w;
+  // Multiples of 2^-24, so a float holds each exactly (the drag's records), summing to exactly 1; with every
+  // sample point as far the quanta left over go to the first.
+  Matrix_n3 samples = random_samples(60, 1), points = random_samples(500, 2);
+  samples.topRows(7) << 4, 0, 5, 2, 0, 5, 3, 1, 5, 3, -1, 5, 3, 0, 6, 3, 0, 4, 4, 0, 5; // the last: the first again
+  points.row(0) << 3, 0, 5;
+  for(std::size_t m : {4u, 6u}) {
+    Diffusion_stencil stencil;
+    stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, m);
+    for(std::size_t i = 0; i < stencil.samples.size(); ++i) {
+      ASSERT_EQ(stencil.samples.degree(i), int(m));
+      double sum = 0, previous = 2;
+      for(int e = stencil.samples.offsets[i]; e < stencil.samples.offsets[i + 1]; ++e) {
+        const double w = stencil.weights[std::size_t(e)];
+        EXPECT_GE(w, 0.0);
+        EXPECT_LE(w, previous); // nearest first, so weights never grow along the row
+        EXPECT_EQ(w * 16777216.0, std::floor(w * 16777216.0));
+        EXPECT_EQ(double(float(w)), w);
+        previous = w;
+        sum += w;
+      }
+      EXPECT_EQ(sum, 1.0);
     }
-    EXPECT_NEAR(sum, 1.0, 1e-12);
+    // Point 0 one unit from seven sample points: equal weights but for the quanta left over,
+    // 2^24 / 6 = 2796202 + 2/3, so 2796203 for the first four and 2796202 for the others.
+    if(m == 6)
+      for(int e = 0; e < 6; ++e) EXPECT_EQ(stencil.weights[std::size_t(e)] * 16777216.0, e < 4 ? 2796203.0 : 2796202.0);
   }
 }
 

@@ -163,10 +163,11 @@ struct Diffusion_rows
   }
 };
 
-/// The diffusion's per-point data in the order a drag walks it, one record per point: rest position, rest
-/// normal and weights as doubles, then the sample points and the destination row as 32-bit integers, padded
-/// to a multiple of 32 bytes (128 bytes for the default six sample points, two cache lines). A drag then reads one stream
-/// instead of five, whose next records it asks for ahead (doc/editing_at_scale.md, "A drag's memory traffic").
+/// The diffusion's per-point data in the order a drag walks it, one record per point: rest position and rest
+/// normal as doubles, the weights as floats (they are multiples of 2^-24, Diffusion_stencil::setup), then the
+/// sample points and the destination row as 32-bit integers, padded to 8 bytes (104 bytes for the default six
+/// sample points). A drag then reads one stream instead of five, whose next records it asks for ahead
+/// (doc/editing_at_scale.md, "A drag's memory traffic").
 class Packed_diffusion_rows
 {
 public:
@@ -178,15 +179,19 @@ public:
             std::size_t width)
   {
     m_width = width;
-    const std::size_t doubles = 6 + width + (width + 2) / 2; // the integers two to a double
-    m_stride = (doubles + 3) / 4 * 4;
+    const std::size_t bytes = 6 * sizeof(double) + width * (sizeof(float) + sizeof(int)) + sizeof(int);
+    m_stride = (bytes + sizeof(double) - 1) / sizeof(double);
     m_records.assign(rows.size() * m_stride, 0.0);
     for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t a) {
       double* record = m_records.data() + a * m_stride;
       const Eigen::Index row = rows[a];
       for(int c = 0; c < 3; ++c) record[c] = points(row, c), record[3 + c] = normals(row, c);
-      std::copy_n(weights.data() + width * std::size_t(row), width, record + 6);
-      char* integers = reinterpret_cast<char*>(record + 6 + width); // by bytes: the storage holds doubles
+      char* rest = reinterpret_cast<char*>(record + 6); // by bytes: the storage holds doubles
+      for(std::size_t k = 0; k < width; ++k) {
+        const float weight = float(weights[width * std::size_t(row) + k]); // exact: a multiple of 2^-24
+        std::memcpy(rest + k * sizeof(float), &weight, sizeof(float));
+      }
+      char* integers = rest + width * sizeof(float);
       std::memcpy(integers, samples.data() + width * std::size_t(row), width * sizeof(int));
       std::memcpy(integers + width * sizeof(int), &destination_of_row[std::size_t(row)], sizeof(int));
     });
@@ -197,19 +202,21 @@ public:
   std::size_t record_bytes() const { return m_stride * sizeof(double); }
   const double* point(std::size_t a) const { return m_records.data() + a * m_stride; }
   const double* normal(std::size_t a) const { return point(a) + 3; }
-  const double* weights_of(std::size_t a) const { return point(a) + 6; }
+  const float* weights_of(std::size_t a) const { return reinterpret_cast<const float*>(point(a) + 6); }
   std::size_t sample(std::size_t a, std::size_t k) const { return integer(a, k); }
   std::size_t destination_of(std::size_t a) const { return integer(a, m_width); }
   void prefetch(std::size_t a) const
   {
-    for(std::size_t line = 0; line < m_stride; line += 8) __builtin_prefetch(point(a) + line);
+    const char* record = reinterpret_cast<const char*>(point(a));
+    for(std::size_t byte = 0; byte < record_bytes(); byte += 64) __builtin_prefetch(record + byte);
+    __builtin_prefetch(record + record_bytes() - 1); // records straddle lines
   }
 
 private:
   std::size_t integer(std::size_t a, std::size_t k) const
   {
     int value;
-    std::memcpy(&value, reinterpret_cast<const char*>(point(a) + 6 + m_width) + k * sizeof(int), sizeof(int));
+    std::memcpy(&value, reinterpret_cast<const char*>(weights_of(a) + m_width) + k * sizeof(int), sizeof(int));
     return std::size_t(value);
   }
 
@@ -337,8 +344,9 @@ private:
              Eigen::Vector3d& displacement) const
   {
     Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
-    const double* w = layout.weights_of(a);
-    for(std::size_t k = 0, kept = width(); k < kept; ++k) blended.noalias() += w[k] * m_records[layout.sample(a, k)];
+    const auto* w = layout.weights_of(a); // doubles or floats
+    for(std::size_t k = 0, kept = width(); k < kept; ++k)
+      blended.noalias() += double(w[k]) * m_records[layout.sample(a, k)];
     turn = blended.topLeftCorner<3, 3>();
     const Eigen::Vector3d p = Eigen::Map<const Eigen::Vector3d>(layout.point(a));
     if(origin == Diffusion_origin::nearest_sample) {
@@ -349,6 +357,19 @@ private:
     } else {
       displacement = blended.topRightCorner<3, 1>() + turn * p;
     }
+  }
+
+  // Rounds a row's `count` weights (summing to 1, nearest first, so not increasing) to multiples of 2^-24 that
+  // still sum to exactly 1 and do not increase: each rounded down, the quanta left over given to the first ones.
+  // A float holds each exactly, so a drag reads 4 bytes a weight instead of 8 and computes the same bits as from
+  // the doubles (doc/editing_at_scale.md, "A drag's memory traffic").
+  static void quantize_weights(double* weights, std::size_t count)
+  {
+    constexpr double quanta = 16777216.0; // 2^24
+    double total = 0;
+    for(std::size_t e = 0; e < count; ++e) total += weights[e] = std::floor(weights[e] * quanta);
+    for(std::size_t e = 0; total < quanta; e = (e + 1) % count, ++total) weights[e] += 1;
+    for(std::size_t e = 0; e < count; ++e) weights[e] /= quanta;
   }
 
   // The cofactor matrix of `M` (`det(M) M^-T`) times `n`, column by column: the cross products of the others.
@@ -423,6 +444,7 @@ void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_p
     }
     // All sample points as far as the (m+1)-th (ties, coincident points): equal weights.
     for(std::size_t e = 0; e < kept; ++e) weights[i * kept + e] = sum > 0 ? weights[i * kept + e] / sum : 1.0 / double(kept);
+    quantize_weights(weights.data() + i * kept, kept);
   });
 }
 
@@ -569,9 +591,9 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
   for(std::size_t a = first; a < last; ++a) {
     prefetch_ahead(layout, a, count, out_points, out_normals);
     __m256d column[4] = {zero, zero, zero, zero};
-    const double* weight = layout.weights_of(a);
+    const auto* weight = layout.weights_of(a); // doubles or floats
     for(std::size_t k = 0; k < kept; ++k) {
-      const __m256d w = _mm256_broadcast_sd(weight + k);
+      const __m256d w = _mm256_set1_pd(double(weight[k]));
       const double* record = records[layout.sample(a, k)].data();
       for(int c = 0; c < 4; ++c) column[c] = _mm256_fmadd_pd(w, _mm256_loadu_pd(record + 4 * c), column[c]);
     }
