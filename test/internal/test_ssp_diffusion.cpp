@@ -70,8 +70,9 @@ TEST(DiffusionStencil, WeightsArePositiveSumToOneAndFallWithDistance)
     }
     // Point 0 one unit from seven sample points: equal weights but for the quanta left over,
     // 2^24 / 6 = 2796202 + 2/3, so 2796203 for the first four and 2796202 for the others.
-    if(m == 6)
+    if(m == 6) {
       for(int e = 0; e < 6; ++e) EXPECT_EQ(stencil.weights[std::size_t(e)] * 16777216.0, e < 4 ? 2796203.0 : 2796202.0);
+    }
   }
 }
 
@@ -134,6 +135,40 @@ TEST(DiffusionStencil, ARigidMotionOfEverySamplePointMovesEveryPointRigidly)
     const Matrix_n3 expected = (points * R.transpose()).rowwise() + t;
     EXPECT_LT((out_points - expected).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LT((out_normals - normals * R.transpose()).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(DiffusionStencil, PackedRecordsHoldTheRowsTheyWereGiven)
+{
+  // A drag's records: 16-bit sample points while every one fits, 32-bit ones past 65,535; each record gives back
+  // its row's position, normal, weights, sample points and destination.
+  const std::size_t width = 6, n = 40;
+  const Matrix_n3 points = random_samples(n, 3), normals = random_samples(n, 4);
+  std::vector<double> weights(n * width);
+  for(std::size_t e = 0; e < weights.size(); ++e) weights[e] = double(e % 7 + 1) / 16777216.0;
+  std::vector<int> rows, destination(n);
+  for(std::size_t i = 0; i < n; i += 3) rows.push_back(int(i));
+  for(std::size_t i = 0; i < n; ++i) destination[i] = int(1000 + 7 * i);
+  for(int largest : {65535, 65536, 2000000}) {
+    std::vector<int> samples(n * width);
+    for(std::size_t e = 0; e < samples.size(); ++e) samples[e] = int((e * 7919) % std::size_t(largest));
+    samples[5] = largest;
+    Packed_diffusion_rows packed;
+    packed.pack<CGAL::Sequential_tag>(rows, destination, points, normals, weights, samples, width);
+    ASSERT_EQ(packed.size(), rows.size());
+    EXPECT_EQ(packed.record_bytes(), largest <= 65535 ? 88u : 104u);
+    for(std::size_t a = 0; a < rows.size(); ++a) {
+      const std::size_t row = std::size_t(rows[a]);
+      EXPECT_EQ(packed.destination_of(a), std::size_t(destination[row]));
+      for(int c = 0; c < 3; ++c) {
+        EXPECT_EQ(packed.point(a)[c], points(Eigen::Index(row), c));
+        EXPECT_EQ(packed.normal(a)[c], normals(Eigen::Index(row), c));
+      }
+      for(std::size_t k = 0; k < width; ++k) {
+        EXPECT_EQ(double(packed.weights_of(a)[k]), weights[width * row + k]);
+        EXPECT_EQ(packed.sample(a, k), std::size_t(samples[width * row + k]));
+      }
+    }
   }
 }
 

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -164,10 +165,11 @@ struct Diffusion_rows
 };
 
 /// The diffusion's per-point data in the order a drag walks it, one record per point: rest position and rest
-/// normal as doubles, the weights as floats (they are multiples of 2^-24, Diffusion_stencil::setup), then the
-/// sample points and the destination row as 32-bit integers, padded to 8 bytes (104 bytes for the default six
-/// sample points). A drag then reads one stream instead of five, whose next records it asks for ahead
-/// (doc/editing_at_scale.md, "A drag's memory traffic").
+/// normal as doubles, the destination row as a 32-bit integer, the weights as floats (multiples of 2^-24,
+/// Diffusion_stencil::setup), then the sample points as 16-bit integers (32-bit ones when there are more than
+/// 65,536 sample points), padded to 8 bytes (88 bytes for the default six sample points). A drag then reads one
+/// stream instead of five, whose next records it asks for ahead (doc/editing_at_scale.md, "A drag's memory
+/// traffic").
 class Packed_diffusion_rows
 {
 public:
@@ -179,21 +181,30 @@ public:
             std::size_t width)
   {
     m_width = width;
-    const std::size_t bytes = 6 * sizeof(double) + width * (sizeof(float) + sizeof(int)) + sizeof(int);
+    m_short_samples = std::all_of(samples.begin(), samples.end(), [](int j) { return j <= 0xffff; });
+    const std::size_t sample_bytes = m_short_samples ? sizeof(std::uint16_t) : sizeof(std::int32_t);
+    const std::size_t bytes = 6 * sizeof(double) + sizeof(std::int32_t) + width * (sizeof(float) + sample_bytes);
     m_stride = (bytes + sizeof(double) - 1) / sizeof(double);
     m_records.assign(rows.size() * m_stride, 0.0);
     for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t a) {
       double* record = m_records.data() + a * m_stride;
-      const Eigen::Index row = rows[a];
-      for(int c = 0; c < 3; ++c) record[c] = points(row, c), record[3 + c] = normals(row, c);
+      const std::size_t row = std::size_t(rows[a]);
+      for(int c = 0; c < 3; ++c)
+        record[c] = points(Eigen::Index(row), c), record[3 + c] = normals(Eigen::Index(row), c);
       char* rest = reinterpret_cast<char*>(record + 6); // by bytes: the storage holds doubles
+      std::memcpy(rest, &destination_of_row[row], sizeof(std::int32_t));
       for(std::size_t k = 0; k < width; ++k) {
-        const float weight = float(weights[width * std::size_t(row) + k]); // exact: a multiple of 2^-24
-        std::memcpy(rest + k * sizeof(float), &weight, sizeof(float));
+        const float weight = float(weights[width * row + k]); // exact: a multiple of 2^-24
+        std::memcpy(rest + weights_offset + k * sizeof(float), &weight, sizeof(float));
+        const int j = samples[width * row + k];
+        char* sample = rest + weights_offset + width * sizeof(float) + k * sample_bytes;
+        if(m_short_samples) {
+          const std::uint16_t short_j = std::uint16_t(j);
+          std::memcpy(sample, &short_j, sample_bytes);
+        } else {
+          std::memcpy(sample, &j, sample_bytes);
+        }
       }
-      char* integers = rest + width * sizeof(float);
-      std::memcpy(integers, samples.data() + width * std::size_t(row), width * sizeof(int));
-      std::memcpy(integers + width * sizeof(int), &destination_of_row[std::size_t(row)], sizeof(int));
     });
   }
 
@@ -202,9 +213,28 @@ public:
   std::size_t record_bytes() const { return m_stride * sizeof(double); }
   const double* point(std::size_t a) const { return m_records.data() + a * m_stride; }
   const double* normal(std::size_t a) const { return point(a) + 3; }
-  const float* weights_of(std::size_t a) const { return reinterpret_cast<const float*>(point(a) + 6); }
-  std::size_t sample(std::size_t a, std::size_t k) const { return integer(a, k); }
-  std::size_t destination_of(std::size_t a) const { return integer(a, m_width); }
+  const float* weights_of(std::size_t a) const
+  {
+    return reinterpret_cast<const float*>(reinterpret_cast<const char*>(point(a) + 6) + weights_offset);
+  }
+  std::size_t sample(std::size_t a, std::size_t k) const
+  {
+    const char* samples = reinterpret_cast<const char*>(weights_of(a) + m_width);
+    if(m_short_samples) {
+      std::uint16_t j;
+      std::memcpy(&j, samples + k * sizeof(j), sizeof(j));
+      return j;
+    }
+    std::int32_t j;
+    std::memcpy(&j, samples + k * sizeof(j), sizeof(j));
+    return std::size_t(j);
+  }
+  std::size_t destination_of(std::size_t a) const
+  {
+    std::int32_t row;
+    std::memcpy(&row, point(a) + 6, sizeof(row));
+    return std::size_t(row);
+  }
   void prefetch(std::size_t a) const
   {
     const char* record = reinterpret_cast<const char*>(point(a));
@@ -213,15 +243,11 @@ public:
   }
 
 private:
-  std::size_t integer(std::size_t a, std::size_t k) const
-  {
-    int value;
-    std::memcpy(&value, reinterpret_cast<const char*>(weights_of(a) + m_width) + k * sizeof(int), sizeof(int));
-    return std::size_t(value);
-  }
+  static constexpr std::size_t weights_offset = sizeof(std::int32_t); // after the destination
 
   std::vector<double, Cache_line_allocator<double>> m_records;
   std::size_t m_width = 0, m_stride = 0;
+  bool m_short_samples = true;
 };
 
 /// The per-point data of the diffusion, fixed at preprocessing: the `m` nearest sample points and their weights.
