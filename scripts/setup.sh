@@ -15,6 +15,7 @@ packages=(
   python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
   python3-aiohttp libjs-three chromium chromium-driver python3-selenium
   python3-scipy python3-dask python3-distributed python3-zarr
+  cloudcompare
 )
 
 missing=()

@@ -51,7 +51,7 @@ struct Curvature_command
     coloring.quantity = quantity_of("mean_curvature");
     cloud.colors = coloring.colors;
     cloud.set_scalar("mean_curvature", std::move(H));
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud, common.scalar_prefix())); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, coloring, render); }));
     if(!report.empty()) write_file(written.report, rep.dump());

@@ -37,7 +37,7 @@ struct Demo_command
     Point_cloud input;
     input.points = tube.points;
     input.normals = tube.normals;
-    write_file(outputs.add(dir / "tentacle.ply"), ply_bytes(input));
+    write_file(outputs.add(dir / "tentacle.ply"), ply_bytes(input, common.scalar_prefix()));
     write_file(outputs.add(dir / "tentacle.png"), render_png(input.points, input.normals, Coloring(), render));
     std::printf("demo: tentacle of %zu points with exact normals\n", input.points.size());
     for(const char* order : {"linear", "quadric", "cubic"}) {
@@ -47,7 +47,7 @@ struct Demo_command
       Report rep(std::string("demo details ") + order);
       const Coloring coloring = add_details(cloud, options, progress, rep);
       const std::string stem = std::string("details_") + order;
-      write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(cloud));
+      write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(cloud, common.scalar_prefix()));
       write_file(outputs.add(dir / (stem + ".png")), render_on_base_surface(cloud, coloring, options.k, render, rep));
       std::printf("demo: %-7s details (lambda %.1f, mu %.1f, k %u) in %.3f s -> %s.ply, %s.png\n", order, options.filter.lambda,
                   options.filter.mu, options.k, rep.data()["timings_s"]["details"].get<double>(), stem.c_str(), stem.c_str());
@@ -72,7 +72,7 @@ struct Demo_command
       });
       progress.finish();
       if(!result) throw Cancelled();
-      write_file(outputs.add(dir / (std::string(stem) + ".ply")), ply_bytes(out));
+      write_file(outputs.add(dir / (std::string(stem) + ".ply")), ply_bytes(out, common.scalar_prefix()));
       write_file(outputs.add(dir / (std::string(stem) + ".png")),
                  render_png(out.points, out.normals, manipulate_coloring(out), render));
       rep.data()["roi_points"] = result.region_size;
@@ -97,7 +97,7 @@ struct Demo_command
       Point_cloud out;
       run_edit(input, bend, progress, rep, out);
       const std::string stem = std::string("edit_") + order;
-      write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(out));
+      write_file(outputs.add(dir / (stem + ".ply")), ply_bytes(out, common.scalar_prefix()));
       write_file(outputs.add(dir / (stem + ".png")), render_png(out.points, out.normals, edit_coloring(out), render));
       const auto& r = rep.data();
       std::printf("demo: %-7s edit, tip swung 50 degrees: %zu SSPs (%zu in the region), SSPs %.3f s, diffusion %.3f s -> %s.ply, %s.png\n",
@@ -120,7 +120,7 @@ struct Demo_command
         if((*out.scalar("displacement"))[i] > 0) moved.push_back(i);
       const std::vector<double> spacing_before = local_spacing(input);
       upsample_cloud(out, CGAL_ext::Upsampling_settings(), &moved, &spacing_before, progress, rep);
-      write_file(outputs.add(dir / "edit_stretch_upsampled.ply"), ply_bytes(out));
+      write_file(outputs.add(dir / "edit_stretch_upsampled.ply"), ply_bytes(out, common.scalar_prefix()));
       write_file(outputs.add(dir / "edit_stretch_upsampled.png"), render_png(out.points, out.normals, edit_coloring(out), render));
       std::printf("demo: tip pulled by 1.0, then %zu points inserted where the stretch thinned the tentacle -> "
                   "edit_stretch.png, edit_stretch_upsampled.{ply,png}\n", rep.data()["upsampling"]["inserted"].get<std::size_t>());

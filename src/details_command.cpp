@@ -25,7 +25,7 @@ struct Details_command
     Point_cloud cloud = read_for_neighbors(input, detail.k, bytes_per_point::details, rep);
     ensure_normals(cloud, progress, rep);
     const Coloring coloring = add_details(cloud, detail, progress, rep);
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud, common.scalar_prefix())); });
     if(!png.empty()) write_file(written.png, render_on_base_surface(cloud, coloring, detail.k, render, rep));
     if(!report.empty()) write_file(written.report, rep.dump());
     written.files.commit();

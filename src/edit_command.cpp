@@ -156,7 +156,7 @@ struct Edit_command
       }
     ensure_normals(cloud, progress, rep);
     const Point_cloud out = run_chain(cloud, chain, progress, rep);
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(out, common.scalar_prefix())); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] { return render_png(out.points, out.normals, edit_coloring(out), render); }));
     if(!report.empty()) write_file(written.report, rep.dump());

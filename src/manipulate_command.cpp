@@ -80,7 +80,7 @@ struct Manipulate_command
     progress.finish();
     if(!result) throw Cancelled();
     const double deviation = enhance ? 0.0 : region_deviation(cloud.points, out.points, region, factor);
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(out)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(out, common.scalar_prefix())); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
         return render_png(out.points, out.normals, manipulate_coloring(out), render);

@@ -31,6 +31,9 @@ int main(int argc, char** argv)
   Common_options common;
   app.add_option("--threads", common.threads, "worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
   app.add_flag("-q,--quiet", common.quiet, "no progress on stderr");
+  app.add_flag("--cloudcompare-fields", common.cloudcompare_fields,
+               "name each scalar field of the PLY files written scalar_NAME, as CloudCompare's command line loads "
+               "them (it shows NAME)");
 
   std::vector<Subcommand> subcommands{add_details_command(app, common)};
   for(Subcommand& s : add_manipulate_commands(app, common)) subcommands.push_back(std::move(s));

@@ -212,14 +212,14 @@ void append(std::string& out, T value)
 }
 } // namespace
 
-std::string ply_bytes(const Point_cloud& cloud)
+std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix)
 {
   const std::size_t n = cloud.points.size();
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment written by point-detail\nelement vertex " << n << "\n"
          << "property double x\nproperty double y\nproperty double z\n";
   if(!cloud.normals.empty()) header << "property double nx\nproperty double ny\nproperty double nz\n";
-  for(const auto& s : cloud.scalars) header << "property double " << s.first << "\n";
+  for(const auto& s : cloud.scalars) header << "property double " << scalar_prefix << s.first << "\n";
   if(!cloud.colors.empty()) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header << "end_header\n";
   std::string out = header.str();

@@ -39,8 +39,9 @@ struct Point_cloud
 /// `bytes_per_point` (what the caller's processing needs per point, reading included).
 Point_cloud read_point_cloud(const std::filesystem::path& path, std::uint64_t bytes_per_point = 1024);
 
-/// The cloud as a binary little-endian PLY: x y z (double), nx ny nz, the scalars (double), red green blue (uchar).
-std::string ply_bytes(const Point_cloud& cloud);
+/// The cloud as a binary little-endian PLY: x y z (double), nx ny nz, the scalars (double), red green blue (uchar);
+/// each scalar's property named `scalar_prefix` and its name.
+std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix = std::string());
 
 } // namespace point_detail
 

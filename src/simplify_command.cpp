@@ -56,13 +56,13 @@ struct Simplify_command
     }
     surfels.set_scalar("radius", std::move(radius));
     surfels.set_scalar("member_count", std::move(member_count));
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(surfels)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(surfels, common.scalar_prefix())); });
     const Coloring coloring = label_colors(sample_of);
     cloud.colors = coloring.colors;
     if(!clusters.empty()) {
       std::vector<double> ssp_index(sample_of.begin(), sample_of.end());
       cloud.set_scalar("ssp_index", std::move(ssp_index));
-      write_file(clusters_tmp, ply_bytes(cloud));
+      write_file(clusters_tmp, ply_bytes(cloud, common.scalar_prefix()));
     }
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] { return render_png(cloud.points, cloud.normals, coloring, render); }));

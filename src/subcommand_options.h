@@ -29,6 +29,10 @@ struct Common_options
 {
   int threads = 0; // 0: all cores
   bool quiet = false;
+  bool cloudcompare_fields = false; // scalar fields named scalar_NAME, which CloudCompare's command line loads
+
+  /// What the PLY files' scalar properties are prefixed with.
+  std::string scalar_prefix() const { return cloudcompare_fields ? "scalar_" : ""; }
 };
 
 /// A subcommand as `main` sees it: its parsed options, and how to run it.

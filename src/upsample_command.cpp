@@ -31,7 +31,7 @@ struct Upsample_command
     const std::size_t n = cloud.points.size();
     upsample_cloud(cloud, settings, nullptr, nullptr, progress, rep);
     rep.data()["points"] = n;
-    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud)); });
+    rep.time("write", [&] { write_file(written.ply, ply_bytes(cloud, common.scalar_prefix())); });
     if(!png.empty())
       write_file(written.png, rep.time("render", [&] {
         Coloring coloring = flag_colors(*cloud.scalar("inserted"));
