@@ -9,8 +9,18 @@ build=${BUILD_DIR:-build}
 # scripts/run_tests.sh builds everything once, then names the folder in CGAL_EXT_BUILT: the scripts it runs after
 # that (benchmarks, pictures) neither reconfigure nor rebuild it while its tests read it.
 if [ "${CGAL_EXT_BUILT:-}" = "$build" ]; then exit 0; fi
-bash scripts/setup.sh
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCGAL_EXT_UNIT_TESTS="${CGAL_EXT_UNIT_TESTS:-ON}" >/dev/null
+# CGAL_EXT_PROGRAM_ONLY=1 (scripts/run_demo.sh): only the program's packages, and neither tests, benchmarks,
+# examples nor the Python module configured. Each run states every part, so the build folder follows the last one.
+if [ "${CGAL_EXT_PROGRAM_ONLY:-0}" = 1 ]; then
+  bash scripts/setup.sh program
+  parts=OFF
+else
+  bash scripts/setup.sh
+  parts=ON
+fi
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCGAL_EXT_UNIT_TESTS="${CGAL_EXT_UNIT_TESTS:-ON}" \
+  -DCGAL_EXT_BUILD_TESTS=$parts -DCGAL_EXT_BUILD_BENCHMARKS=$parts -DCGAL_EXT_BUILD_EXAMPLES=$parts \
+  -DCGAL_EXT_BUILD_PYTHON=$parts >/dev/null
 if [ $# -gt 0 ]; then
   cmake --build "$build" -j"$(nproc)" --target "$@"
 else

@@ -1,22 +1,28 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages the project builds with. Idempotent: quiet and fast when all is there.
-# Run as root (or with sudo available). Usage: scripts/setup.sh
+# Installs the Debian 12 packages the project builds and tests with. Idempotent: quiet and fast when all is there.
+# Run as root (or with sudo available). Usage: scripts/setup.sh [program]
+#   program: only what building the point-detail program needs (scripts/run_demo.sh); without it, everything
+#   (the tests, the Python package, the studio's browser, the tiled runs, the viewers the tests open files in).
 set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config ccache
   libcgal-dev libeigen3-dev libboost-dev libtbb-dev libgmp-dev libmpfr-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libsuitesparse-dev libopenblas-dev
-  clang clang-format-14 libclang-rt-14-dev time bc
-  doxygen python3 python3-matplotlib
-  pybind11-dev python3-dev python3-numpy python3-pytest
-  python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
-  python3-aiohttp libjs-three chromium chromium-driver python3-selenium
-  python3-scipy python3-dask python3-distributed python3-zarr
-  cloudcompare
 )
+if [ "${1:-}" != program ]; then
+  packages+=(
+    libgtest-dev libgmock-dev libbenchmark-dev
+    clang clang-format-14 libclang-rt-14-dev time bc
+    doxygen python3 python3-matplotlib
+    pybind11-dev python3-dev python3-numpy python3-pytest
+    python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
+    python3-aiohttp libjs-three chromium chromium-driver python3-selenium
+    python3-scipy python3-dask python3-distributed python3-zarr
+    cloudcompare
+  )
+fi
 
 missing=()
 for p in "${packages[@]}"; do
