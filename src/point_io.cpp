@@ -91,15 +91,17 @@ std::vector<Vector> ply_face_normals(const fs::path& path, std::size_t expected_
   return face_normals(vertices, faces);
 }
 
+// Property `name` as the scalar `key`.
 template <typename T>
-bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, Point_cloud& cloud)
+bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, const std::string& key,
+                 Point_cloud& cloud)
 {
   auto found = ps.template property_map<T>(name);
   if(!found.second) return false;
   std::vector<double> values;
   values.reserve(ps.size());
   for(auto it = ps.begin(); it != ps.end(); ++it) values.push_back(double(found.first[*it]));
-  cloud.scalars.emplace_back(name, std::move(values));
+  cloud.scalars.emplace_back(key, std::move(values));
   return true;
 }
 
@@ -191,13 +193,21 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
        blue = ps.property_map<unsigned char>("blue");
   if(red.second && green.second && blue.second)
     for(auto it = ps.begin(); it != ps.end(); ++it) cloud.colors.push_back({red.first[*it], green.first[*it], blue.first[*it]});
-  for(const std::string& name : ps.properties()) {
+  const std::vector<std::string> properties = ps.properties();
+  for(const std::string& name : properties) {
     if(name == "index" || name == "point" || name == "normal" || name == "red" || name == "green" || name == "blue")
       continue;
-    copy_scalar<double>(ps, name, cloud) || copy_scalar<float>(ps, name, cloud) || copy_scalar<int>(ps, name, cloud) ||
-      copy_scalar<unsigned int>(ps, name, cloud) || copy_scalar<unsigned char>(ps, name, cloud) ||
-      copy_scalar<signed char>(ps, name, cloud) || copy_scalar<short>(ps, name, cloud) ||
-      copy_scalar<unsigned short>(ps, name, cloud);
+    // A field named as CloudCompare names its own (scalar_NAME: --cloudcompare-fields, or CloudCompare's files)
+    // is read as NAME, unless the file has a NAME too.
+    const std::string& prefix = cloudcompare_scalar_prefix;
+    const bool prefixed = name.size() > prefix.size() && name.compare(0, prefix.size(), prefix) == 0;
+    const std::string bare = prefixed ? name.substr(prefix.size()) : std::string();
+    const bool taken = std::find(properties.begin(), properties.end(), bare) != properties.end();
+    const std::string& key = prefixed && !taken ? bare : name;
+    copy_scalar<double>(ps, name, key, cloud) || copy_scalar<float>(ps, name, key, cloud) ||
+      copy_scalar<int>(ps, name, key, cloud) || copy_scalar<unsigned int>(ps, name, key, cloud) ||
+      copy_scalar<unsigned char>(ps, name, key, cloud) || copy_scalar<signed char>(ps, name, key, cloud) ||
+      copy_scalar<short>(ps, name, key, cloud) || copy_scalar<unsigned short>(ps, name, key, cloud);
   }
   return cloud;
 }
@@ -219,7 +229,10 @@ std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix
   header << "ply\nformat binary_little_endian 1.0\ncomment written by point-detail\nelement vertex " << n << "\n"
          << "property double x\nproperty double y\nproperty double z\n";
   if(!cloud.normals.empty()) header << "property double nx\nproperty double ny\nproperty double nz\n";
-  for(const auto& s : cloud.scalars) header << "property double " << scalar_prefix << s.first << "\n";
+  for(const auto& s : cloud.scalars) {
+    const bool prefixed = s.first.compare(0, scalar_prefix.size(), scalar_prefix) == 0;
+    header << "property double " << (prefixed ? "" : scalar_prefix) << s.first << "\n";
+  }
   if(!cloud.colors.empty()) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header << "end_header\n";
   std::string out = header.str();

@@ -39,8 +39,12 @@ struct Point_cloud
 /// `bytes_per_point` (what the caller's processing needs per point, reading included).
 Point_cloud read_point_cloud(const std::filesystem::path& path, std::uint64_t bytes_per_point = 1024);
 
+/// The prefix CloudCompare's command line wants on a PLY file's scalar fields; read_point_cloud reads such a
+/// field under its name without it.
+inline const std::string cloudcompare_scalar_prefix = "scalar_";
+
 /// The cloud as a binary little-endian PLY: x y z (double), nx ny nz, the scalars (double), red green blue (uchar);
-/// each scalar's property named `scalar_prefix` and its name.
+/// each scalar's property named `scalar_prefix` and its name (its name alone if it starts with the prefix).
 std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix = std::string());
 
 } // namespace point_detail

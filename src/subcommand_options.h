@@ -32,7 +32,7 @@ struct Common_options
   bool cloudcompare_fields = false; // scalar fields named scalar_NAME, which CloudCompare's command line loads
 
   /// What the PLY files' scalar properties are prefixed with.
-  std::string scalar_prefix() const { return cloudcompare_fields ? "scalar_" : ""; }
+  std::string scalar_prefix() const { return cloudcompare_fields ? cloudcompare_scalar_prefix : std::string(); }
 };
 
 /// A subcommand as `main` sees it: its parsed options, and how to run it.

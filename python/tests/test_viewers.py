@@ -9,6 +9,7 @@ import subprocess
 import numpy as np
 import pytest
 
+import cgal_ext
 from conftest import PROGRAM_ENV, bumpy_sphere, read_ply, run_program, write_ply, xyz
 
 CLOUDCOMPARE = shutil.which("CloudCompare")
@@ -56,3 +57,13 @@ def test_cloudcompare_loads_every_scalar_field(tmp_path, command):
     # Without the option CloudCompare's command line drops the same fields: why the option exists.
     dropped = cloudcompare_columns(str(plain), str(tmp_path))
     assert not any(name[len("scalar_"):] in dropped for name in scalars), sorted(dropped)
+    # The program and the package read such a file's fields under their own names, and write them back once
+    # prefixed: the file and its rewrite hold the same fields.
+    properties = cgal_ext.read_points(str(written)).properties
+    colors = ["colors"] if "red" in vertex.dtype.names else []
+    assert sorted(properties) == sorted([name[len("scalar_"):] for name in scalars] + colors)
+    if command[0] == "details":
+        run_program("render", "-i", written, "-o", tmp_path / "view.png", "--color-by", "detail_normal")
+        run_program("--cloudcompare-fields", "details", "-i", written, "-o", tmp_path / "again.ply")
+        again = read_ply(tmp_path / "again.ply").dtype.names
+        assert sorted(again) == sorted(vertex.dtype.names)

@@ -141,34 +141,73 @@ TEST(DiffusionStencil, ARigidMotionOfEverySamplePointMovesEveryPointRigidly)
 TEST(DiffusionStencil, PackedRecordsHoldTheRowsTheyWereGiven)
 {
   // A drag's records: 16-bit sample points while every one fits, 32-bit ones past 65,535; each record gives back
-  // its row's position, normal, weights, sample points and destination.
-  const std::size_t width = 6, n = 40;
+  // its row's position, normal, weights, sample points and destination, for stencils of any width.
+  const std::size_t n = 40;
   const Matrix_n3 points = random_samples(n, 3), normals = random_samples(n, 4);
-  std::vector<double> weights(n * width);
-  for(std::size_t e = 0; e < weights.size(); ++e) weights[e] = double(e % 7 + 1) / 16777216.0;
   std::vector<int> rows, destination(n);
   for(std::size_t i = 0; i < n; i += 3) rows.push_back(int(i));
   for(std::size_t i = 0; i < n; ++i) destination[i] = int(1000 + 7 * i);
-  for(int largest : {65535, 65536, 2000000}) {
-    std::vector<int> samples(n * width);
-    for(std::size_t e = 0; e < samples.size(); ++e) samples[e] = int((e * 7919) % std::size_t(largest));
-    samples[5] = largest;
-    Packed_diffusion_rows packed;
-    packed.pack<CGAL::Sequential_tag>(rows, destination, points, normals, weights, samples, width);
-    ASSERT_EQ(packed.size(), rows.size());
-    EXPECT_EQ(packed.record_bytes(), largest <= 65535 ? 88u : 104u);
-    for(std::size_t a = 0; a < rows.size(); ++a) {
-      const std::size_t row = std::size_t(rows[a]);
-      EXPECT_EQ(packed.destination_of(a), std::size_t(destination[row]));
-      for(int c = 0; c < 3; ++c) {
-        EXPECT_EQ(packed.point(a)[c], points(Eigen::Index(row), c));
-        EXPECT_EQ(packed.normal(a)[c], normals(Eigen::Index(row), c));
-      }
-      for(std::size_t k = 0; k < width; ++k) {
-        EXPECT_EQ(double(packed.weights_of(a)[k]), weights[width * row + k]);
-        EXPECT_EQ(packed.sample(a, k), std::size_t(samples[width * row + k]));
+  for(std::size_t width : {1u, 3u, 6u, 7u}) {
+    std::vector<double> weights(n * width);
+    for(std::size_t e = 0; e < weights.size(); ++e) weights[e] = double(e % 7 + 1) / 16777216.0;
+    for(int largest : {65535, 65536, 2000000}) {
+      std::vector<int> samples(n * width);
+      for(std::size_t e = 0; e < samples.size(); ++e) samples[e] = int((e * 7919) % std::size_t(largest));
+      samples[0] = largest;
+      Packed_diffusion_rows packed;
+      packed.pack<CGAL::Sequential_tag>(rows, destination, points, normals, weights, samples, width);
+      ASSERT_EQ(packed.size(), rows.size());
+      const std::size_t bytes = 6 * 8 + 4 + width * (4 + (largest <= 65535 ? 2 : 4));
+      EXPECT_EQ(packed.record_bytes(), (bytes + 7) / 8 * 8);
+      for(std::size_t a = 0; a < rows.size(); ++a) {
+        const std::size_t row = std::size_t(rows[a]);
+        EXPECT_EQ(packed.destination_of(a), std::size_t(destination[row]));
+        for(int c = 0; c < 3; ++c) {
+          EXPECT_EQ(packed.point(a)[c], points(Eigen::Index(row), c));
+          EXPECT_EQ(packed.normal(a)[c], normals(Eigen::Index(row), c));
+        }
+        for(std::size_t k = 0; k < width; ++k) {
+          EXPECT_EQ(packed.weight(a, k), weights[width * row + k]);
+          EXPECT_EQ(packed.sample(a, k), std::size_t(samples[width * row + k]));
+        }
       }
     }
+  }
+}
+
+TEST(DiffusionStencil, PackedRecordsMoveThePointsAsTheRowsDoPastSixtyFiveThousandSamplePoints)
+{
+  // 70,000 sample points: the records hold 32-bit sample points, and the drag from them is the drag from the
+  // stencil's own rows, bit for bit.
+  const Matrix_n3 samples = random_samples(70000, 5), points = random_samples(600, 6);
+  Matrix_n3 normals = random_samples(600, 7);
+  normals.rowwise().normalize();
+  Diffusion_stencil stencil;
+  stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, 6);
+  ASSERT_GT(*std::max_element(stencil.samples.indices.begin(), stencil.samples.indices.end()), 65535);
+  std::vector<Eigen::Matrix3d> maps(std::size_t(samples.rows()));
+  Matrix_n3 moved = samples;
+  for(Eigen::Index j = 0; j < samples.rows(); ++j) {
+    maps[std::size_t(j)] = Eigen::AngleAxisd(samples(j, 0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    moved.row(j) += Eigen::RowVector3d(0.1 * samples(j, 1), 0, 0.05);
+  }
+  stencil.set_motions<CGAL::Parallel_if_available_tag>(samples, moved, maps);
+  std::vector<int> rows(std::size_t(points.rows())), destination(rows.size());
+  for(std::size_t i = 0; i < rows.size(); ++i) rows[i] = int(i), destination[i] = int(rows.size() - 1 - i);
+  Packed_diffusion_rows packed;
+  packed.pack<CGAL::Parallel_if_available_tag>(rows, destination, points, normals, stencil.weights,
+                                               stencil.samples.indices, stencil.width());
+  EXPECT_EQ(packed.record_bytes(), 104u);
+  for(Diffusion_origin origin : {Diffusion_origin::nearest_sample, Diffusion_origin::own_sample}) {
+    Matrix_n3 by_rows(points.rows(), 3), by_rows_normals(points.rows(), 3);
+    Matrix_n3 by_records(points.rows(), 3), by_records_normals(points.rows(), 3);
+    stencil.move_points<CGAL::Parallel_if_available_tag>(points, normals, samples, moved, origin, by_rows.data(),
+                                                         by_rows_normals.data(), nullptr, &destination);
+    stencil.move_packed_points<CGAL::Parallel_if_available_tag>(packed, samples, moved, origin, by_records.data(),
+                                                                by_records_normals.data());
+    EXPECT_TRUE(by_rows == by_records);
+    EXPECT_TRUE(by_rows_normals == by_records_normals);
+    EXPECT_GT((by_rows.colwise().reverse() - points).cwiseAbs().maxCoeff(), 1e-3); // the points moved
   }
 }
 

@@ -190,24 +190,31 @@ public:
   }
 
   /// apply()'s handle points whose input indices lie in `[begin, end)`, into arrays in input order (row i: input
-  /// point i, three doubles).
+  /// point i, three doubles). A long run of them (a handle in scan order lies between two blended points) is
+  /// shared among the threads.
+  template <typename ConcurrencyTag>
   void apply_to_handle_points(std::int64_t begin, std::int64_t end, const std::vector<Eigen::Matrix3d>& rotations,
                               const std::vector<Rigid_transform>& transforms, double* out_points,
                               double* out_normals) const
   {
     using Row = Eigen::Map<Eigen::RowVector3d>;
     const Walk& walk = m_walk;
-    const auto first = std::lower_bound(walk.handle_points.begin(), walk.handle_points.end(), begin);
-    const auto last = std::lower_bound(first, walk.handle_points.end(), end);
-    for(auto at = first; at != last; ++at) {
-      const std::size_t h = std::size_t(at - walk.handle_points.begin());
-      const std::size_t g = std::size_t(walk.handle_groups[h]), i = std::size_t(*at);
+    const auto points = walk.handle_points.begin();
+    const std::size_t first = std::size_t(std::lower_bound(points, walk.handle_points.end(), begin) - points);
+    const std::size_t last =
+      std::size_t(std::lower_bound(points + std::ptrdiff_t(first), walk.handle_points.end(), end) - points);
+    const auto put = [&](std::size_t h) {
+      const std::size_t g = std::size_t(walk.handle_groups[h]), i = std::size_t(walk.handle_points[h]);
       Eigen::RowVector3d exact, exact_normal;
       on_transform(rotations[g], transforms[g], walk.handle_positions.row(Eigen::Index(h)),
                    walk.handle_normals.row(Eigen::Index(h)), exact, exact_normal);
       Row(out_points + 3 * i) = exact;
       Row(out_normals + 3 * i) = exact_normal;
-    }
+    };
+    if(last - first > 4096)
+      for_range<ConcurrencyTag>(first, last, put, 1024);
+    else
+      for(std::size_t h = first; h < last; ++h) put(h);
   }
 
   /// apply()'s collar points among the walk's rows `[begin, end)`, once they hold their blends: row

@@ -110,7 +110,8 @@ public:
       const std::int64_t begin = first == 0 ? 0 : std::int64_t(packed.destination_of(first));
       const std::int64_t end =
         last == packed.size() ? std::numeric_limits<std::int64_t>::max() : std::int64_t(packed.destination_of(last));
-      collar.apply_to_handle_points(begin, end, m_group_rotations, transforms, out_points, out_normals);
+      collar.template apply_to_handle_points<ConcurrencyTag>(begin, end, m_group_rotations, transforms, out_points,
+                                                             out_normals);
       if(!collar.rows.empty()) collar.apply_to_walk_collar(first, last, packed, out_points, out_normals);
     };
     if(packed.size() == 0) handles_and_collar(0, 0);

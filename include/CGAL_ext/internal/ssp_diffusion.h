@@ -149,7 +149,8 @@ struct Diffusion_rows
   std::size_t row(std::size_t a) const { return active ? std::size_t(active[a]) : a; }
   const double* point(std::size_t a) const { return points + 3 * row(a); }
   const double* normal(std::size_t a) const { return normals + 3 * row(a); }
-  const double* weights_of(std::size_t a) const { return weights + width * row(a); }
+  /// The k-th weight of the a-th point's stencil.
+  double weight(std::size_t a, std::size_t k) const { return weights[width * row(a) + k]; }
   /// The k-th sample point of the a-th point's stencil (nearest first).
   std::size_t sample(std::size_t a, std::size_t k) const { return std::size_t(samples[width * row(a) + k]); }
   std::size_t destination_of(std::size_t a) const { return destination ? std::size_t(destination[a]) : row(a); }
@@ -213,13 +214,15 @@ public:
   std::size_t record_bytes() const { return m_stride * sizeof(double); }
   const double* point(std::size_t a) const { return m_records.data() + a * m_stride; }
   const double* normal(std::size_t a) const { return point(a) + 3; }
-  const float* weights_of(std::size_t a) const
+  double weight(std::size_t a, std::size_t k) const
   {
-    return reinterpret_cast<const float*>(reinterpret_cast<const char*>(point(a) + 6) + weights_offset);
+    float w; // by bytes: the storage holds doubles
+    std::memcpy(&w, weights_of(a) + k * sizeof(float), sizeof(float));
+    return double(w);
   }
   std::size_t sample(std::size_t a, std::size_t k) const
   {
-    const char* samples = reinterpret_cast<const char*>(weights_of(a) + m_width);
+    const char* samples = weights_of(a) + m_width * sizeof(float);
     if(m_short_samples) {
       std::uint16_t j;
       std::memcpy(&j, samples + k * sizeof(j), sizeof(j));
@@ -244,6 +247,8 @@ public:
 
 private:
   static constexpr std::size_t weights_offset = sizeof(std::int32_t); // after the destination
+
+  const char* weights_of(std::size_t a) const { return reinterpret_cast<const char*>(point(a) + 6) + weights_offset; }
 
   std::vector<double, Cache_line_allocator<double>> m_records;
   std::size_t m_width = 0, m_stride = 0;
@@ -370,9 +375,8 @@ private:
              Eigen::Vector3d& displacement) const
   {
     Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
-    const auto* w = layout.weights_of(a); // doubles or floats
     for(std::size_t k = 0, kept = width(); k < kept; ++k)
-      blended.noalias() += double(w[k]) * m_records[layout.sample(a, k)];
+      blended.noalias() += layout.weight(a, k) * m_records[layout.sample(a, k)];
     turn = blended.topLeftCorner<3, 3>();
     const Eigen::Vector3d p = Eigen::Map<const Eigen::Vector3d>(layout.point(a));
     if(origin == Diffusion_origin::nearest_sample) {
@@ -392,6 +396,7 @@ private:
   static void quantize_weights(double* weights, std::size_t count)
   {
     constexpr double quanta = 16777216.0; // 2^24
+    if(count == 0) return;
     double total = 0;
     for(std::size_t e = 0; e < count; ++e) total += weights[e] = std::floor(weights[e] * quanta);
     for(std::size_t e = 0; total < quanta; e = (e + 1) % count, ++total) weights[e] += 1;
@@ -617,9 +622,8 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
   for(std::size_t a = first; a < last; ++a) {
     prefetch_ahead(layout, a, count, out_points, out_normals);
     __m256d column[4] = {zero, zero, zero, zero};
-    const auto* weight = layout.weights_of(a); // doubles or floats
     for(std::size_t k = 0; k < kept; ++k) {
-      const __m256d w = _mm256_set1_pd(double(weight[k]));
+      const __m256d w = _mm256_set1_pd(layout.weight(a, k));
       const double* record = records[layout.sample(a, k)].data();
       for(int c = 0; c < 4; ++c) column[c] = _mm256_fmadd_pd(w, _mm256_loadu_pd(record + 4 * c), column[c]);
     }
