@@ -226,13 +226,6 @@ public:
     const Walk& walk = m_walk;
     const auto first = std::lower_bound(walk.collar.begin(), walk.collar.end(), int(begin)) - walk.collar.begin();
     for(std::size_t c = std::size_t(first); c < walk.collar.size() && std::size_t(walk.collar[c]) < end; ++c) {
-      // The steps of the collar point a few ahead: consecutive collar points step from handles far apart, whose
-      // steps the caches do not hold, and each point's normalisation leaves little room to wait for them.
-      if(c + collar_prefetch < walk.collar.size()) {
-        const int ahead = walk.collar_entries.indices[std::size_t(walk.collar_entries.offsets[c + collar_prefetch])];
-        __builtin_prefetch(walk.steps.data() + 3 * ahead);
-        __builtin_prefetch(walk.normal_steps.data() + 3 * ahead);
-      }
       const int entry = walk.collar_entries.offsets[c];
       const std::size_t i = rows.destination_of(std::size_t(walk.collar[c]));
       take_steps(walk.collar_entries.indices.data() + entry, walk.collar_weights.data() + entry,
@@ -270,8 +263,6 @@ public:
   }
 
 private:
-  static constexpr std::size_t collar_prefetch = 8; // collar points ahead
-
   // A handle point's rest `position` and `normal` on its group's transform `T` (`R`: its rotation as a matrix).
   template <typename Position, typename Normal>
   static void on_transform(const Eigen::Matrix3d& R, const Rigid_transform& T, const Position& position,

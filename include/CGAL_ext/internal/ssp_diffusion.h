@@ -134,8 +134,7 @@ struct Cache_line_allocator
 };
 
 constexpr std::size_t diffusion_block = 256; // points per task of Diffusion_stencil::apply
-constexpr std::size_t diffusion_prefetch = 32;      // how many points ahead a block asks for the rows it walks
-constexpr std::size_t diffusion_write_prefetch = 8; // and for the lines it writes, whose rows it has read by then
+constexpr std::size_t diffusion_prefetch = 32; // how many points ahead a block asks for the rows it walks
 
 /// Where Diffusion_stencil's blocks find the a-th point they move: `width` sample points and weights per stencil
 /// row, the row `active[a]` (row a without `active`), written to row `destination[a]` (its own row without).
@@ -409,21 +408,12 @@ private:
     return n.x() * M.col(1).cross(M.col(2)) + n.y() * M.col(2).cross(M.col(0)) + n.z() * M.col(0).cross(M.col(1));
   }
 
-  // Asks the cache for the data of the point `diffusion_prefetch` points after the a-th, and for the lines of
-  // `out_points` and `out_normals` the point `diffusion_write_prefetch` after it writes: the hardware's own
-  // prefetchers left a drag waiting on memory a good part of its time, and in random order a store to a line
-  // not in cache waits for the line to be read. The destination is read from a record asked for earlier, so
-  // that asking does not wait for it (doc/editing_at_scale.md, "A drag's memory traffic").
+  // Asks the cache for the data of the point `diffusion_prefetch` points after the a-th: the hardware's own
+  // prefetchers left a drag waiting on memory a good part of its time.
   template <typename Layout>
-  static void prefetch_ahead(const Layout& layout, std::size_t a, std::size_t count, const double* out_points,
-                             const double* out_normals)
+  static void prefetch_ahead(const Layout& layout, std::size_t a, std::size_t count)
   {
     if(a + diffusion_prefetch < count) layout.prefetch(a + diffusion_prefetch);
-    if(a + diffusion_write_prefetch < count) {
-      const std::size_t o = layout.destination_of(a + diffusion_write_prefetch);
-      __builtin_prefetch(out_points + 3 * o, 1);
-      __builtin_prefetch(out_normals + 3 * o, 1);
-    }
   }
 
   // The first `count` points of `layout`, a block of them per task.
@@ -565,7 +555,7 @@ void Diffusion_stencil::apply_block(const Layout& layout, std::size_t first, std
   std::size_t turned[diffusion_block];
   std::size_t turned_count = 0;
   for(std::size_t a = first; a < last; ++a) {
-    prefetch_ahead(layout, a, count, out_points, out_normals);
+    prefetch_ahead(layout, a, count);
     const std::size_t o = layout.destination_of(a);
     Row out_point(out_points + 3 * o), out_normal(out_normals + 3 * o);
     const Rest point(layout.point(a)), normal(layout.normal(a));
@@ -620,7 +610,7 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
   const std::size_t kept = width();
   const Eigen::Matrix4d* records = m_records.data();
   for(std::size_t a = first; a < last; ++a) {
-    prefetch_ahead(layout, a, count, out_points, out_normals);
+    prefetch_ahead(layout, a, count);
     __m256d column[4] = {zero, zero, zero, zero};
     for(std::size_t k = 0; k < kept; ++k) {
       const __m256d w = _mm256_set1_pd(layout.weight(a, k));
