@@ -31,6 +31,13 @@ Matrix_n3 random_samples(std::size_t n, unsigned seed)
   return m;
 }
 
+Matrix_n3 random_normals(std::size_t n, unsigned seed)
+{
+  Matrix_n3 normals = random_samples(n, seed);
+  normals.rowwise().normalize();
+  return normals;
+}
+
 /// Each sample point's weight in the stencil of `point` (0 outside it).
 std::map<int, double> weights_at(const Eigen::RowVector3d& point, const Matrix_n3& samples, std::size_t m)
 {
@@ -119,8 +126,7 @@ TEST(DiffusionStencil, EverySamplePointsWeightIsContinuousAlongAPath)
 TEST(DiffusionStencil, ARigidMotionOfEverySamplePointMovesEveryPointRigidly)
 {
   const Matrix_n3 samples = random_samples(50, 4), points = random_samples(300, 5);
-  Matrix_n3 normals = random_samples(300, 6);
-  normals.rowwise().normalize();
+  const Matrix_n3 normals = random_normals(300, 6);
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::RowVector3d t(0.3, -1.2, 2.0);
   const Matrix_n3 moved = (samples * R.transpose()).rowwise() + t;
@@ -180,8 +186,7 @@ TEST(DiffusionStencil, PackedRecordsMoveThePointsAsTheRowsDoPastSixtyFiveThousan
   // 70,000 sample points: the records hold 32-bit sample points, and the drag from them is the drag from the
   // stencil's own rows, bit for bit.
   const Matrix_n3 samples = random_samples(70000, 5), points = random_samples(600, 6);
-  Matrix_n3 normals = random_samples(600, 7);
-  normals.rowwise().normalize();
+  const Matrix_n3 normals = random_normals(600, 7);
   Diffusion_stencil stencil;
   stencil.setup<CGAL::Parallel_if_available_tag>(points, samples, 6);
   ASSERT_GT(*std::max_element(stencil.samples.indices.begin(), stencil.samples.indices.end()), 65535);
@@ -214,8 +219,7 @@ TEST(DiffusionStencil, PackedRecordsMoveThePointsAsTheRowsDoPastSixtyFiveThousan
 TEST(DiffusionStencil, PointsWhoseSamplePointsStayKeepTheirBits)
 {
   const Matrix_n3 samples = random_samples(50, 7), points = random_samples(300, 8);
-  Matrix_n3 normals = random_samples(300, 9);
-  normals.rowwise().normalize();
+  const Matrix_n3 normals = random_normals(300, 9);
   Diffusion_stencil stencil;
   stencil.setup<CGAL::Sequential_tag>(points, samples, 4);
   // Sample point 0 moves; every point that does not have it in its stencil keeps its position and normal exactly.
@@ -244,8 +248,7 @@ TEST(DiffusionStencil, TheWidePathComputesWhatThePortableOneDoes)
   // a subset of the points; the two paths differ by the rounding of fused multiply-adds only.
   const std::size_t count = 80, n = 2000;
   const Matrix_n3 samples = random_samples(count, 10), points = random_samples(n, 11);
-  Matrix_n3 normals = random_samples(n, 12), moved = samples + 0.05 * random_samples(count, 13);
-  normals.rowwise().normalize();
+  Matrix_n3 normals = random_normals(n, 12), moved = samples + 0.05 * random_samples(count, 13);
   normals.row(3).setZero(); // a point without a normal keeps none (no division by zero)
   std::vector<Eigen::Matrix3d> map(count);
   std::mt19937 rng(14);

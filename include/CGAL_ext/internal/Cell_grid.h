@@ -57,8 +57,7 @@ public:
       if(i > 0 && key[i] == key[i - 1]) {
         cell_of[i] = cell_of[i - 1];
       } else {
-        std::size_t s = slot(key[i]);
-        while(m_slot_key[s] != key[i] && m_slot_key[s] != empty_key) s = (s + 1) & (capacity - 1);
+        const std::size_t s = probe(key[i]);
         if(m_slot_key[s] == empty_key) {
           m_slot_key[s] = key[i];
           m_slot_cell[s] = int(m_cell_key.size());
@@ -148,14 +147,15 @@ private:
   {
     return std::uint64_t(c[0]) | (std::uint64_t(c[1]) << axis_bits) | (std::uint64_t(c[2]) << (2 * axis_bits));
   }
-  // Fibonacci hashing: the product's top bits, which every bit of the key reaches.
-  std::size_t slot(std::uint64_t key) const { return std::size_t((key * 0x9E3779B97F4A7C15ull) >> m_slot_shift); }
-  int find(std::uint64_t key) const
+  // The slot that holds `key`, or the empty one where it would go: from its Fibonacci hash (the product's top
+  // bits, which every bit of the key reaches) on.
+  std::size_t probe(std::uint64_t key) const
   {
-    for(std::size_t s = slot(key); m_slot_key[s] != empty_key; s = (s + 1) & (m_slot_key.size() - 1))
-      if(m_slot_key[s] == key) return m_slot_cell[s];
-    return -1;
+    std::size_t s = std::size_t((key * 0x9E3779B97F4A7C15ull) >> m_slot_shift);
+    while(m_slot_key[s] != key && m_slot_key[s] != empty_key) s = (s + 1) & (m_slot_key.size() - 1);
+    return s;
   }
+  int find(std::uint64_t key) const { return m_slot_cell[probe(key)]; } // -1 in an empty slot
 
   Eigen::RowVector3d m_origin;
   double m_size = 0, m_inverse = 0, m_margin = 0;

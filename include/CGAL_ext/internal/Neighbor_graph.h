@@ -364,11 +364,16 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
     std::iota(unanswered.begin(), unanswered.end(), 0);
   }
   progress.stage(whole.at(0.95), whole.end);
+  std::unique_ptr<Position_tree> built; // only where some row needs it
+  const auto tree = [&]() -> const Position_tree& {
+    if(!built) built = std::make_unique<Position_tree>(positions, ConcurrencyTag());
+    return *built;
+  };
   if(!unanswered.empty()) {
-    const Position_tree tree(positions, ConcurrencyTag());
+    const Position_tree& search = tree();
     if(!for_each_index<ConcurrencyTag>(unanswered.size(), progress, [&](std::size_t t) {
          thread_local std::vector<Ranked_row> ball;
-         tree.nearest_ball(std::size_t(unanswered[t]), k, ball);
+         search.nearest_ball(std::size_t(unanswered[t]), k, ball);
          keep(std::size_t(unanswered[t]), ball);
        }))
       return {};
@@ -376,11 +381,11 @@ Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t 
   progress.stage(whole.begin, whole.end);
   if(pile.load() < n) {
     const std::size_t i = pile.load();
-    const Position_tree tree(positions, ConcurrencyTag());
+    const Position_tree& search = tree();
     std::vector<Ranked_row> ball;
-    tree.nearest_ball(i, k, ball);
-    const Position_tree::Point& p = tree[i];
-    const Position_tree::Point& tied_with = tree[std::size_t(ball[k - 1].second)];
+    search.nearest_ball(i, k, ball);
+    const Position_tree::Point& p = search[i];
+    const Position_tree::Point& tied_with = search[std::size_t(ball[k - 1].second)];
     std::ostringstream os;
     os << ball.size() << " points lie within the distance of the " << k << "-th nearest neighbour of the point ("
        << p.x() << ", " << p.y() << ", " << p.z() << "), (" << tied_with.x() << ", " << tied_with.y() << ", "
