@@ -262,8 +262,20 @@ PYBIND11_MODULE(_core, m)
         "numpy.ndarray\n    (n, 3) float64, a new array.")
       .c_str());
 
+  m.def("record_layout", &record_layout, "path"_a,
+        doc("Where the points of a binary PCD or a LAS file are, for mapping the file instead of reading it (the "
+            "tiled runs): the header checked as read_points checks it.",
+            {"path : str or os.PathLike\n    A .pcd (binary) or .las file."},
+            "dict\n    points, data_offset, record_bytes; fields: (name, byte offset in a record, kind and bytes such "
+            "as 'f4', 'i4', 'u2') of each single-valued field; coordinates and normals (field names, normals None "
+            "when absent); scale and shift (coordinate = field * scale + shift).",
+            false)
+          .append("\nRaises\n------\nValueError\n    Another format, an ASCII or compressed PCD, or a header the "
+                  "readers refuse.\n")
+          .c_str());
   m.def("read_points", &read_points, "path"_a,
-        doc("Reads a PLY, OFF, XYZ or PWN point set with the point-detail program's readers: the header is checked "
+        doc("Reads a PLY, OFF, XYZ, PWN, PCD, PTS, PTX or LAS point set with the point-detail program's readers "
+            "(doc/python.md lists what each keeps): the header is checked "
             "before anything is allocated, and a file larger than the memory, truncated or malformed is refused with "
             "the program's message (doc/bad_input.md); non-finite coordinates of a binary file are read as they are "
             "(the algorithms refuse them). A mesh's normals are its faces' area-weighted vertex normals.",
@@ -271,8 +283,8 @@ PYBIND11_MODULE(_core, m)
             "PointSet\n    (points (n, 3) float64, normals (n, 3) or None, properties: dict of the other per-point "
             "properties, float64 (n,) each, colours as 'colors' (n, 3) uint8).",
             false)
-            .append("\nRaises\n------\nFileNotFoundError\n    No such file.\nValueError\n    A file the readers "
-                    "refuse, with their message.\n")
+          .append("\nRaises\n------\nFileNotFoundError\n    No such file.\nValueError\n    A file the readers "
+                  "refuse, with their message.\n")
           .c_str());
   m.def("write_ply", &write_ply, "path"_a, "points"_a, "normals"_a = py::none(), "colors"_a = py::none(), py::kw_only(),
         "input_path"_a = py::none(),

@@ -9,7 +9,8 @@ source scripts/stage_timing.sh
 seconds=${1:-30}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_point_reader fuzz_ply fuzz_off fuzz_edit_json fuzz_sel_def fuzz_region_spec fuzz_neighborhoods)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_point_reader fuzz_ply fuzz_off fuzz_pcd fuzz_pts_ptx fuzz_las fuzz_edit_json fuzz_sel_def fuzz_region_spec
+  fuzz_neighborhoods)
 build=${SANITIZE_BUILD_DIR:-build-sanitize}
 # The targets are part of the sanitized build: after scripts/run_sanitized_tests.sh there is nothing to build.
 fuzz_build() { bash scripts/sanitized_build.sh "${targets[@]}"; }

@@ -20,7 +20,7 @@ if [ "${1:-}" != program ]; then
     python3-venv python3-build python3-mypy python3-setuptools python3-wheel python3-pip
     python3-aiohttp libjs-three chromium chromium-driver python3-selenium
     python3-scipy python3-dask python3-distributed python3-zarr
-    cloudcompare
+    cloudcompare python3-open3d
   )
 fi
 

@@ -66,7 +66,9 @@ Subcommand add_curvature_command(CLI::App& app, const Common_options& common)
   auto command = std::make_shared<Curvature_command>();
   Curvature_command& curvature = *command;
   CLI::App* curvature_app = app.add_subcommand("curvature", "signed mean curvature of every point (jet fitting), as a PLY property and a colour map");
-  curvature_app->add_option("-i,--input", curvature.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  curvature_app
+    ->add_option("-i,--input", curvature.input, "input points (.ply, .off, .xyz, .pwn, .pcd, .pts, .ptx, .las)")
+    ->required();
   curvature_app->add_option("-o,--output", curvature.output, "output binary PLY with mean_curvature and colours")->required();
   add_neighbor_count_option(*curvature_app, curvature.k, "degree-2 fit", 5);
   add_setting_option(*curvature_app, "--fitting", curvature.fitting,

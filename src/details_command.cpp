@@ -39,7 +39,8 @@ Subcommand add_details_command(CLI::App& app, const Common_options& common)
   auto command = std::make_shared<Details_command>();
   Details_command& details = *command;
   CLI::App* details_app = app.add_subcommand("details", "geometric details of every point, as PLY properties and a colour map");
-  details_app->add_option("-i,--input", details.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  details_app->add_option("-i,--input", details.input, "input points (.ply, .off, .xyz, .pwn, .pcd, .pts, .ptx, .las)")
+    ->required();
   details_app->add_option("-o,--output", details.output, "output binary PLY")->required();
   details_app->add_option("--png", details.png, "also render the colour map on the base surface");
   details_app->add_option("--color-by", details.detail.color_by, "colour map (and PLY colours): detail_normal (delta . n, the "

@@ -129,7 +129,7 @@ struct Edit_command
     Progress_printer progress(common.quiet);
     Report rep("edit");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::edit); });
+    Point_cloud cloud = read_input(input, bytes_per_point::edit, rep);
     if(cloud.points.size() < 2) throw Cli_error(input + " has fewer than 2 points");
     std::vector<Edit_step> chain;
     if(edit.empty()) {
@@ -192,7 +192,8 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
   auto command = std::make_shared<Edit_command>();
   Edit_command& edit = *command;
   CLI::App* edit_app = app.add_subcommand("edit", "detail-preserving editing by handles on simplification sample points (paper Sect. 6)");
-  edit_app->add_option("-i,--input", edit.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  edit_app->add_option("-i,--input", edit.input, "input points (.ply, .off, .xyz, .pwn, .pcd, .pts, .ptx, .las)")
+    ->required();
   edit_app->add_option("-o,--output", edit.output, "output binary PLY: deformed points and normals, displacement, status, ssp_index")->required();
   auto* edit_json = edit_app->add_option("--edit", edit.edit, "edit description (JSON: roi, handles with transforms, settings; doc/editing.md)");
   auto* edit_sel = edit_app->add_option("--sel", edit.sel, "Botsch-Sorkine selection: one status per point (0 fixed, 1 deformable, 2 handle)");

@@ -120,7 +120,8 @@ std::vector<Subcommand> add_manipulate_commands(CLI::App& app, const Common_opti
     "small details, use enhance");
   CLI::App* enhance_app = app.add_subcommand("enhance", "enhance the details against the balanced-flow base surface (paper Sect. 4.2)");
   for(auto [sub, command] : {std::pair{scale_app, &scale}, std::pair{enhance_app, &enhance}}) {
-    sub->add_option("-i,--input", command->input, "input points (.ply, .off, .xyz, .pwn)")->required();
+    sub->add_option("-i,--input", command->input, "input points (.ply, .off, .xyz, .pwn, .pcd, .pts, .ptx, .las)")
+      ->required();
     sub->add_option("-o,--output", command->output, "output binary PLY: moved points, their normals (re-fitted where they moved), displacement, in_roi")->required();
     sub->add_option("-s,--factor", command->factor, "scale factor s (1: unchanged)")->required();
     auto* roi_option = sub->add_option("--roi", command->roi,

@@ -226,26 +226,6 @@ void Output_files::commit()
   m_files.clear();
 }
 
-std::ifstream open_input(const fs::path& path, std::ios::openmode mode)
-{
-  std::error_code ec;
-  if(!fs::exists(path, ec)) throw Cli_error("cannot read " + path.string() + ": no such file");
-  if(!fs::is_regular_file(path, ec)) throw Cli_error("cannot read " + path.string() + ": not a regular file");
-  std::ifstream in(path, mode);
-  if(!in) throw Cli_error("cannot read " + path.string() + ": permission denied");
-  return in;
-}
-
-void write_file(const fs::path& path, const std::string& bytes)
-{
-  std::ofstream out(path, std::ios::binary);
-  errno = 0;
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  out.close();
-  if(!out)
-    throw Cli_error("cannot write " + path.string() + ": " + (errno != 0 ? std::strerror(errno) : "disk full or not writable?"));
-}
-
 Report::Report(std::string command)
 {
   m_json["command"] = std::move(command);

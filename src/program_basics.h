@@ -1,9 +1,11 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-// What a run of point-detail needs, whatever its subcommand: errors, the process set-up, Ctrl-C, progress,
-// whole-or-nothing output files, reports.
+// What a run of point-detail needs, whatever its subcommand: the process set-up, Ctrl-C, progress,
+// whole-or-nothing output files, reports (errors and file access: the I/O layer's files.h).
 #ifndef POINT_DETAIL_PROGRAM_BASICS_H
 #define POINT_DETAIL_PROGRAM_BASICS_H
+
+#include "files.h"
 
 #include <nlohmann/json.hpp>
 
@@ -16,12 +18,6 @@
 #include <vector>
 
 namespace point_detail {
-
-/// A problem the user can fix (bad file, bad option): printed as one line, exit code 1.
-struct Cli_error : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
 
 /// Thrown when Ctrl-C or a callback stopped the run: nothing is written, exit code 130.
 struct Cancelled : std::runtime_error
@@ -92,13 +88,6 @@ private:
   std::vector<std::filesystem::path> m_inputs;
   std::vector<std::pair<std::filesystem::path, std::filesystem::path>> m_files; // temporary, destination
 };
-
-/// Opens an input file for reading, or throws Cli_error: missing, not a regular file (a device such as
-/// /dev/zero would never end), or unreadable.
-std::ifstream open_input(const std::filesystem::path& path, std::ios::openmode mode = std::ios::in);
-
-/// Writes `bytes` to `path` or throws Cli_error.
-void write_file(const std::filesystem::path& path, const std::string& bytes);
 
 /// Stage timings and counts for `--report`.
 class Report

@@ -20,7 +20,7 @@ struct Render_command
     render.view = parse_view(view);
     Report rep("render");
     rep.data()["input"] = input;
-    Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes_per_point::render); });
+    Point_cloud cloud = read_input(input, bytes_per_point::render, rep);
     rep.data()["points"] = cloud.points.size();
     if(cloud.points.size() >= 6) { // shaded pictures: normals from the points when the file has none
       Progress_printer progress(common.quiet);

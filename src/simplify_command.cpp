@@ -96,7 +96,9 @@ Subcommand add_simplify_command(CLI::App& app, const Common_options& common)
   auto command = std::make_shared<Simplify_command>();
   Simplify_command& simplify = *command;
   CLI::App* simplify_app = app.add_subcommand("simplify", "simplification sample points: clusters split until small and of one mean-shift mode (paper Sect. 5)");
-  simplify_app->add_option("-i,--input", simplify.input, "input points (.ply, .off, .xyz, .pwn)")->required();
+  simplify_app
+    ->add_option("-i,--input", simplify.input, "input points (.ply, .off, .xyz, .pwn, .pcd, .pts, .ptx, .las)")
+    ->required();
   simplify_app->add_option("-o,--output", simplify.output, "output binary PLY of the SSP surfels: position, normal, radius, member_count")->required();
   simplify.max_cluster_size_option = simplify_app->add_option("--max-cluster-size", simplify.max_cluster_size,
     "largest number of points per SSP (default: ceil(points / target))");

@@ -52,9 +52,22 @@ fs::path add_if_given(Output_files& outputs, const std::string& destination)
   return destination.empty() ? fs::path() : outputs.add(destination);
 }
 
-Point_cloud read_for_neighbors(const std::string& input, unsigned int k, std::uint64_t bytes, Report& rep)
+Point_cloud read_input(const std::string& input, std::uint64_t bytes, Report& rep)
 {
   Point_cloud cloud = rep.time("read", [&] { return read_point_cloud(input, bytes); });
+  if(cloud.points_without_position > 0) {
+    rep.data()["points_without_position"] = cloud.points_without_position;
+    std::fprintf(stderr,
+                 "point-detail: note: %zu points of %s have no position (NaN in a PCD file, 0 0 0 in a PTX file) "
+                 "and are left out; the outputs hold the other points in file order\n",
+                 cloud.points_without_position, input.c_str());
+  }
+  return cloud;
+}
+
+Point_cloud read_for_neighbors(const std::string& input, unsigned int k, std::uint64_t bytes, Report& rep)
+{
+  Point_cloud cloud = read_input(input, bytes, rep);
   if(cloud.points.size() <= k)
     throw Cli_error(input + " has " + std::to_string(cloud.points.size()) + " points: -k " + std::to_string(k) +
                     " needs more than k points");

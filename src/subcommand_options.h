@@ -123,6 +123,9 @@ constexpr std::uint64_t upsample = 512;  // 400
 constexpr std::uint64_t render = 416;    // 185 with normals; estimating them, as curvature
 } // namespace bytes_per_point
 
+/// Reads `input` (Report stage "read"), noting on stderr and in the report the points the file gives no position.
+Point_cloud read_input(const std::string& input, std::uint64_t bytes, Report& rep);
+
 /// Reads `input` (timed in the report), asking the machine for `bytes` per point, and checks that it has more
 /// than `k` points.
 Point_cloud read_for_neighbors(const std::string& input, unsigned int k, std::uint64_t bytes, Report& rep);

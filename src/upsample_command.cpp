@@ -53,7 +53,8 @@ Subcommand add_upsample_command(CLI::App& app, const Common_options& common)
   auto command = std::make_shared<Upsample_command>();
   Upsample_command& upsample = *command;
   CLI::App* upsample_app = app.add_subcommand("upsample", "fill holes and stretched parts with new samples, relaxed on the surface (paper Sect. 6.3)");
-  upsample_app->add_option("-i,--input", upsample.input, "input points with normals (.ply, .off, .xyz, .pwn)")->required();
+  upsample_app->add_option("-i,--input", upsample.input, "input points with normals (.ply, .off, .xyz, .pwn, .pcd)")
+    ->required();
   upsample_app->add_option("-o,--output", upsample.output, "output binary PLY: the input, then the new points (inserted = 1)")->required();
   upsample_app->add_option("--spacing", upsample.spacing, "target spacing everywhere (0: each point's local spacing, so that only what is sparse for its surroundings is filled)")->capture_default_str();
   upsample_app->add_option("--max-hole-size", upsample.settings.detection.max_hole_size, "widest gap filled, in spacings (open borders are never grown)")->capture_default_str();

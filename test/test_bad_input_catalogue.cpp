@@ -11,6 +11,7 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
+#include "las_test_file.h"
 #include "program_run.h"
 #include "test_support.h"
 
@@ -20,7 +21,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -193,6 +196,58 @@ std::vector<std::array<double, 3>> sphere_coordinates(std::size_t n)
   std::vector<std::array<double, 3>> out;
   for(const Point& p : s.points) out.push_back({p.x(), p.y(), p.z()});
   return out;
+}
+
+/// A PCD file of x y z floats: its header (POINTS, WIDTH 1 unless `header_lines` replaces the lines after TYPE)
+/// and `data`.
+std::string pcd_file(const std::string& kind, std::size_t points, const std::string& data,
+                     const std::string& header_lines = "")
+{
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n" +
+         (header_lines.empty()
+            ? "WIDTH " + std::to_string(points) + "\nHEIGHT 1\nPOINTS " + std::to_string(points) + "\n"
+            : header_lines) +
+         "DATA " + kind + "\n" + data;
+}
+
+std::string binary_xyz_floats(const std::vector<std::array<double, 3>>& points)
+{
+  std::string bytes;
+  for(const auto& p : points)
+    for(double c : p) {
+      const float f = float(c);
+      bytes.append(reinterpret_cast<const char*>(&f), sizeof f);
+    }
+  return bytes;
+}
+
+/// A LAS 1.`minor` file of point format `format` (records of `record_bytes`, 0 for the format's own size) holding
+/// `points` at a scale of 0.001; only the coordinates are set.
+std::string las_file(unsigned minor, unsigned format, const std::vector<std::array<double, 3>>& points,
+                     std::uint16_t record_bytes = 0)
+{
+  std::string las = las_test_file::header(minor, format, points.size(), record_bytes);
+  const std::size_t bytes = record_bytes == 0 ? std::size_t(point_detail::las_format_bytes(format)) : record_bytes;
+  for(const auto& p : points) {
+    std::string record(bytes, '\0');
+    for(std::size_t axis = 0; axis < 3; ++axis) {
+      const std::int32_t v = std::int32_t(std::lround(p[axis] / 0.001));
+      std::memcpy(&record[4 * axis], &v, sizeof v);
+    }
+    las += record;
+  }
+  return las;
+}
+
+/// A PTX scan of the points, seen from the origin without transform.
+std::string ptx_scan(const std::vector<std::array<double, 3>>& points,
+                     const std::string& last_transform_row = "0 0 0 1")
+{
+  std::string text = "1\n" + std::to_string(points.size()) +
+                     "\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n" + last_transform_row + "\n";
+  for(const auto& p : points)
+    text += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + " 0.5\n";
+  return text;
 }
 
 const char* const edit_json_sphere = R"({"handles": [{"select": ["sphere:0,0,1,0.3"], "translation": [0, 0, 0.2]}]})";
@@ -619,6 +674,102 @@ const std::vector<Row>& catalogue()
        w.expect_failure("edit -i " + in + " -o " + w.path("o.ply") + " --sel " + w.write("s.sel", sel) + " --def " +
                           w.write("d.def", "1 0 0\n0 1 0\n0 0 1\n"),
                         "holds 9 numbers");
+     }},
+    {"cli_pcd_truncated_binary", [] {
+       Workspace w;
+       const std::string in = w.write("cut.pcd", pcd_file("binary", 400, binary_xyz_floats(sphere_coordinates(100))));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "truncated pcd file (the header announces 400 points");
+     }},
+    {"cli_pcd_corrupted_compressed", [] {
+       // Sizes that fit the file, LZF data that do not decompress to them.
+       Workspace w;
+       std::string data;
+       for(std::uint32_t v : {64u, 400u * 12u}) data.append(reinterpret_cast<const char*>(&v), sizeof v);
+       data += std::string(64, '\xe0');
+       const std::string in = w.write("bad.pcd", pcd_file("binary_compressed", 400, data));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "corrupted pcd file");
+     }},
+    {"cli_pcd_malformed_header", [] {
+       Workspace w;
+       const std::string run = "details -o " + w.path("o.ply") + " -i ", points = ascii_xyz(sphere_coordinates(400));
+       w.expect_failure(run + w.write("a.pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4\nTYPE F F F\nPOINTS 400\nDATA ascii\n" + points),
+                        "FIELDS, SIZE, TYPE and COUNT name 3, 2, 3 and 0 fields");
+       w.expect_failure(run + w.write("b.pcd", "FIELDS x y intensity\nSIZE 4 4 4\nTYPE F F F\nPOINTS 400\nDATA ascii\n" + points),
+                        "the fields need x, y and z");
+       w.expect_failure(run + w.write("c.pcd", pcd_file("ascii", 400, points, "WIDTH 20\nHEIGHT 10\nPOINTS 400\n")),
+                        "POINTS 400 is not WIDTH x HEIGHT (20 x 10)");
+       w.expect_failure(run + w.write("d.pcd", pcd_file("lzma", 400, points)), "DATA is ascii, binary or binary_compressed");
+     }},
+    {"cli_pcd_ascii_wrong_value_count", [] {
+       Workspace w;
+       std::string points = ascii_xyz(sphere_coordinates(400));
+       points.insert(points.find('\n', 100) + 1, "0.5 0.5\n");
+       const std::string in = w.write("bad.pcd", pcd_file("ascii", 401, points));
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "has 2 values, the fields need 3");
+     }},
+    {"cli_pcd_points_without_position", [] {
+       // An organised cloud's missing measurements (x y z all NaN) are left out, with a note; a point with one NaN
+       // coordinate is an error of the library, naming it.
+       Workspace w;
+       auto points = sphere_coordinates(400);
+       for(std::size_t i = 0; i < 400; i += 40) points[i] = {nan, nan, nan};
+       const std::string header = "WIDTH 20\nHEIGHT 20\nPOINTS 400\n";
+       const Program_run r = run("details -i " + w.write("holes.pcd", pcd_file("binary", 400, binary_xyz_floats(points), header)) +
+                                 " -o " + w.path("o.ply"));
+       EXPECT_EQ(r.exit_code, 0) << r.output;
+       EXPECT_NE(r.output.find("10 points of"), std::string::npos) << r.output;
+       EXPECT_NE(file_bytes(w.path("o.ply")).find("element vertex 390\n"), std::string::npos);
+       points[0] = {0.0, nan, 1.0};
+       w.expect_failure("details -i " + w.write("nan.pcd", pcd_file("binary", 400, binary_xyz_floats(points), header)) + " -o " +
+                          w.path("p.ply"),
+                        "non-finite coordinate");
+     }},
+    {"cli_pts_malformed", [] {
+       Workspace w;
+       const std::string run = "details -o " + w.path("o.ply") + " -i ", points = ascii_xyz(sphere_coordinates(300));
+       w.expect_failure(run + w.write("cut.pts", "400\n" + points), "truncated pts file (a block announces 400 points, 300 follow)");
+       w.expect_failure(run + w.write("mixed.pts", "301\n" + points + "1 2 3 4\n"), "cannot read " + w.path("mixed.pts") + ":302: this line has 4 values, the file's first point 3");
+       w.expect_failure(run + w.write("huge.pts", "1000000000\n" + points), "announces 1000000000 points, more than its");
+       w.expect_failure(run + w.write("word.pts", "300\n" + points.substr(0, 40) + "x" + points.substr(40)), "is not a number");
+     }},
+    {"cli_ptx_malformed", [] {
+       Workspace w;
+       const std::string run = "details -o " + w.path("o.ply") + " -i ";
+       const std::string scan = ptx_scan(sphere_coordinates(300));
+       w.expect_failure(run + w.write("cut.ptx", scan.substr(0, scan.rfind('\n', scan.size() / 2) + 1)), "truncated ptx file (scan 1 announces 300 points");
+       w.expect_failure(run + w.write("bent.ptx", ptx_scan(sphere_coordinates(300), "0 0 0 2")), "the transform is not an affine map");
+       w.expect_failure(run + w.write("short.ptx", "1\n2\n0 0 0\n1 0 0\n"), "the scan's header ends before a scanner axis");
+     }},
+    {"cli_las_compressed", [] {
+       // LAZ, by its extension or by the bit LASzip sets in the point format, gets the way to decompress it.
+       Workspace w;
+       const std::string run = "details -o " + w.path("o.ply") + " -i ";
+       std::string las = las_file(2, 0, sphere_coordinates(400));
+       w.expect_failure(run + w.write("scan.laz", las), "decompress it first, e.g. `laszip -i scan.laz -o scan.las`");
+       las[104] = char(0x80 | 3);
+       w.expect_failure(run + w.write("scan.las", las), "LAZ (compressed LAS) is not read");
+     }},
+    {"cli_las_truncated", [] {
+       Workspace w;
+       const std::string las = las_file(4, 7, sphere_coordinates(400));
+       w.expect_failure("details -i " + w.write("cut.las", las.substr(0, las.size() - 100)) + " -o " + w.path("o.ply"),
+                        "truncated las file (the header announces 400 points of 36 bytes");
+       w.expect_failure("details -i " + w.write("head.las", las.substr(0, 200)) + " -o " + w.path("o.ply"),
+                        "the header alone needs 227");
+     }},
+    {"cli_las_inconsistent_header", [] {
+       Workspace w;
+       const std::string run = "details -o " + w.path("o.ply") + " -i ";
+       const auto points = sphere_coordinates(400);
+       w.expect_failure(run + w.write("a.las", las_file(2, 6, points)), "point format 6 needs LAS 1.4, the file says 1.2");
+       w.expect_failure(run + w.write("b.las", las_file(2, 3, points, 30)), "records of 30 bytes; point format 3 needs at least 34");
+       std::string zero_scale = las_file(3, 1, points);
+       std::memset(&zero_scale[139], 0, 8);
+       w.expect_failure(run + w.write("c.las", zero_scale), "the scale not zero");
+       w.expect_failure(run + w.write("d.las", "LASX" + las_file(2, 0, points).substr(4)), "not a LAS file");
+       std::string version = las_file(2, 0, points);
+       version[25] = 5;
+       w.expect_failure(run + w.write("e.las", version), "LAS version 1.5 (1.0 to 1.4 are read)");
      }},
     {"cli_output_is_input", [] {
        Workspace w;

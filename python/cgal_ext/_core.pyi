@@ -1,7 +1,7 @@
 # Types of the compiled extension cgal_ext._core, for type checkers and editors (checked against the extension by
 # mypy's stubtest in the test command). The defaults shown at run time by help() are the C++ settings' own.
 import os
-from typing import Any, Callable, NamedTuple, Optional, Tuple, Union, overload
+from typing import Any, Callable, Dict, NamedTuple, Optional, Tuple, Union, overload
 
 import numpy
 import numpy.typing
@@ -57,6 +57,7 @@ def compute_local_spacing(points: numpy.typing.ArrayLike) -> numpy.ndarray: ...
 def refit_normals(points: numpy.typing.ArrayLike, normals: numpy.typing.ArrayLike, moved: numpy.typing.ArrayLike, *,
                   k: int = ...) -> numpy.ndarray: ...
 def read_points(path: _Path) -> PointSet: ...
+def record_layout(path: _Path) -> Dict[str, Any]: ...
 def write_ply(path: _Path, points: numpy.typing.ArrayLike, normals: Optional[numpy.typing.ArrayLike] = ...,
               colors: Optional[numpy.typing.ArrayLike] = ..., *, input_path: Optional[_Path] = ...,
               **scalars: numpy.typing.ArrayLike) -> None: ...

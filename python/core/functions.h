@@ -286,6 +286,30 @@ Point_set_result read_points(const Path_like& path_object)
                                                                     normals, properties);
 }
 
+/// The record layout of a binary PCD or LAS file (point_detail::record_layout) as a dict, for the tiled runs'
+/// memory maps.
+py::dict record_layout(const Path_like& path_object)
+{
+  const fs::path path = path_of(path_object, "path");
+  const point_detail::Record_layout layout =
+    translating_program_errors([&] { return point_detail::record_layout(path); });
+  py::list fields;
+  for(const auto& f : layout.fields)
+    fields.append(py::make_tuple(f.name, f.offset, std::string(1, f.kind) + std::to_string(f.bytes)));
+  py::dict out;
+  out["points"] = layout.points;
+  out["data_offset"] = layout.data_offset;
+  out["record_bytes"] = layout.record_bytes;
+  out["fields"] = fields;
+  out["coordinates"] = py::make_tuple(layout.coordinates[0], layout.coordinates[1], layout.coordinates[2]);
+  out["normals"] = layout.normals[0].empty()
+                     ? py::object(py::none())
+                     : py::object(py::make_tuple(layout.normals[0], layout.normals[1], layout.normals[2]));
+  out["scale"] = py::make_tuple(layout.scale[0], layout.scale[1], layout.scale[2]);
+  out["shift"] = py::make_tuple(layout.shift[0], layout.shift[1], layout.shift[2]);
+  return out;
+}
+
 /// The points and normals as the program holds them (its writer and renderer take them so).
 point_detail::Point_cloud program_cloud(const Point_input& input)
 {

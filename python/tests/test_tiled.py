@@ -232,6 +232,38 @@ def test_bad_inputs_get_clear_errors(scan, client, tmp_path):
     assert time.monotonic() - started < 30
 
 
+def test_binary_pcd_and_las_are_mapped_as_the_program_reads_them(scan, client, tmp_path):
+    """The tiled runs map a binary PCD (x y z and normals as floats, a padding field between) and a LAS file
+    (integers, scale and offset) at the record layout of the I/O layer; the details equal the one-process call on
+    the points read_points reads."""
+    from test_formats import OFFSET, SCALE, las_file, las_points
+    points, normals = scan.small_points[:30_000], scan.small_normals[:30_000]
+    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("_", "<u4"), ("normal_x", "<f4"), ("normal_y", "<f4"),
+              ("normal_z", "<f4")]
+    records = np.zeros(len(points), dtype=fields)
+    for name, column in zip(("x", "y", "z", "normal_x", "normal_y", "normal_z"), np.hstack([points, normals]).T):
+        records[name] = column
+    header = ("VERSION 0.7\nFIELDS x y z _ normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4 4\nTYPE F F F U F F F\n"
+              f"COUNT 1 1 1 1 1 1 1\nWIDTH {len(points)}\nHEIGHT 1\nPOINTS {len(points)}\nDATA binary\n")
+    (tmp_path / "scan.pcd").write_bytes(header.encode() + records.tobytes())
+    las_fields = las_points(1, len(points))
+    las_fields["ints"] = np.round((points * 100 - OFFSET) / SCALE).astype(np.int64)
+    las_file(tmp_path / "scan.las", 1, las_fields, minor=4)
+    for name in ("scan.pcd", "scan.las"):
+        read = cgal_ext.read_points(tmp_path / name)
+        tiled.run("details", tmp_path / name, tmp_path / (name + ".ply"), client=client, tiles=4)
+        out = read_output(tmp_path / (name + ".ply"))
+        assert np.array_equal(columns(out, "xyz"), read.points), name
+        if read.normals is None:
+            continue
+        assert np.array_equal(columns(out, ("nx", "ny", "nz")), read.normals)
+        magnitude = cgal_ext.compute_geometric_details(read.points, read.normals)[1]
+        assert np.abs(out["detail_magnitude"] - magnitude).max() <= 1e-12
+    with pytest.raises(tiled.TiledError, match="ascii PCD file, whose points cannot be mapped"):
+        (tmp_path / "text.pcd").write_text(header.replace("binary", "ascii") + "0 0 0 0 0 0 1\n" * len(points))
+        tiled.run("details", tmp_path / "text.pcd", tmp_path / "out.ply", client=client)
+
+
 def test_the_command_line_runs_on_its_own_cluster(scan, tmp_path):
     command = [sys.executable, "-m", "cgal_ext.tiled", "curvature", str(scan.small), "-o", str(tmp_path / "c.ply"),
                "--workers", "2", "--tiles", "4", "-k", "12", "--report", str(tmp_path / "r.json")]

@@ -173,7 +173,7 @@ class Session:
         for dirpath, dirnames, filenames in os.walk(self.root):
             dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
             for f in sorted(filenames):
-                if f.lower().endswith((".ply", ".off", ".xyz", ".pwn")):
+                if f.lower().endswith((".ply", ".off", ".xyz", ".pwn", ".pcd", ".pts", ".ptx", ".las")):
                     found.append(str(pathlib.Path(dirpath, f).relative_to(self.root)))
                     if len(found) >= 1000:
                         return found

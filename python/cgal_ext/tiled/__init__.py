@@ -1,5 +1,6 @@
 """Tiled runs on Dask distributed for scans larger than one machine's memory: details, normals, curvature and
-enhancement of a binary PLY (read by memory map) or a Zarr group, written tile by tile to PLY or Zarr.
+enhancement of a binary PLY, binary PCD or LAS file (read by memory map) or a Zarr group, written tile by tile
+to PLY or Zarr.
 
     from cgal_ext import tiled
     report = tiled.run("details", "scan.ply", "details.zarr", order="cubic")
@@ -33,7 +34,8 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     operation : {"details", "normals", "curvature", "enhance"}
         What to compute; the output holds the fields of the program's PLY for that subcommand.
     input : path
-        A binary PLY file (memory-mapped) or a Zarr group with 1-D arrays x, y, z (and nx, ny, nz).
+        A binary PLY, binary PCD or LAS file (memory-mapped) or a Zarr group with 1-D arrays x, y, z (and nx,
+        ny, nz).
     output : path
         OUT.ply or OUT.zarr; written under a temporary name and renamed when complete. Never the input.
     scheduler : str, optional

@@ -12,13 +12,15 @@ def parser():
     main = argparse.ArgumentParser(
         prog="python3 -m cgal_ext.tiled",
         description="Details, normals, curvature or enhancement of a scan larger than memory, tile by tile on Dask. "
-                    "The input is a binary PLY (memory-mapped) or a Zarr group; the output OUT.ply or OUT.zarr holds "
-                    "the fields of the program's PLY for the same subcommand and is written whole or not at all.")
+                    "The input is a binary PLY, binary PCD or LAS file (memory-mapped) or a Zarr group; the output "
+                    "OUT.ply or OUT.zarr holds the fields of the program's PLY for the same subcommand and is written "
+                    "whole or not at all.")
     commands = main.add_subparsers(dest="operation", required=True, metavar="OPERATION")
 
     def command(name, help_text):
         sub = commands.add_parser(name, help=help_text, description=help_text)
-        sub.add_argument("input", metavar="INPUT", help="binary PLY or Zarr group (x, y, z; nx, ny, nz if any)")
+        sub.add_argument("input", metavar="INPUT",
+                         help="binary PLY, binary PCD, LAS or Zarr group (x, y, z; nx, ny, nz if any)")
         sub.add_argument("-o", "--output", required=True, help="OUT.ply or OUT.zarr")
         engine = sub.add_argument_group("engine")
         engine.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster)")

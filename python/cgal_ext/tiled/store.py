@@ -1,4 +1,5 @@
-"""Where the tiled runs read and write points: binary PLY by memory map and Zarr groups, row ranges at a time.
+"""Where the tiled runs read and write points: binary PLY, binary PCD and LAS by memory map and Zarr groups, row
+ranges at a time.
 
 A source never loads its file whole: `rows(a, b)` reads one row range at a time. A PLY file is mapped for the
 call only: pages of a mapping that stays open count in the worker's resident memory, which Dask's memory limit
@@ -30,9 +31,12 @@ def open_source(path):
         raise TiledError(f"{path}: no such file or directory")
     if path.is_dir():
         return ZarrSource(path)
+    if path.suffix.lower() in (".pcd", ".las", ".laz"):
+        return RecordSource(path)
     if path.suffix.lower() != ".ply":
-        raise TiledError(f"{path}: the tiled runs read binary PLY (by memory map) or a Zarr group, not "
-                         f"'{path.suffix}' files; convert it with `point-detail render` or cgal_ext.write_ply")
+        raise TiledError(f"{path}: the tiled runs read binary PLY, binary PCD and LAS (by memory map) or a Zarr "
+                         f"group, not '{path.suffix}' files; convert it with `point-detail render` or "
+                         "cgal_ext.write_ply")
     return PlySource(path)
 
 
@@ -115,6 +119,46 @@ class PlySource:
     def normals(self, begin, end):
         """The normals of rows [begin, end), float64 (n, 3); None when the scan has none."""
         return self._columns(self._records(begin, end), ("nx", "ny", "nz")) if self.has_normals else None
+
+
+class RecordSource:
+    """A binary PCD or LAS file's points, read by memory map at the offsets the I/O layer's header check gives
+    (cgal_ext._core.record_layout): LAS coordinates are the records' integers times the scale plus the shift."""
+
+    def __init__(self, path):
+        from .. import _core
+        self.path = str(Path(path).resolve())
+        try:
+            layout = _core.record_layout(self.path)
+        except ValueError as error:
+            raise TiledError(str(error)) from None
+        self.count, self.offset = layout["points"], layout["data_offset"]
+        fields = {name: (offset, kind) for name, offset, kind in layout["fields"]}
+        used = list(layout["coordinates"]) + list(layout["normals"] or ())
+        self.dtype = np.dtype({"names": used, "formats": ["<" + fields[n][1] for n in used],
+                               "offsets": [fields[n][0] for n in used], "itemsize": layout["record_bytes"]})
+        self.coordinate_names, self.normal_names = layout["coordinates"], layout["normals"]
+        self.scale, self.shift = np.array(layout["scale"]), np.array(layout["shift"])
+        self.has_normals = self.normal_names is not None
+
+    def _records(self, begin, end):
+        records = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
+        part = np.array(records[begin:end])
+        del records  # unmapped: its pages leave the resident set
+        return part
+
+    def coordinates(self, begin, end):
+        points = PlySource._columns(self._records(begin, end), self.coordinate_names) * self.scale + self.shift
+        # The program leaves out a PCD point whose x, y and z are all NaN; a tiled run cannot drop rows.
+        missing = np.flatnonzero(np.isnan(points).all(axis=1))
+        if len(missing):
+            raise TiledError(f"{self.path}: point {begin + missing[0]} has no position (x, y and z NaN); the tiled "
+                             "runs need every row to be a point: write the scan without them first (point-detail "
+                             "leaves them out of its PLY outputs)")
+        return points
+
+    def normals(self, begin, end):
+        return PlySource._columns(self._records(begin, end), self.normal_names) if self.has_normals else None
 
 
 class ZarrSource:

@@ -2,8 +2,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "point_io.h"
 
-#include "program_basics.h"
-#include "guarded_reading.h"
+#include "files.h"
+#include "las_format.h"
+#include "off_format.h"
+#include "pcd_format.h"
+#include "ply_format.h"
+#include "pts_format.h"
 
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Point_set_3.h>
@@ -38,13 +42,6 @@ void Point_cloud::set_scalar(const std::string& name, std::vector<double> values
 }
 
 namespace {
-
-std::string lower_extension(const fs::path& path)
-{
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext.empty() ? ext : ext.substr(1);
-}
 
 std::size_t count_zero(const std::vector<Vector>& normals)
 {
@@ -105,44 +102,19 @@ bool copy_scalar(CGAL::Point_set_3<Point, Vector>& ps, const std::string& name, 
   return true;
 }
 
-/// The points (and normals) of a plain binary PLY (Announced::plain_vertices), read in one piece: an order of
-/// magnitude faster than CGAL's generic reader, with the same values (doc/hardening.md measures it).
-template <typename Value>
-Point_cloud read_plain_ply(const fs::path& path, const Announced& header)
-{
-  const std::size_t n = std::size_t(header.vertices), per_point = header.plain_normals ? 6 : 3;
-  std::vector<Value> values(n * per_point);
-  std::ifstream in(path, std::ios::binary);
-  in.seekg(std::streamoff(header.header_bytes));
-  in.read(reinterpret_cast<char*>(values.data()), std::streamsize(values.size() * sizeof(Value)));
-  if(std::size_t(in.gcount()) != values.size() * sizeof(Value))
-    throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " + std::to_string(n) +
-                    " points)");
-  Point_cloud cloud;
-  cloud.points.reserve(n);
-  for(std::size_t i = 0; i < n; ++i) {
-    const Value* v = &values[i * per_point];
-    cloud.points.emplace_back(double(v[0]), double(v[1]), double(v[2]));
-  }
-  if(header.plain_normals) {
-    cloud.normals.reserve(n);
-    for(std::size_t i = 0; i < n; ++i) {
-      const Value* v = &values[i * per_point + 3];
-      cloud.normals.emplace_back(double(v[0]), double(v[1]), double(v[2]));
-    }
-    cloud.normal_source = "file";
-  }
-  return cloud;
-}
-
 } // namespace
 
 Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point)
 {
   open_input(path, std::ios::binary);
   const std::string ext = lower_extension(path);
+  if(ext == "pcd") return read_pcd(path, bytes_per_point);
+  if(ext == "pts") return read_pts(path, bytes_per_point);
+  if(ext == "ptx") return read_ptx(path, bytes_per_point);
+  if(ext == "las" || ext == "laz") return read_las(path, bytes_per_point);
   if(ext != "ply" && ext != "off" && ext != "xyz" && ext != "pwn")
-    throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use .ply, .off, .xyz or .pwn)");
+    throw Cli_error("cannot read " + path.string() + ": unsupported extension '." + ext + "' (use " +
+                    supported_extensions + ")");
 
   if(ext == "off") {
     Off_file off = read_off(path, bytes_per_point);
@@ -162,8 +134,7 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
 
   const Announced header = ext == "ply" ? check_ply_header(path, bytes_per_point) : Announced();
   const std::uint64_t announced = header.vertices;
-  if(header.plain_vertices && announced > 0)
-    return header.plain_value_bytes == 8 ? read_plain_ply<double>(path, header) : read_plain_ply<float>(path, header);
+  if(header.plain_vertices && announced > 0) return read_plain_ply(path, header);
   CGAL::Point_set_3<Point, Vector> ps;
   bool ok = false;
   try {
@@ -212,44 +183,46 @@ Point_cloud read_point_cloud(const fs::path& path, std::uint64_t bytes_per_point
   return cloud;
 }
 
-namespace {
-template <typename T>
-void append(std::string& out, T value)
+Record_layout record_layout(const fs::path& path)
 {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T)); // the machine is little-endian (x86_64, aarch64)
-  out.append(bytes, sizeof(T));
-}
-} // namespace
-
-std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix)
-{
-  const std::size_t n = cloud.points.size();
-  std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment written by point-detail\nelement vertex " << n << "\n"
-         << "property double x\nproperty double y\nproperty double z\n";
-  if(!cloud.normals.empty()) header << "property double nx\nproperty double ny\nproperty double nz\n";
-  for(const auto& s : cloud.scalars) {
-    const bool prefixed = s.first.compare(0, scalar_prefix.size(), scalar_prefix) == 0;
-    header << "property double " << (prefixed ? "" : scalar_prefix) << s.first << "\n";
-  }
-  if(!cloud.colors.empty()) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  header << "end_header\n";
-  std::string out = header.str();
-  out.reserve(out.size() + n * (24 + (cloud.normals.empty() ? 0 : 24) + 8 * cloud.scalars.size() + 3));
-  for(std::size_t i = 0; i < n; ++i) {
-    append(out, cloud.points[i].x());
-    append(out, cloud.points[i].y());
-    append(out, cloud.points[i].z());
-    if(!cloud.normals.empty()) {
-      append(out, cloud.normals[i].x());
-      append(out, cloud.normals[i].y());
-      append(out, cloud.normals[i].z());
+  open_input(path, std::ios::binary);
+  const std::string ext = lower_extension(path);
+  Record_layout layout;
+  if(ext == "pcd") {
+    const Pcd_header h = check_pcd_header(path, 1);
+    if(h.data != "binary")
+      throw Cli_error(path.string() + " is a " + h.data +
+                      " PCD file, whose points cannot be mapped; binary PCD, LAS and "
+                      "binary PLY can (rewrite it with `point-detail render` or cgal_ext.write_ply)");
+    layout.points = h.points;
+    layout.data_offset = h.header_bytes;
+    layout.record_bytes = h.record_bytes;
+    std::uint64_t at = 0;
+    for(const Pcd_field& f : h.fields) {
+      if(f.count == 1 && f.name != "_")
+        layout.fields.push_back({f.name, at, f.type == 'F' ? 'f' : f.type == 'I' ? 'i' : 'u', f.size});
+      at += std::uint64_t(f.size) * f.count;
     }
-    for(const auto& s : cloud.scalars) append(out, s.second[i]);
-    if(!cloud.colors.empty()) out.append(reinterpret_cast<const char*>(cloud.colors[i].data()), 3);
+    layout.coordinates = {"x", "y", "z"};
+    const bool with_normals = std::any_of(layout.fields.begin(), layout.fields.end(),
+                                          [](const Record_layout::Field& f) { return f.name == "normal_x"; });
+    if(with_normals) layout.normals = {"normal_x", "normal_y", "normal_z"};
+    return layout;
   }
-  return out;
+  if(ext == "las" || ext == "laz") {
+    const Las_header h = check_las_header(path, 1);
+    layout.points = h.points;
+    layout.data_offset = h.point_offset;
+    layout.record_bytes = h.record_bytes;
+    layout.fields = {{"X", 0, 'i', 4}, {"Y", 4, 'i', 4}, {"Z", 8, 'i', 4}, {"intensity", 12, 'u', 2}};
+    layout.coordinates = {"X", "Y", "Z"};
+    for(int axis = 0; axis < 3; ++axis) {
+      layout.scale[std::size_t(axis)] = h.scale[axis];
+      layout.shift[std::size_t(axis)] = h.offset[axis];
+    }
+    return layout;
+  }
+  throw Cli_error("cannot map " + path.string() + ": only binary PCD and LAS files are read by record layout");
 }
 
 } // namespace point_detail

@@ -5,7 +5,7 @@
 #ifndef POINT_DETAIL_EDIT_SPEC_H
 #define POINT_DETAIL_EDIT_SPEC_H
 
-#include "program_basics.h"
+#include "files.h"
 #include "point_io.h"
 
 #include <CGAL_ext/Detail_filter.h>

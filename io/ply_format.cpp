@@ -1,12 +1,10 @@
 // Copyright (c) 2026 The CGAL_ext authors.
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "guarded_reading.h"
+#include "ply_format.h"
 
-#include "program_basics.h"
+#include "files.h"
 
 #include <algorithm>
-#include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -18,126 +16,6 @@
 
 namespace point_detail {
 namespace fs = std::filesystem;
-namespace {
-
-/// Available memory in bytes (MemAvailable of /proc/meminfo), or 0 when it cannot be read.
-std::uint64_t available_memory()
-{
-  std::ifstream meminfo("/proc/meminfo");
-  std::string key;
-  std::uint64_t kib = 0;
-  std::string unit;
-  while(meminfo >> key >> kib >> unit)
-    if(key == "MemAvailable:") return kib * 1024;
-  return 0;
-}
-
-std::string gibibytes(double bytes)
-{
-  std::ostringstream os;
-  os.precision(bytes < 1024.0 * 1024 * 1024 * 10 ? 2 : 0);
-  os << std::fixed << bytes / (1024.0 * 1024 * 1024) << " GiB";
-  return os.str();
-}
-
-/// Fails early, before any reader allocates, for a file that announces more points than this machine's memory
-/// can process at `bytes_per_point`.
-void check_memory_for(const fs::path& path, std::uint64_t points, std::uint64_t bytes_per_point)
-{
-  const std::uint64_t available = available_memory();
-  if(available > 0 && points > available / bytes_per_point)
-    throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(points) +
-                    " points, which need about " + gibibytes(double(points) * bytes_per_point) +
-                    " of memory; this machine has " + gibibytes(double(available)) + " available");
-}
-
-} // namespace
-
-Off_file read_off(const fs::path& path, std::uint64_t bytes_per_point)
-{
-  std::ifstream in = open_input(path);
-  const std::string name = path.string();
-  std::size_t line_number = 0;
-  std::vector<std::string> tokens;
-  // The next line with content, comments ('#' to the end of the line) removed, split at blanks.
-  auto next_line = [&]() {
-    std::string line;
-    while(std::getline(in, line)) {
-      ++line_number;
-      line = line.substr(0, line.find('#'));
-      std::istringstream words(line);
-      tokens.clear();
-      for(std::string word; words >> word;) tokens.push_back(word);
-      if(!tokens.empty()) return true;
-    }
-    return false;
-  };
-  auto where = [&]() { return name + ":" + std::to_string(line_number) + ": "; };
-  auto real = [&](const std::string& token) {
-    char* end = nullptr;
-    const double value = std::strtod(token.c_str(), &end);
-    if(end != token.c_str() + token.size()) throw Cli_error(where() + "'" + token + "' is not a number");
-    return value;
-  };
-  auto count = [&](const std::string& token, const char* what) {
-    char* end = nullptr;
-    errno = 0;
-    const long long value = std::strtoll(token.c_str(), &end, 10);
-    if(end != token.c_str() + token.size() || errno == ERANGE || value < 0)
-      throw Cli_error(where() + "'" + token + "' is not a " + what);
-    return std::uint64_t(value);
-  };
-
-  if(!next_line()) throw Cli_error(name + " contains no points");
-  const std::string keyword = tokens[0];
-  const std::size_t off_at = keyword.rfind("OFF");
-  if(off_at == std::string::npos || off_at + 3 != keyword.size())
-    throw Cli_error(where() + "not an OFF file (it starts with '" + keyword + "')");
-  const std::string prefix = keyword.substr(0, off_at);
-  if(prefix.find('4') != std::string::npos || prefix.find('n') != std::string::npos)
-    throw Cli_error(where() + keyword + " (4D or n-dimensional OFF) is not supported");
-  for(char c : prefix)
-    if(c != 'S' && c != 'T' && c != 'C' && c != 'N') throw Cli_error(where() + "unknown OFF variant '" + keyword + "'");
-  const bool with_normals = prefix.find('N') != std::string::npos;
-  tokens.erase(tokens.begin());
-  if(!tokens.empty() && tokens[0] == "BINARY")
-    throw Cli_error(where() + "binary OFF is not supported; convert it to PLY");
-  if(tokens.empty() && !next_line()) throw Cli_error(name + ": the header has no vertex count");
-  const std::uint64_t vertex_count = count(tokens[0], "vertex count");
-  const std::uint64_t face_count = tokens.size() > 1 ? count(tokens[1], "face count") : 0;
-  check_memory_for(path, vertex_count, bytes_per_point);
-
-  Off_file off;
-  const std::size_t per_vertex = with_normals ? 6 : 3;
-  for(std::uint64_t v = 0; v < vertex_count; ++v) {
-    if(!next_line())
-      throw Cli_error("cannot read " + name + ": truncated off file (the header announces " + std::to_string(vertex_count) +
-                      " points, " + std::to_string(v) + " were read)");
-    if(tokens.size() < per_vertex)
-      throw Cli_error(where() + "a vertex needs " + std::to_string(per_vertex) + " numbers, this line has " +
-                      std::to_string(tokens.size()));
-    off.vertices.emplace_back(real(tokens[0]), real(tokens[1]), real(tokens[2]));
-    if(with_normals) off.normals.emplace_back(real(tokens[3]), real(tokens[4]), real(tokens[5]));
-  }
-  // Faces give the vertex normals when the file has none; a file cut short in its faces loses only them.
-  for(std::uint64_t f = 0; f < face_count && next_line(); ++f) {
-    const std::uint64_t corners = count(tokens[0], "corner count");
-    if(tokens.size() < corners + 1)
-      throw Cli_error(where() + "a face of " + std::to_string(corners) + " corners has " +
-                      std::to_string(tokens.size() - 1) + " indices");
-    std::vector<std::size_t> face;
-    for(std::uint64_t c = 1; c <= corners; ++c) {
-      const std::uint64_t index = count(tokens[c], "vertex index");
-      if(index >= vertex_count)
-        throw Cli_error(where() + "vertex index " + tokens[c] + " is out of range (" + std::to_string(vertex_count) +
-                        " vertices)");
-      face.push_back(std::size_t(index));
-    }
-    off.faces.push_back(std::move(face));
-  }
-  return off;
-}
-
 namespace {
 
 Ply_scalar ply_scalar(const std::string& type)
@@ -188,11 +66,8 @@ Announced ply_announced(std::istream& in, const std::string& name)
     ++line_number;
     if(!line.empty() && line.back() == '\r') line.pop_back();
     // CGAL's reader cuts names at a NUL byte ("x\0" is x), and the duplicate check below could not see that.
-    if(std::any_of(line.begin(), line.end(), [](unsigned char c) { return (c < 0x20 && c != '\t') || c == 0x7f; }))
-      fail("a control character in the header");
-    std::istringstream words(line);
     std::vector<std::string> w;
-    for(std::string word; words >> word;) w.push_back(word);
+    if(!header_words(line, w)) fail("a control character in the header");
     if(line_number == 1) {
       if(line != "ply") fail("a PLY file starts with the line 'ply'");
       continue;
@@ -291,48 +166,6 @@ bool ascii_ply_value(const std::string& token, const Ply_scalar& type)
   return v <= highest && v >= (type.is_signed ? -highest - 1 : 0);
 }
 
-/// Sequential reads and skips over a stream through a large buffer: a binary PLY walk visits every record, and
-/// an istream call per field would cost more than the reading it guards.
-class Buffered_bytes
-{
-public:
-  explicit Buffered_bytes(std::istream& in) : m_in(in), m_buffer(std::size_t(1) << 20) {}
-
-  bool read(unsigned char* out, std::size_t n)
-  {
-    for(; n > 0; --n) {
-      if(m_at == m_end && !refill()) return false;
-      *out++ = static_cast<unsigned char>(m_buffer[m_at++]);
-    }
-    return true;
-  }
-
-  /// Skips n bytes; false if the stream ends first.
-  bool skip(std::uint64_t n)
-  {
-    while(n > 0) {
-      if(m_at == m_end && !refill()) return false;
-      const std::size_t step = std::size_t(std::min<std::uint64_t>(n, m_end - m_at));
-      m_at += step;
-      n -= step;
-    }
-    return true;
-  }
-
-private:
-  bool refill()
-  {
-    m_in.read(m_buffer.data(), std::streamsize(m_buffer.size()));
-    m_at = 0;
-    m_end = std::size_t(m_in.gcount());
-    return m_end > 0;
-  }
-
-  std::istream& m_in;
-  std::vector<char> m_buffer;
-  std::size_t m_at = 0, m_end = 0;
-};
-
 /// Walks the elements of a PLY file up to its last list property and checks that every list's count fits in what
 /// the file holds. CGAL's reader resizes a list to its count and reads that many values even past the end of the
 /// file (a count of 2^31 in a small file kept it looping), and once an ASCII value fails to read, it takes the
@@ -409,6 +242,84 @@ Announced check_ply_header(const fs::path& path, std::uint64_t bytes_per_point)
                     " bytes, the file holds " + std::to_string(size - a.header_bytes) + " after its header)");
   if(!ec) check_ply_lists(in, a, size, path.string());
   return a;
+}
+
+namespace {
+
+template <typename Value>
+Point_cloud read_plain_values(const fs::path& path, const Announced& header)
+{
+  const std::size_t n = std::size_t(header.vertices), per_point = header.plain_normals ? 6 : 3;
+  std::vector<Value> values(n * per_point);
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(header.header_bytes));
+  in.read(reinterpret_cast<char*>(values.data()), std::streamsize(values.size() * sizeof(Value)));
+  if(std::size_t(in.gcount()) != values.size() * sizeof(Value))
+    throw Cli_error("cannot read " + path.string() + ": truncated ply file (the header announces " + std::to_string(n) +
+                    " points)");
+  Point_cloud cloud;
+  cloud.points.reserve(n);
+  for(std::size_t i = 0; i < n; ++i) {
+    const Value* v = &values[i * per_point];
+    cloud.points.emplace_back(double(v[0]), double(v[1]), double(v[2]));
+  }
+  if(header.plain_normals) {
+    cloud.normals.reserve(n);
+    for(std::size_t i = 0; i < n; ++i) {
+      const Value* v = &values[i * per_point + 3];
+      cloud.normals.emplace_back(double(v[0]), double(v[1]), double(v[2]));
+    }
+    cloud.normal_source = "file";
+  }
+  return cloud;
+}
+
+} // namespace
+
+Point_cloud read_plain_ply(const fs::path& path, const Announced& header)
+{
+  return header.plain_value_bytes == 8 ? read_plain_values<double>(path, header)
+                                       : read_plain_values<float>(path, header);
+}
+
+namespace {
+template <typename T>
+void append(std::string& out, T value)
+{
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T)); // the machine is little-endian (x86_64, aarch64)
+  out.append(bytes, sizeof(T));
+}
+} // namespace
+
+std::string ply_bytes(const Point_cloud& cloud, const std::string& scalar_prefix)
+{
+  const std::size_t n = cloud.points.size();
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\ncomment written by point-detail\nelement vertex " << n << "\n"
+         << "property double x\nproperty double y\nproperty double z\n";
+  if(!cloud.normals.empty()) header << "property double nx\nproperty double ny\nproperty double nz\n";
+  for(const auto& s : cloud.scalars) {
+    const bool prefixed = s.first.compare(0, scalar_prefix.size(), scalar_prefix) == 0;
+    header << "property double " << (prefixed ? "" : scalar_prefix) << s.first << "\n";
+  }
+  if(!cloud.colors.empty()) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  header << "end_header\n";
+  std::string out = header.str();
+  out.reserve(out.size() + n * (24 + (cloud.normals.empty() ? 0 : 24) + 8 * cloud.scalars.size() + 3));
+  for(std::size_t i = 0; i < n; ++i) {
+    append(out, cloud.points[i].x());
+    append(out, cloud.points[i].y());
+    append(out, cloud.points[i].z());
+    if(!cloud.normals.empty()) {
+      append(out, cloud.normals[i].x());
+      append(out, cloud.normals[i].y());
+      append(out, cloud.normals[i].z());
+    }
+    for(const auto& s : cloud.scalars) append(out, s.second[i]);
+    if(!cloud.colors.empty()) out.append(reinterpret_cast<const char*>(cloud.colors[i].data()), 3);
+  }
+  return out;
 }
 
 } // namespace point_detail

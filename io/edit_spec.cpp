@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "edit_spec.h"
 
-#include "program_basics.h"
+#include "files.h"
 #include "region_spec.h"
 
 #include <CGAL/number_type_config.h>
