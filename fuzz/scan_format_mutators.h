@@ -48,8 +48,9 @@ inline std::vector<std::string>* pcd_line(Pcd_file& pcd, const char* key)
   return nullptr;
 }
 
-/// LZF data that decompress to `bytes`: runs of literals (what a compressor writes for data it cannot shorten),
-/// and now and then a back reference that repeats the byte before.
+/// LZF data as long as `bytes` once decompressed: runs of literals (what a compressor writes for data it cannot
+/// shorten) and now and then a back reference of any length (2 + 1 to 7, or longer with the extra length byte)
+/// and any distance, now and then one that reaches before the start or past the end.
 inline std::string lzf_literals(const std::string& bytes, Random& random)
 {
   std::string out;
@@ -58,10 +59,14 @@ inline std::string lzf_literals(const std::string& bytes, Random& random)
     out += char(run - 1);
     out += bytes.substr(at, run);
     at += run;
-    if(at < bytes.size() && one_in(random, 4)) { // a reference of length 3 at distance 1 (may run past the end)
-      out += char(1 << 5);
-      out += char(0);
-      at += 3;
+    if(at < bytes.size() && one_in(random, 4)) {
+      const std::size_t length = 3 + below(random, one_in(random, 2) ? 6 : 262); // 3 to 8 in ctrl, to 264 beyond
+      const std::size_t distance = 1 + below(random, std::min<std::size_t>(at + (one_in(random, 16) ? 2 : 0), 8192));
+      const std::size_t short_length = std::min<std::size_t>(length - 2, 7);
+      out += char((short_length << 5) | ((distance - 1) >> 8));
+      if(short_length == 7) out += char(length - 9);
+      out += char((distance - 1) & 0xff);
+      at += length;
     }
   }
   return out;

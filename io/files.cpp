@@ -51,6 +51,13 @@ bool header_words(std::string line, std::vector<std::string>& words)
   return true;
 }
 
+bool whole_number(const std::string& token, std::uint64_t& value)
+{
+  if(token.empty() || token.size() > 18 || token.find_first_not_of("0123456789") != std::string::npos) return false;
+  value = std::stoull(token);
+  return true;
+}
+
 std::string lower_extension(const fs::path& path)
 {
   std::string ext = path.extension().string();
@@ -84,6 +91,7 @@ std::string gibibytes(double bytes)
 
 void check_memory_for(const fs::path& path, std::uint64_t points, std::uint64_t bytes_per_point)
 {
+  if(bytes_per_point == 0) return;
   const std::uint64_t available = available_memory();
   if(available > 0 && points > available / bytes_per_point)
     throw Cli_error("cannot read " + path.string() + ": it announces " + std::to_string(points) +

@@ -31,12 +31,15 @@ void write_file(const std::filesystem::path& path, const std::string& bytes);
 std::uint64_t file_bytes(const std::filesystem::path& path);
 
 /// Fails early, before any reader allocates, for a file that announces more points than this machine's memory
-/// can process at `bytes_per_point`.
+/// can process at `bytes_per_point` (0: no check, for a file that is mapped rather than read).
 void check_memory_for(const std::filesystem::path& path, std::uint64_t points, std::uint64_t bytes_per_point);
 
 /// The words of a line of a text header (PLY, PCD), its '\r' dropped; false when the line holds a control
 /// character (a NUL byte in a name would read differently in each reader).
 bool header_words(std::string line, std::vector<std::string>& words);
+
+/// `token` as a count: decimal digits only, at most 18 of them; false otherwise.
+bool whole_number(const std::string& token, std::uint64_t& value);
 
 /// The extension of `path` in lower case, without its dot.
 std::string lower_extension(const std::filesystem::path& path);

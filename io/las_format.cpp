@@ -116,11 +116,11 @@ Las_header check_las_header(const fs::path& path, std::uint64_t bytes_per_point)
   if(las.point_offset < header_size)
     fail("the point records start inside the header (offset " + std::to_string(las.point_offset) + ")");
   if(las.points == 0) throw Cli_error(name + " contains no points");
-  check_memory_for(path, las.points, bytes_per_point);
   const std::uint64_t left = size > las.point_offset ? size - las.point_offset : 0;
   if(las.points > left / las.record_bytes)
     fail("truncated las file (the header announces " + std::to_string(las.points) + " points of " +
          std::to_string(las.record_bytes) + " bytes, the file holds " + std::to_string(left) + " bytes of records)");
+  check_memory_for(path, las.points, bytes_per_point);
   return las;
 }
 
@@ -152,7 +152,7 @@ Point_cloud read_las(const fs::path& path, std::uint64_t bytes_per_point)
     if(format <= 5) {
       return_number[i] = r[14] & 7;
       returns[i] = (r[14] >> 3) & 7;
-      classification[i] = r[15] & 31;
+      classification[i] = las.version_minor == 0 ? r[15] : r[15] & 31; // LAS 1.0: the whole byte
     } else {
       return_number[i] = r[14] & 15;
       returns[i] = r[14] >> 4;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <unordered_set>
 
 namespace point_detail {
 namespace fs = std::filesystem;
@@ -45,6 +46,9 @@ bool lzf_decompress(const unsigned char* in, std::size_t in_size, std::vector<un
 
 namespace {
 
+/// Fields a header may name (each value of every point is read into memory as a double).
+constexpr std::size_t max_fields = 4096;
+
 /// One value of `field` from its little-endian bytes.
 double decode(const unsigned char* bytes, const Pcd_field& field)
 {
@@ -60,15 +64,11 @@ double decode(const unsigned char* bytes, const Pcd_field& field)
       std::memcpy(&v, bytes, 8);
       return v;
     }
-  case 'U': {
+  default: { // 'I' and 'U': little-endian, sign-extended for 'I'
     std::uint64_t v = 0;
     for(unsigned i = 0; i < field.size; ++i) v |= std::uint64_t(bytes[i]) << (8 * i);
-    return double(v);
-  }
-  default: {
-    std::uint64_t v = 0;
-    for(unsigned i = 0; i < field.size; ++i) v |= std::uint64_t(bytes[i]) << (8 * i);
-    if(field.size < 8 && (v >> (8 * field.size - 1)) != 0) v |= ~std::uint64_t(0) << (8 * field.size); // sign
+    if(field.type == 'U') return double(v);
+    if(field.size < 8 && (v >> (8 * field.size - 1)) != 0) v |= ~std::uint64_t(0) << (8 * field.size);
     return double(std::int64_t(v));
   }
   }
@@ -133,10 +133,14 @@ Pcd_header check_pcd_header(const fs::path& path, std::uint64_t bytes_per_point)
     throw Cli_error("cannot read " + name + ": malformed pcd header (line " + std::to_string(line_number) + ": " +
                     what + ")");
   };
+  // After the header's lines, a problem is no line's.
+  auto bad = [&](const std::string& what) {
+    throw Cli_error("cannot read " + name + ": malformed pcd header (" + what + ")");
+  };
   auto whole = [&](const std::string& token) {
-    if(token.empty() || token.size() > 18 || token.find_first_not_of("0123456789") != std::string::npos)
-      fail("'" + token + "' is not a count");
-    return std::uint64_t(std::stoull(token));
+    std::uint64_t value = 0;
+    if(!whole_number(token, value)) fail("'" + token + "' is not a count");
+    return value;
   };
   std::vector<std::string> names, sizes, types, counts;
   std::uint64_t width = 0, height = 0;
@@ -179,56 +183,79 @@ Pcd_header check_pcd_header(const fs::path& path, std::uint64_t bytes_per_point)
     } else
       fail("unknown or malformed line '" + key + "'");
   }
-  if(h.data.empty()) throw Cli_error("cannot read " + name + ": malformed pcd header (no DATA line)");
-  if(names.empty()) fail("no FIELDS line");
+  if(h.data.empty()) bad("no DATA line");
+  if(names.empty()) bad("no FIELDS line");
   if(sizes.size() != names.size() || types.size() != names.size() || (!counts.empty() && counts.size() != names.size()))
-    fail("FIELDS, SIZE, TYPE and COUNT name " + std::to_string(names.size()) + ", " + std::to_string(sizes.size()) +
-         ", " + std::to_string(types.size()) + " and " + std::to_string(counts.size()) + " fields");
+    bad("FIELDS, SIZE, TYPE and COUNT name " + std::to_string(names.size()) + ", " + std::to_string(sizes.size()) +
+        ", " + std::to_string(types.size()) + " and " + std::to_string(counts.size()) + " fields");
+  if(names.size() > max_fields)
+    bad(std::to_string(names.size()) + " fields (at most " + std::to_string(max_fields) + ")");
+  std::unordered_set<std::string> seen;
   for(std::size_t i = 0; i < names.size(); ++i) {
     Pcd_field f;
     f.name = names[i];
-    const std::uint64_t size = whole(sizes[i]);
+    std::uint64_t size = 0, count = 1;
+    if(!whole_number(sizes[i], size) || (size != 1 && size != 2 && size != 4 && size != 8))
+      bad("field '" + f.name + "' has size " + sizes[i] + " (1, 2, 4 or 8)");
     if(types[i].size() != 1 || std::string("IUF").find(types[i][0]) == std::string::npos)
-      fail("field '" + f.name + "' has type '" + types[i] + "' (I, U or F)");
+      bad("field '" + f.name + "' has type '" + types[i] + "' (I, U or F)");
     f.type = types[i][0];
-    if(size != 1 && size != 2 && size != 4 && size != 8)
-      fail("field '" + f.name + "' has size " + sizes[i] + " (1, 2, 4 or 8)");
     if(f.type == 'F' && size != 4 && size != 8)
-      fail("floating-point field '" + f.name + "' has size " + sizes[i] + " (4 or 8)");
+      bad("floating-point field '" + f.name + "' has size " + sizes[i] + " (4 or 8)");
     f.size = unsigned(size);
-    const std::uint64_t count = counts.empty() ? 1 : whole(counts[i]);
-    if(count == 0 || count > 4096) fail("field '" + f.name + "' has count " + counts[i] + " (1 to 4096)");
+    if(!counts.empty() && (!whole_number(counts[i], count) || count == 0 || count > 4096))
+      bad("field '" + f.name + "' has count " + counts[i] + " (1 to 4096)");
     f.count = unsigned(count);
-    for(const Pcd_field& other : h.fields)
-      if(other.name == f.name && f.name != "_") fail("field '" + f.name + "' appears twice");
+    if(f.name != "_" && !seen.insert(f.name).second) bad("field '" + f.name + "' appears twice");
+    f.offset = h.record_bytes;
     h.fields.push_back(f);
     h.record_bytes += size * count;
   }
   const Field_roles roles = roles_of(h.fields);
-  if(roles.x < 0 || roles.y < 0 || roles.z < 0) fail("the fields need x, y and z");
+  if(roles.x < 0 || roles.y < 0 || roles.z < 0) bad("the fields need x, y and z");
   if((roles.nx >= 0 || roles.ny >= 0 || roles.nz >= 0) && (roles.nx < 0 || roles.ny < 0 || roles.nz < 0))
-    fail("the normals need normal_x, normal_y and normal_z");
+    bad("the normals need normal_x, normal_y and normal_z");
+  if(has_width && has_height && width != 0 && height > ~std::uint64_t(0) / width) bad("WIDTH x HEIGHT is too large");
   if(!has_points) {
-    if(!has_width) fail("no POINTS line and no WIDTH");
+    if(!has_width) bad("no POINTS line and no WIDTH");
     h.points = width * (has_height ? height : 1);
   }
-  if(has_width && has_height) {
-    if(width != 0 && height > ~std::uint64_t(0) / width) fail("WIDTH x HEIGHT is too large");
-    if(h.points != width * height)
-      fail("POINTS " + std::to_string(h.points) + " is not WIDTH x HEIGHT (" + std::to_string(width) + " x " +
-           std::to_string(height) + ")");
-  }
+  if(has_width && has_height && h.points != width * height)
+    bad("POINTS " + std::to_string(h.points) + " is not WIDTH x HEIGHT (" + std::to_string(width) + " x " +
+        std::to_string(height) + ")");
   if(h.points == 0) throw Cli_error(name + " contains no points");
+
+  // What the file holds, before the memory and before anything is allocated.
+  const std::uint64_t size = file_bytes(path), left = size - std::min(size, h.header_bytes);
   std::uint64_t values_per_point = 0;
   for(const Pcd_field& f : h.fields) values_per_point += f.count;
-  check_memory_for(path, h.points, bytes_per_point + 16 * values_per_point); // read_pcd holds every value twice
-  const std::uint64_t size = file_bytes(path), left = size - std::min(size, h.header_bytes);
-  // Binary: the records; compressed: two sizes; ASCII: two characters per value.
-  const std::uint64_t per_point = h.data == "binary" ? h.record_bytes : 2 * values_per_point;
-  if(h.data == "binary_compressed" ? left < 8 : h.points > left / per_point)
+  auto truncated = [&](const std::string& what) {
     throw Cli_error("cannot read " + name + ": truncated pcd file (the header announces " + std::to_string(h.points) +
-                    " points of " + std::to_string(h.record_bytes) + " bytes, the file holds " + std::to_string(left) +
-                    " bytes after its header)");
+                    " points, " + what + "; the file holds " + std::to_string(left) + " bytes after its header)");
+  };
+  if(h.data == "binary" && h.points > left / h.record_bytes)
+    truncated("records of " + std::to_string(h.record_bytes) + " bytes");
+  // ASCII: at least one character and a separator per value (the last line's newline may be missing).
+  if(h.data == "ascii" && h.points > (left + 1) / (2 * values_per_point))
+    truncated(std::to_string(values_per_point) + " values each");
+  if(h.data == "binary_compressed") {
+    unsigned char sizes_bytes[8];
+    in.clear();
+    in.seekg(std::streamoff(h.header_bytes));
+    if(left < 8 || !in.read(reinterpret_cast<char*>(sizes_bytes), 8)) truncated("its compressed sizes missing");
+    std::memcpy(&h.compressed_bytes, sizes_bytes, 4);
+    std::memcpy(&h.uncompressed_bytes, sizes_bytes + 4, 4);
+    if(h.compressed_bytes > left - 8) truncated(std::to_string(h.compressed_bytes) + " bytes of compressed data");
+    // LZF writes at most 264 bytes from 3 (its longest back reference), so 88 times its data at most.
+    if(h.points > std::uint64_t(0xffffffffu) / h.record_bytes || h.uncompressed_bytes != h.points * h.record_bytes ||
+       h.uncompressed_bytes > 88 * std::uint64_t(h.compressed_bytes))
+      throw Cli_error("cannot read " + name + ": corrupted pcd file (" + std::to_string(h.compressed_bytes) +
+                      " compressed bytes said to hold " + std::to_string(h.uncompressed_bytes) + "; the header's " +
+                      std::to_string(h.points) + " points of " + std::to_string(h.record_bytes) + " bytes need " +
+                      std::to_string(h.points * h.record_bytes) + ")");
+  }
+  if(bytes_per_point > 0)
+    check_memory_for(path, h.points, bytes_per_point + 16 * values_per_point); // every value twice
   return h;
 }
 
@@ -238,10 +265,6 @@ Point_cloud read_pcd(const fs::path& path, std::uint64_t bytes_per_point)
   const std::string name = path.string();
   const Field_roles roles = roles_of(h.fields);
   const std::size_t n = std::size_t(h.points);
-  std::vector<std::uint64_t> offset(h.fields.size()); // of each field in a record
-  for(std::size_t i = 1; i < h.fields.size(); ++i)
-    offset[i] = offset[i - 1] + std::uint64_t(h.fields[i - 1].size) * h.fields[i - 1].count;
-
   // Every value of every point as a double, point by point (a packed colour keeps its 32 bits).
   std::vector<std::uint64_t> first_value(h.fields.size());
   for(std::size_t i = 1; i < h.fields.size(); ++i) first_value[i] = first_value[i - 1] + h.fields[i - 1].count;
@@ -302,27 +325,15 @@ Point_cloud read_pcd(const fs::path& path, std::uint64_t bytes_per_point)
       if(!bytes.read(record.data(), record.size())) throw Cli_error("cannot read " + name + ": truncated pcd file");
       for(std::size_t field = 0; field < h.fields.size(); ++field)
         for(unsigned c = 0; c < h.fields[field].count; ++c)
-          store(point, field, c, record.data() + offset[field] + std::size_t(c) * h.fields[field].size);
+          store(point, field, c, record.data() + h.fields[field].offset + std::size_t(c) * h.fields[field].size);
     }
   } else {
-    unsigned char sizes[8];
-    in.read(reinterpret_cast<char*>(sizes), 8);
-    std::uint32_t compressed, uncompressed;
-    std::memcpy(&compressed, sizes, 4);
-    std::memcpy(&uncompressed, sizes + 4, 4);
-    const std::uint64_t left = file_bytes(path) - h.header_bytes - 8;
-    if(compressed > left)
-      throw Cli_error("cannot read " + name + ": truncated pcd file (" + std::to_string(compressed) +
-                      " compressed bytes announced, " + std::to_string(left) + " in the file)");
-    if(uncompressed != h.points * h.record_bytes)
-      throw Cli_error("cannot read " + name + ": corrupted pcd file (" + std::to_string(uncompressed) +
-                      " bytes once decompressed, the header's points need " +
-                      std::to_string(h.points * h.record_bytes) + ")");
-    std::vector<unsigned char> packed(compressed), data;
-    in.read(reinterpret_cast<char*>(packed.data()), std::streamsize(compressed));
-    if(!lzf_decompress(packed.data(), packed.size(), data, uncompressed))
+    in.seekg(std::streamoff(h.header_bytes + 8));
+    std::vector<unsigned char> packed(h.compressed_bytes), data;
+    in.read(reinterpret_cast<char*>(packed.data()), std::streamsize(packed.size()));
+    if(!lzf_decompress(packed.data(), packed.size(), data, h.uncompressed_bytes))
       throw Cli_error("cannot read " + name + ": corrupted pcd file (its compressed data do not decompress to " +
-                      std::to_string(uncompressed) + " bytes)");
+                      std::to_string(h.uncompressed_bytes) + " bytes)");
     // Field after field, each field's values of every point together.
     std::size_t at = 0;
     for(std::size_t field = 0; field < h.fields.size(); ++field)

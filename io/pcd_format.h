@@ -17,9 +17,10 @@ namespace point_detail {
 struct Pcd_field
 {
   std::string name;
-  unsigned size = 0;  ///< bytes of one value: 1, 2, 4 or 8
-  char type = 'F';    ///< 'I' (signed), 'U' (unsigned) or 'F' (floating point)
-  unsigned count = 1; ///< values per point
+  unsigned size = 0;        ///< bytes of one value: 1, 2, 4 or 8
+  char type = 'F';          ///< 'I' (signed), 'U' (unsigned) or 'F' (floating point)
+  unsigned count = 1;       ///< values per point
+  std::uint64_t offset = 0; ///< bytes before it in a binary record
 };
 
 /// What a PCD header announces, checked against itself and the file's size.
@@ -27,13 +28,16 @@ struct Pcd_header
 {
   std::vector<Pcd_field> fields;
   std::uint64_t points = 0;
-  std::string data;               ///< "ascii", "binary" or "binary_compressed"
-  std::uint64_t header_bytes = 0; ///< where the data starts
-  std::uint64_t record_bytes = 0; ///< bytes of one point in the binary layouts
+  std::string data;                                           ///< "ascii", "binary" or "binary_compressed"
+  std::uint64_t header_bytes = 0;                             ///< where the data starts
+  std::uint64_t record_bytes = 0;                             ///< bytes of one point in the binary layouts
+  std::uint32_t compressed_bytes = 0, uncompressed_bytes = 0; ///< binary_compressed: the LZF data and what they hold
 };
 
-/// Reads a PCD header without trusting it: malformed lines, inconsistent counts, fields without x y z, and
-/// (binary) a file too short for its points are refused before anything is allocated.
+/// Reads a PCD header without trusting it: malformed lines, inconsistent counts, fields without x y z, a file too
+/// short for its points (binary_compressed: compressed data larger than the file, or sizes that cannot hold the
+/// points) and then more points than the memory holds at `bytes_per_point` (0: no memory check) are refused
+/// before anything is allocated.
 Pcd_header check_pcd_header(const std::filesystem::path& path, std::uint64_t bytes_per_point);
 
 /// Reads a PCD file whole or throws Cli_error naming the problem. x y z, normal_x normal_y normal_z and rgb /

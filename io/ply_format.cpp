@@ -51,9 +51,9 @@ Announced ply_announced(std::istream& in, const std::string& name)
     throw Cli_error("cannot read " + name + ": malformed ply header (line " + std::to_string(line_number) + ": " + what + ")");
   };
   auto whole = [&](const std::string& token) {
-    if(token.empty() || token.size() > 18 || token.find_first_not_of("0123456789") != std::string::npos)
-      fail("'" + token + "' is not a count");
-    return std::uint64_t(std::stoull(token));
+    std::uint64_t value = 0;
+    if(!whole_number(token, value)) fail("'" + token + "' is not a count");
+    return value;
   };
   std::vector<Ply_element>& elements = a.elements;
   std::map<std::string, std::string> vertex_types; // CGAL's reader needs x y z (and nx ny nz) of one float type

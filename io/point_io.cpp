@@ -189,20 +189,17 @@ Record_layout record_layout(const fs::path& path)
   const std::string ext = lower_extension(path);
   Record_layout layout;
   if(ext == "pcd") {
-    const Pcd_header h = check_pcd_header(path, 1);
+    const Pcd_header h = check_pcd_header(path, 0);
     if(h.data != "binary")
       throw Cli_error(path.string() + " is a " + h.data +
                       " PCD file, whose points cannot be mapped; binary PCD, LAS and "
-                      "binary PLY can (rewrite it with `point-detail render` or cgal_ext.write_ply)");
+                      "binary PLY can (rewrite it as PLY: cgal_ext.read_points, then cgal_ext.write_ply)");
     layout.points = h.points;
     layout.data_offset = h.header_bytes;
     layout.record_bytes = h.record_bytes;
-    std::uint64_t at = 0;
-    for(const Pcd_field& f : h.fields) {
+    for(const Pcd_field& f : h.fields)
       if(f.count == 1 && f.name != "_")
-        layout.fields.push_back({f.name, at, f.type == 'F' ? 'f' : f.type == 'I' ? 'i' : 'u', f.size});
-      at += std::uint64_t(f.size) * f.count;
-    }
+        layout.fields.push_back({f.name, f.offset, f.type == 'F' ? 'f' : f.type == 'I' ? 'i' : 'u', f.size});
     layout.coordinates = {"x", "y", "z"};
     const bool with_normals = std::any_of(layout.fields.begin(), layout.fields.end(),
                                           [](const Record_layout::Field& f) { return f.name == "normal_x"; });
@@ -210,7 +207,7 @@ Record_layout record_layout(const fs::path& path)
     return layout;
   }
   if(ext == "las" || ext == "laz") {
-    const Las_header h = check_las_header(path, 1);
+    const Las_header h = check_las_header(path, 0);
     layout.points = h.points;
     layout.data_offset = h.point_offset;
     layout.record_bytes = h.record_bytes;

@@ -43,8 +43,8 @@ struct Record_layout
   std::array<double, 3> scale{1, 1, 1}, shift{0, 0, 0}; ///< coordinate = field * scale + shift (LAS)
 };
 
-/// The record layout of a binary PCD or a LAS file, its header checked as read_point_cloud checks it (without
-/// the memory check: a mapped file is read a range at a time). Throws Cli_error for any other file, naming why.
+/// The record layout of a binary PCD or a LAS file, its header checked as read_point_cloud checks it, except for
+/// the memory (a mapped file is read a range at a time). Throws Cli_error for any other file, naming why.
 Record_layout record_layout(const std::filesystem::path& path);
 
 /// The prefix CloudCompare's command line wants on a PLY file's scalar fields; read_point_cloud reads such a

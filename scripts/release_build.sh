@@ -13,15 +13,13 @@ if [ "${CGAL_EXT_BUILT:-}" = "$build" ]; then exit 0; fi
 # examples nor the Python module configured. Each run states every part, so the build folder follows the last one.
 if [ "${CGAL_EXT_PROGRAM_ONLY:-0}" = 1 ]; then
   bash scripts/setup.sh program
-  parts=OFF
+  parts=(-DCGAL_EXT_BUILD_TESTS=OFF -DCGAL_EXT_BUILD_BENCHMARKS=OFF -DCGAL_EXT_BUILD_EXAMPLES=OFF -DCGAL_EXT_BUILD_PYTHON=OFF)
 else
   bash scripts/setup.sh
-  parts=ON
+  parts=(-DCGAL_EXT_BUILD_TESTS=ON -DCGAL_EXT_BUILD_BENCHMARKS=ON -DCGAL_EXT_BUILD_EXAMPLES=ON -DCGAL_EXT_BUILD_PYTHON=ON
+         -DCGAL_EXT_UNIT_TESTS="${CGAL_EXT_UNIT_TESTS:-ON}")
 fi
-# --no-warn-unused-cli: the program-only build reads no CGAL_EXT_UNIT_TESTS, and says so otherwise.
-cmake --no-warn-unused-cli -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCGAL_EXT_UNIT_TESTS="${CGAL_EXT_UNIT_TESTS:-ON}" \
-  -DCGAL_EXT_BUILD_TESTS=$parts -DCGAL_EXT_BUILD_BENCHMARKS=$parts -DCGAL_EXT_BUILD_EXAMPLES=$parts \
-  -DCGAL_EXT_BUILD_PYTHON=$parts >/dev/null
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${parts[@]}" >/dev/null
 if [ $# -gt 0 ]; then
   cmake --build "$build" -j"$(nproc)" --target "$@"
 else

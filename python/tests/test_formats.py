@@ -2,6 +2,7 @@
 the program read them: PCD and PTS files of Open3D's own writers, LAS files of every point format written here from
 the ASPRS specification, PTX and PTS files written by hand, and the refusals of broken files, each checked against
 its message."""
+import os
 import struct
 import subprocess
 
@@ -263,7 +264,7 @@ def test_pcd_refusals(tmp_path):
     whole = xyz_pcd(tmp_path / "whole.pcd").read_bytes()
     cut = tmp_path / "cut.pcd"
     cut.write_bytes(whole[:-5])
-    assert_refused(cut, "truncated pcd file", "announces 20 points of 12 bytes", "235 bytes after its header")
+    assert_refused(cut, "truncated pcd file", "announces 20 points, records of 12 bytes", "235 bytes after its header")
     no_z = tmp_path / "no_z.pcd"
     no_z.write_bytes(pcd_header([("x", 4, "F", 1), ("y", 4, "F", 1), ("intensity", 4, "F", 1)], 20) + whole[-240:])
     assert_refused(no_z, "malformed pcd header", "the fields need x, y and z")
@@ -288,7 +289,7 @@ def test_compressed_pcd_refusals(o3d, tmp_path):
     assert uncompressed == 300 * 28
     cut = tmp_path / "cut.pcd"
     cut.write_bytes(data[:start + compressed // 2])
-    assert_refused(cut, "truncated pcd file (%d compressed bytes announced, %d in the file)" % (compressed, compressed // 2))
+    assert_refused(cut, "truncated pcd file", "%d bytes of compressed data" % compressed)
     # A back reference as the first instruction points before the start of the output.
     backward = bytearray(data)
     backward[start] = 0xE0
@@ -302,7 +303,26 @@ def test_compressed_pcd_refusals(o3d, tmp_path):
     wrong_size = bytearray(data)
     struct.pack_into("<I", wrong_size, start - 4, uncompressed + 4)
     (tmp_path / "size.pcd").write_bytes(wrong_size)
-    assert_refused(tmp_path / "size.pcd", "corrupted pcd file (8404 bytes once decompressed, the header's points need 8400)")
+    assert_refused(tmp_path / "size.pcd", "corrupted pcd file (%d compressed bytes said to hold 8404; the header's 300 "
+                   "points of 28 bytes need 8400)" % compressed)
+    # A small file whose sizes promise more than LZF can expand to is refused before anything is allocated.
+    huge = tmp_path / "huge.pcd"
+    huge.write_bytes(pcd_header(XYZ_FIELDS, 10_000_000, data="binary_compressed") +
+                     struct.pack("<II", 16, 120_000_000) + bytes(16))
+    assert_refused(huge, "corrupted pcd file (16 compressed bytes said to hold 120000000")
+
+
+def test_record_layout_maps_a_file_larger_than_memory(tmp_path):
+    """A sparse 48 GB binary PCD: read_points refuses it for the memory, record_layout (the tiled runs' map) does not."""
+    path = tmp_path / "big.pcd"
+    n = 4_000_000_000
+    header = pcd_header(XYZ_FIELDS, n)
+    path.write_bytes(header)
+    os.truncate(path, len(header) + 12 * n)
+    layout = cgal_ext._core.record_layout(path)
+    assert (layout["points"], layout["data_offset"], layout["record_bytes"]) == (n, len(header), 12)
+    assert layout["fields"] == [("x", 0, "f4"), ("y", 4, "f4"), ("z", 8, "f4")] and layout["normals"] is None
+    assert_refused(path, "announces 4000000000 points, which need about", "of memory")
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -497,7 +517,9 @@ def las_records(fmt, fields, extra_bytes=0):
         # Byte 14: return number (bits 0-2), number of returns (3-5), scan direction and edge flags (6-7, random);
         # byte 15: classification (bits 0-4), synthetic, key-point and withheld flags (5-7, random).
         records[:, 14] = (records[:, 14] & 0xC0) | returns | (count << 3)
-        records[:, 15] = (records[:, 15] & 0xE0) | fields["classification"]
+        # (LAS 1.0 has no flags there: the class is the whole byte.)
+        keep = 0 if fields.get("class_is_a_byte") else 0xE0
+        records[:, 15] = (records[:, 15] & keep) | fields["classification"]
         gps_at, rgb_at = 20, 20 if fmt == 2 else 28
     else:
         # Byte 14: return number (bits 0-3), number of returns (4-7); 15: flags (random); 16: classification.
@@ -566,6 +588,9 @@ LAS_CASES = [(2, fmt) for fmt in range(6)] + [(4, fmt) for fmt in range(11)] + [
 def test_las_point_formats(tmp_path, minor, fmt):
     # The 1.4 files also carry a VLR and 3 extra bytes per record, which the reader steps over.
     fields = las_points(fmt, 150, seed=fmt)
+    if minor == 0:
+        fields["classification"] = np.random.default_rng(5).integers(0, 256, 150)
+        fields["class_is_a_byte"] = True
     if "rgb" in fields:
         assert fields["rgb"].max() > 255
     path = las_file(tmp_path / "points.las", fmt, fields, minor, extra_bytes=3 if minor == 4 else 0, vlr=minor == 4)

@@ -35,8 +35,8 @@ def open_source(path):
         return RecordSource(path)
     if path.suffix.lower() != ".ply":
         raise TiledError(f"{path}: the tiled runs read binary PLY, binary PCD and LAS (by memory map) or a Zarr "
-                         f"group, not '{path.suffix}' files; convert it with `point-detail render` or "
-                         "cgal_ext.write_ply")
+                         f"group, not '{path.suffix}' files; rewrite it as PLY (cgal_ext.read_points, then "
+                         "cgal_ext.write_ply)")
     return PlySource(path)
 
 
