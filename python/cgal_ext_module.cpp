@@ -275,10 +275,11 @@ PYBIND11_MODULE(_core, m)
           .c_str());
   m.def("read_points", &read_points, "path"_a,
         doc("Reads a PLY, OFF, XYZ, PWN, PCD, PTS, PTX or LAS point set with the point-detail program's readers "
-            "(doc/python.md lists what each keeps): the header is checked "
-            "before anything is allocated, and a file larger than the memory, truncated or malformed is refused with "
-            "the program's message (doc/bad_input.md); non-finite coordinates of a binary file are read as they are "
-            "(the algorithms refuse them). A mesh's normals are its faces' area-weighted vertex normals.",
+            "(doc/formats.md says what each keeps): the header is checked before anything is allocated, and a file "
+            "larger than the memory, truncated or malformed is refused with the program's message "
+            "(doc/bad_input.md); non-finite coordinates of a binary file are read as they are (the algorithms refuse "
+            "them), except the points without position, which are left out (PCD points whose x, y and z are all "
+            "NaN, PTX points 0 0 0). A mesh's normals are its faces' area-weighted vertex normals.",
             {"path : str or os.PathLike\n    The file; its extension names the format."},
             "PointSet\n    (points (n, 3) float64, normals (n, 3) or None, properties: dict of the other per-point "
             "properties, float64 (n,) each, colours as 'colors' (n, 3) uint8).",

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cgal_ext
-from conftest import PROGRAM, PROGRAM_ENV, bumpy_sphere, read_ply, xyz
+from conftest import DATA, PROGRAM, PROGRAM_ENV, bumpy_sphere, read_ply, xyz
 
 
 def read(path):
@@ -310,6 +310,30 @@ def test_compressed_pcd_refusals(o3d, tmp_path):
     huge.write_bytes(pcd_header(XYZ_FIELDS, 10_000_000, data="binary_compressed") +
                      struct.pack("<II", 16, 120_000_000) + bytes(16))
     assert_refused(huge, "corrupted pcd file (16 compressed bytes said to hold 120000000")
+
+
+PCL_SCANS = ["test_pcd", "bun0", "milk", "milk_cartoon_all_small_clorox", "table_scene_lms400",
+             "table_scene_mug_stereo_textured"]
+
+
+@pytest.mark.parametrize("name", PCL_SCANS)
+def test_pcl_sample_scans_read_as_open3d_reads_them(o3d, name):
+    """PCL's own sample scans (Debian's python3-pcl, fetched by scripts/fetch_data.sh): ASCII and binary_compressed,
+    organised 640 x 480 clouds whose missing measurements are NaN, packed rgb and rgba, extra fields. The points
+    are Open3D's finite ones in order (float32 exactly; ASCII text read to double, equal once rounded to float32),
+    the colours and fields Open3D's."""
+    path = os.path.join(DATA, "pcd", name + ".pcd")
+    got = read(path)
+    theirs = o3d.t.io.read_point_cloud(path).point
+    positions = theirs["positions"].numpy()
+    finite = ~np.isnan(positions).all(axis=1)
+    assert len(got.points) == finite.sum() > 1000
+    np.testing.assert_array_equal(got.points.astype(np.float32), positions[finite])
+    if "colors" in theirs:
+        np.testing.assert_array_equal(got.properties["colors"], theirs["colors"].numpy()[finite][:, :3])
+    for field in ("intensity", "distance", "sid"):
+        if field in theirs:
+            np.testing.assert_array_equal(got.properties[field], theirs[field].numpy()[finite, 0])
 
 
 def test_record_layout_maps_a_file_larger_than_memory(tmp_path):
