@@ -281,7 +281,7 @@ Point_cloud read_pcd(const fs::path& path, std::uint64_t bytes_per_point)
   std::ifstream in(path, std::ios::binary);
   in.seekg(std::streamoff(h.header_bytes));
   if(h.data == "ascii") {
-    std::string line, token;
+    std::string line;
     std::size_t line_number = 0, point = 0;
     while(point < n && std::getline(in, line)) {
       ++line_number;
