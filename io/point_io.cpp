@@ -14,15 +14,8 @@
 #include <CGAL/Point_set_3/IO.h>
 
 #include <algorithm>
-#include <cctype>
-#include <cerrno>
-#include <cstdlib>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <fstream>
-#include <map>
-#include <sstream>
 
 namespace point_detail {
 namespace fs = std::filesystem;

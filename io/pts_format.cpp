@@ -5,7 +5,6 @@
 #include "files.h"
 
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -86,9 +85,10 @@ unsigned char color_component(const Number_lines& line, std::size_t i)
 void check_announced(const Number_lines& line, const fs::path& path, std::uint64_t points,
                      std::uint64_t bytes_per_point, std::uint64_t min_line_bytes)
 {
-  if(points > file_bytes(path) / min_line_bytes)
-    line.fail("the file announces " + std::to_string(points) + " points, more than its " +
-              std::to_string(file_bytes(path)) + " bytes hold");
+  const std::uint64_t size = file_bytes(path);
+  if(points > size / min_line_bytes)
+    line.fail("the file announces " + std::to_string(points) + " points, more than its " + std::to_string(size) +
+              " bytes hold");
   check_memory_for(path, points, bytes_per_point);
 }
 

@@ -86,8 +86,34 @@ def _parse_ply_header(path):
     return count, dtype, offset
 
 
-class PlySource:
-    """A binary PLY file's vertices, read by memory map."""
+class MappedSource:
+    """Fixed-size records of a file, read by memory map a row range at a time: `path`, `dtype`, `offset`, `count`,
+    the fields of the coordinates and of the normals (None when there are none), and optionally a `scale` and a
+    `shift` of the coordinates."""
+    scale = shift = None
+
+    def _records(self, begin, end):
+        records = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
+        part = np.array(records[begin:end])
+        del records  # unmapped: its pages leave the resident set
+        return part
+
+    @staticmethod
+    def _columns(records, names):
+        return np.stack([records[n].astype(np.float64) for n in names], axis=1)
+
+    def coordinates(self, begin, end):
+        """The points of rows [begin, end), float64 (n, 3)."""
+        points = self._columns(self._records(begin, end), self.coordinate_names)
+        return points if self.scale is None else points * self.scale + self.shift
+
+    def normals(self, begin, end):
+        """The normals of rows [begin, end), float64 (n, 3); None when the scan has none."""
+        return self._columns(self._records(begin, end), self.normal_names) if self.has_normals else None
+
+
+class PlySource(MappedSource):
+    """A binary PLY file's vertices."""
 
     def __init__(self, path):
         self.path = str(Path(path).resolve())
@@ -101,28 +127,11 @@ class PlySource:
             raise TiledError(f"{self.path}: truncated: the header announces {self.count} vertices "
                              f"({need} bytes with the header), the file has {size} bytes")
         self.has_normals = all(c in self.dtype.names for c in ("nx", "ny", "nz"))
-
-    def _records(self, begin, end):
-        vertices = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
-        records = np.array(vertices[begin:end])
-        del vertices  # unmapped: its pages leave the resident set
-        return records
-
-    @staticmethod
-    def _columns(records, names):
-        return np.stack([records[n].astype(np.float64) for n in names], axis=1)
-
-    def coordinates(self, begin, end):
-        """The points of rows [begin, end), float64 (n, 3)."""
-        return self._columns(self._records(begin, end), "xyz")
-
-    def normals(self, begin, end):
-        """The normals of rows [begin, end), float64 (n, 3); None when the scan has none."""
-        return self._columns(self._records(begin, end), ("nx", "ny", "nz")) if self.has_normals else None
+        self.coordinate_names, self.normal_names = ("x", "y", "z"), ("nx", "ny", "nz") if self.has_normals else None
 
 
-class RecordSource:
-    """A binary PCD or LAS file's points, read by memory map at the offsets the I/O layer's header check gives
+class RecordSource(MappedSource):
+    """A binary PCD or LAS file's points, at the offsets the I/O layer's header check gives
     (cgal_ext._core.record_layout): LAS coordinates are the records' integers times the scale plus the shift."""
 
     def __init__(self, path):
@@ -141,14 +150,8 @@ class RecordSource:
         self.scale, self.shift = np.array(layout["scale"]), np.array(layout["shift"])
         self.has_normals = self.normal_names is not None
 
-    def _records(self, begin, end):
-        records = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
-        part = np.array(records[begin:end])
-        del records  # unmapped: its pages leave the resident set
-        return part
-
     def coordinates(self, begin, end):
-        points = PlySource._columns(self._records(begin, end), self.coordinate_names) * self.scale + self.shift
+        points = super().coordinates(begin, end)
         # The program leaves out a PCD point whose x, y and z are all NaN; a tiled run cannot drop rows.
         missing = np.flatnonzero(np.isnan(points).all(axis=1))
         if len(missing):
@@ -156,9 +159,6 @@ class RecordSource:
                              "runs need every row to be a point: write the scan without them first (point-detail "
                              "leaves them out of its PLY outputs)")
         return points
-
-    def normals(self, begin, end):
-        return PlySource._columns(self._records(begin, end), self.normal_names) if self.has_normals else None
 
 
 class ZarrSource:
