@@ -376,3 +376,103 @@ TEST(NeighborGraph, AGridBlockRefusesMoreCandidatesThanAsked)
   EXPECT_TRUE(grid.gather(cell, 1, all, block));
   EXPECT_EQ(block.size(), all);
 }
+
+namespace {
+
+// Every pair (squared distance, row) of the `k` rows a search reports, in its order.
+template <typename Search>
+std::vector<Ranked_row> reported(std::size_t k, const Search& search)
+{
+  std::vector<Ranked_row> got;
+  search(k, [&](int j, double d2) { got.emplace_back(d2, j); });
+  return got;
+}
+
+// The brute-force ranking of `k` rows, where rows tied at the k-th distance may differ: compared by distance.
+void expect_nearest(const Matrix_n3& points, const Eigen::RowVector3d& query, std::size_t k,
+                    const std::vector<Ranked_row>& got)
+{
+  const std::vector<int> expected = brute_force_nearest(points, query, k);
+  ASSERT_EQ(got.size(), k);
+  EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
+  for(std::size_t m = 0; m < k; ++m) {
+    EXPECT_EQ(got[m].first, (points.row(expected[m]) - query).squaredNorm()) << "rank " << m;
+    EXPECT_EQ(got[m].first, (points.row(got[m].second) - query).squaredNorm()) << "rank " << m;
+  }
+}
+
+} // namespace
+
+TEST(NeighborGraph, ATreeOfAppendedRowsAnswersAsATreeOverAllRows)
+{
+  // A base cloud, then rows appended: a dense cluster, copies of base rows (ties across the two trees) and far rows.
+  const Matrix_n3 base = random_cloud(1500, 7);
+  Matrix_n3 appended = 0.1 * random_cloud(300, 8);
+  for(Eigen::Index r = 0; r < 40; ++r) appended.row(r) = base.row(r * 13);
+  for(Eigen::Index r = 40; r < 45; ++r) appended.row(r) << 5.0 + double(r), 0, 0;
+  Matrix_n3 all(base.rows() + appended.rows(), 3);
+  all << base, appended;
+  const Position_tree base_tree(base, CGAL::Parallel_if_available_tag());
+  const Position_tree extended(base_tree, appended, CGAL::Parallel_if_available_tag());
+  const Position_tree whole(all, CGAL::Sequential_tag());
+  ASSERT_EQ(extended.size(), whole.size());
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<Eigen::Index> row(0, all.rows() - 1);
+  for(int q = 0; q < 200; ++q) {
+    const Eigen::RowVector3d query = all.row(row(rng)) + 0.01 * Eigen::RowVector3d(q % 3, q % 5, q % 7);
+    const Position_tree::Point at(query(0), query(1), query(2));
+    for(const std::size_t k : {1u, 12u, 126u, 2000u})
+      expect_nearest(all, query, std::min<std::size_t>(k, all.rows()),
+                     reported(k, [&](std::size_t count, const auto& visit) { extended.nearest(at, count, visit); }));
+    std::vector<int> near, expected;
+    extended.within(at, 0.3, near);
+    whole.within(at, 0.3, expected);
+    std::sort(near.begin(), near.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(near, expected);
+  }
+  // Closed balls are a function of the positions: the same sets as over all rows, duplicates across the trees included.
+  std::vector<Ranked_row> ball, expected_ball;
+  for(std::size_t self = 0; self < std::size_t(all.rows()); self += 7) {
+    extended.nearest_ball(self, 10, ball);
+    whole.nearest_ball(self, 10, expected_ball);
+    EXPECT_EQ(ball, expected_ball) << "row " << self;
+  }
+  // Nothing appended: the base's answers.
+  const Position_tree nothing_appended(base_tree, Matrix_n3(0, 3), CGAL::Sequential_tag());
+  const Eigen::RowVector3d query = base.row(3);
+  expect_nearest(base, query, 12, reported(12, [&](std::size_t count, const auto& visit) {
+                   nothing_appended.nearest(Position_tree::Point(query(0), query(1), query(2)), count, visit);
+                 }));
+}
+
+TEST(NeighborGraph, MovingNeighborsAreTheTreesNearestAtEveryStep)
+{
+  // Points walking over a cloud in steps of a tenth to twice its spacing, and now and then a jump across it: at
+  // every step the kept candidates, or a fresh lookup, give the nearest rows by brute force.
+  const Matrix_n3 points = random_cloud(3000, 11);
+  const Position_tree tree(points, CGAL::Sequential_tag());
+  const double spacing = 2.0 / std::cbrt(3000.0);
+  const std::size_t walkers = 40;
+  Moving_neighbors near(tree, walkers, 48);
+  std::mt19937 rng(12);
+  std::normal_distribution<double> step(0, 1);
+  std::vector<Eigen::Vector3d> x(walkers);
+  for(std::size_t w = 0; w < walkers; ++w) x[w] = points.row(Eigen::Index(w * 71)).transpose();
+  for(int s = 0; s < 30; ++s)
+    for(std::size_t w = 0; w < walkers; ++w) {
+      const double length = s % 10 == 9 ? 1.0 : spacing * (0.1 + 1.9 * double(w) / walkers);
+      x[w] += length * Eigen::Vector3d(step(rng), step(rng), step(rng)).normalized();
+      const std::size_t k = s % 2 ? 24 : 12;
+      expect_nearest(points, x[w].transpose(), k,
+                     reported(k, [&](std::size_t count, const auto& visit) { near.nearest(w, x[w], count, visit); }));
+    }
+  // Fewer rows than the reach: every row is a candidate, and every step is certain.
+  const Matrix_n3 few = random_cloud(20, 13);
+  const Position_tree few_tree(few, CGAL::Sequential_tag());
+  Moving_neighbors near_few(few_tree, 1, 48);
+  Eigen::Vector3d at(0, 0, 0);
+  for(int s = 0; s < 5; ++s, at.x() += 0.5)
+    expect_nearest(few, at.transpose(), 20,
+                   reported(30, [&](std::size_t count, const auto& visit) { near_few.nearest(0, at, count, visit); }));
+}

@@ -101,13 +101,26 @@ public:
   {
     for(std::size_t i = 0; i < m_points.size(); ++i) m_points[i] = point(positions, Eigen::Index(i));
     m_pmap = Point_pmap(m_points.data());
+    if(m_points.empty()) return; // only as the appended rows of another tree
     m_tree = std::make_unique<Tree>(boost::counting_iterator<int>(0), boost::counting_iterator<int>(int(m_points.size())),
                                     typename Tree::Splitter(), Traits(m_pmap));
     m_tree->template build<ConcurrencyTag>();
   }
 
-  std::size_t size() const { return m_points.size(); }
-  const Point& operator[](std::size_t i) const { return m_points[i]; }
+  /// A tree over the rows of `base` followed by those of `appended` (rows `base.size()` on), built over the
+  /// appended rows only: `base` must outlive it.
+  template <typename ConcurrencyTag>
+  Position_tree(const Position_tree& base, const Matrix_n3& appended, ConcurrencyTag tag) : Position_tree(appended, tag)
+  {
+    m_base = &base;
+    m_first_own_row = base.size();
+  }
+
+  std::size_t size() const { return m_first_own_row + m_points.size(); }
+  const Point& operator[](std::size_t i) const
+  {
+    return i < m_first_own_row ? (*m_base)[i] : m_points[i - m_first_own_row];
+  }
 
   /// Calls `visit(row, squared_distance)` for the `min(k, size())` rows nearest to `query` in the order
   /// (squared distance, row), nearest first. Of rows tied at the k-th distance the tree keeps those it meets first:
@@ -125,7 +138,7 @@ public:
   /// order (squared distance, row). `k < size()`.
   void nearest_ball(std::size_t self, std::size_t k, std::vector<Ranked_row>& out) const
   {
-    const Point& query = m_points[self];
+    const Point& query = (*this)[self];
     const auto drop_self = [&] {
       out.erase(std::remove(out.begin(), out.end(), Ranked_row(0.0, int(self))), out.end());
     };
@@ -144,7 +157,11 @@ public:
   /// Appends to `out` the rows within `radius` of `centre` (and perhaps some a rounding farther).
   void within(const Point& centre, double radius, std::vector<int>& out) const
   {
-    m_tree->search(std::back_inserter(out), CGAL::Fuzzy_sphere<Traits>(centre, radius, 0, Traits(m_pmap)));
+    if(m_base) m_base->within(centre, radius, out);
+    const std::size_t first = out.size();
+    if(!m_points.empty())
+      m_tree->search(std::back_inserter(out), CGAL::Fuzzy_sphere<Traits>(centre, radius, 0, Traits(m_pmap)));
+    for(std::size_t i = first; i < out.size(); ++i) out[i] += int(m_first_own_row);
   }
 
 private:
@@ -152,12 +169,36 @@ private:
   void search(const Point& query, std::size_t count, std::vector<Ranked_row>& out) const
   {
     out.clear();
-    Search search(*m_tree, query, unsigned(count), 0, true, typename Search::Distance(m_pmap), true);
-    for(auto it = search.begin(); it != search.end(); ++it)
-      out.emplace_back(squared_distance(query, m_points[std::size_t(it->first)]), it->first);
+    if(m_base) m_base->search(query, std::min(count, m_base->size()), out);
+    const std::size_t first = out.size();
+    if(!m_points.empty() && first == count && count > 0) {
+      // Only appended rows within the base's count-th distance can be among the nearest.
+      const double kth = out.back().first;
+      thread_local std::vector<int> rows;
+      rows.clear();
+      m_tree->search(std::back_inserter(rows),
+                     CGAL::Fuzzy_sphere<Traits>(query, std::sqrt(kth) * (1 + tie_margin), 0, Traits(m_pmap)));
+      for(const int row : rows) {
+        const double d2 = squared_distance(query, m_points[std::size_t(row)]);
+        if(d2 <= kth) out.emplace_back(d2, row + int(m_first_own_row));
+      }
+      std::sort(out.begin() + std::ptrdiff_t(first), out.end());
+    } else if(!m_points.empty()) {
+      Search search(*m_tree, query, unsigned(std::min(count, m_points.size())), 0, true,
+                    typename Search::Distance(m_pmap), true);
+      for(auto it = search.begin(); it != search.end(); ++it)
+        out.emplace_back(squared_distance(query, m_points[std::size_t(it->first)]), it->first + int(m_first_own_row));
+    }
     // Nearest first already, but for ties (and our rounding of the distance): an insertion sort, linear here.
-    for(std::size_t i = 1; i < out.size(); ++i)
-      for(std::size_t j = i; j > 0 && out[j] < out[j - 1]; --j) std::swap(out[j], out[j - 1]);
+    for(std::size_t i = first + 1; i < out.size(); ++i)
+      for(std::size_t j = i; j > first && out[j] < out[j - 1]; --j) std::swap(out[j], out[j - 1]);
+    if(first > 0 && first < out.size()) { // the base's nearest and the appended rows' nearest: merged, cut to count
+      thread_local std::vector<Ranked_row> merged;
+      merged.clear();
+      for(std::size_t a = 0, b = first; merged.size() < count && (a < first || b < out.size());)
+        merged.push_back(b == out.size() || (a < first && out[a] < out[b]) ? out[a++] : out[b++]);
+      out.swap(merged);
+    }
   }
 
   // Replaces `out` by every row within the margin of `kth` (a squared distance), ranked: the rows tied with the k-th
@@ -169,7 +210,7 @@ private:
     within(query, std::sqrt(kth) * (1 + tie_margin), rows);
     out.clear();
     for(const int row : rows) {
-      const double d2 = squared_distance(query, m_points[std::size_t(row)]);
+      const double d2 = squared_distance(query, (*this)[std::size_t(row)]);
       if(d2 <= kth * (1 + tie_margin)) out.emplace_back(d2, row);
     }
     std::sort(out.begin(), out.end());
@@ -178,6 +219,62 @@ private:
   std::vector<Point> m_points;
   Point_pmap m_pmap;
   std::unique_ptr<Tree> m_tree;
+  const Position_tree* m_base = nullptr; // the rows before m_first_own_row
+  std::size_t m_first_own_row = 0;
+};
+
+/// The nearest rows of a tree to points that move a little at a time (the new samples during relaxation): each
+/// point keeps the `reach` rows nearest to where it was last looked up, and its `k` <= `reach` nearest are taken
+/// from them while that is certain, that is, while the k-th of them is nearer to it than the reach-th was to the
+/// old place less the distance moved (then no other row can be nearer); otherwise the tree is asked again. The
+/// answer is the tree's, ranked by (squared distance, row), for a few distance computations per step.
+class Moving_neighbors
+{
+public:
+  /// For `points` moving points, each to keep its `reach` nearest rows of `tree` (which must outlive this).
+  Moving_neighbors(const Position_tree& tree, std::size_t points, std::size_t reach)
+      : m_tree(tree), m_reach(std::min(reach, tree.size())), m_anchor(points), m_radius(points, -1.0),
+        m_candidates(points * m_reach)
+  {}
+
+  /// Calls `visit(row, squared_distance)` for the `k` rows nearest to `x`, the position of point `point` now.
+  template <typename Visit>
+  void nearest(std::size_t point, const Eigen::Vector3d& x, std::size_t k, const Visit& visit)
+  {
+    thread_local std::vector<Ranked_row> ranked;
+    k = std::min(k, m_reach);
+    if(k == 0) return;
+    const Position_tree::Point at(x.x(), x.y(), x.z());
+    int* candidates = m_candidates.data() + point * m_reach;
+    if(m_radius[point] >= 0) {
+      ranked.clear();
+      for(std::size_t c = 0; c < m_reach; ++c)
+        ranked.emplace_back(Position_tree::squared_distance(at, m_tree[std::size_t(candidates[c])]), candidates[c]);
+      std::nth_element(ranked.begin(), ranked.begin() + std::ptrdiff_t(k - 1), ranked.end());
+      std::sort(ranked.begin(), ranked.begin() + std::ptrdiff_t(k - 1));
+      const double moved = (x - m_anchor[point]).norm();
+      // A relative margin for the rounding of the distances.
+      if(std::sqrt(ranked[k - 1].first) + moved < m_radius[point] * (1 - 1e-9)) {
+        for(std::size_t c = 0; c < k; ++c) visit(ranked[c].second, ranked[c].first);
+        return;
+      }
+    }
+    ranked.clear();
+    m_tree.nearest(at, m_reach, [&](int j, double d2) { ranked.emplace_back(d2, j); });
+    for(std::size_t c = 0; c < m_reach; ++c) candidates[c] = ranked[c].second;
+    m_anchor[point] = x;
+    // All the rows taken: every later step is certain.
+    m_radius[point] =
+      m_reach < m_tree.size() ? std::sqrt(ranked.back().first) : std::numeric_limits<double>::infinity();
+    for(std::size_t c = 0; c < k; ++c) visit(ranked[c].second, ranked[c].first);
+  }
+
+private:
+  const Position_tree& m_tree;
+  std::size_t m_reach;
+  std::vector<Eigen::Vector3d> m_anchor;
+  std::vector<double> m_radius; // < 0: not looked up yet
+  std::vector<int> m_candidates;
 };
 
 /// A graph of `n` rows of `k` neighbours each, to be filled.

@@ -41,18 +41,10 @@ public:
       for(int m = 0; m < count; ++m) m_c(0) += (point(m) - m_origin).dot(m_n) * m_scale / count;
       return;
     }
-    Matrix AtA = Matrix::Zero(m_terms, m_terms);
-    Vector Atz = Vector::Zero(m_terms);
-    for(int m = 0; m < count; ++m) {
-      const Eigen::Vector3d d = point(m) - m_origin;
-      const Vector row = monomials(d.dot(m_u) * m_scale, d.dot(m_v) * m_scale);
-      AtA.noalias() += row * row.transpose();
-      Atz += d.dot(m_n) * m_scale * row;
-    }
-    // A light ridge on all but the constant term: samples on two lines (two rings of a stretched tube) leave a
-    // curvature undetermined, which then stays zero instead of exploding.
-    for(int c = 1; c < m_terms; ++c) AtA(c, c) += 1e-3 * count;
-    m_c.head(m_terms) = AtA.ldlt().solve(Atz);
+    if(m_terms == 6)
+      solve<6>(count, point);
+    else
+      solve<10>(count, point);
     if(!m_c.allFinite()) m_c.setZero();
   }
 
@@ -83,8 +75,25 @@ public:
   }
 
 private:
-  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 10, 10>;
   using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 10, 1>;
+
+  // The least-squares coefficients of `terms` monomials (sizes fixed at compile time: most fits are small and many).
+  template <int terms, typename PointAt>
+  void solve(int count, const PointAt& point)
+  {
+    Eigen::Matrix<double, terms, terms> AtA = Eigen::Matrix<double, terms, terms>::Zero();
+    Eigen::Matrix<double, terms, 1> Atz = Eigen::Matrix<double, terms, 1>::Zero();
+    for(int m = 0; m < count; ++m) {
+      const Eigen::Vector3d d = point(m) - m_origin;
+      const Eigen::Matrix<double, terms, 1> row = monomials(d.dot(m_u) * m_scale, d.dot(m_v) * m_scale);
+      AtA.noalias() += row * row.transpose();
+      Atz += d.dot(m_n) * m_scale * row;
+    }
+    // A light ridge on all but the constant term: samples on two lines (two rings of a stretched tube) leave a
+    // curvature undetermined, which then stays zero instead of exploding.
+    for(int c = 1; c < terms; ++c) AtA(c, c) += 1e-3 * count;
+    m_c.template head<terms>() = AtA.ldlt().solve(Atz);
+  }
 
   Vector monomials(double x, double y) const
   {

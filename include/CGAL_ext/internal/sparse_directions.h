@@ -79,15 +79,22 @@ std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tr
     });
     return spacing;
   }
-  // Only the spacings of `rows` (the others stay 0): the mean distances of their neighbourhoods only.
+  // Only the spacings of `rows` (the others stay 0): the mean distances of their neighbourhoods only. A row's
+  // own mean distance comes from the first k + 1 of its neighbourhood (rows are distinct).
   const std::size_t count = rows->size();
   std::vector<int> near_rows(count * around);
-  for_range<ConcurrencyTag>(0, count, [&](std::size_t m) {
-    int* out = near_rows.data() + m * around;
-    tree.nearest(Position_tree::point(positions, Eigen::Index((*rows)[m])), around, [&](int j, double) { *out++ = j; });
-  });
   std::vector<char> needed(n, 0);
+  for_range<ConcurrencyTag>(0, count, [&](std::size_t m) {
+    const std::size_t i = std::size_t((*rows)[m]);
+    int* out = near_rows.data() + m * around;
+    std::size_t rank = 0;
+    tree.nearest(Position_tree::point(positions, Eigen::Index(i)), around, [&](int j, double d2) {
+      *out++ = j;
+      if(rank++ <= k && std::size_t(j) != i) mean[i] += std::sqrt(d2) / double(k);
+    });
+  });
   for(int j : near_rows) needed[std::size_t(j)] = 1;
+  for(int i : *rows) needed[std::size_t(i)] = 0;
   for_range<ConcurrencyTag>(0, n, [&](std::size_t i) {
     if(needed[i]) mean_distance(i);
   });
@@ -190,7 +197,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
   // Enough candidates to see across a gap of max_hole_size spacings: about the samples of that disc.
   const std::size_t reach = std::min<std::size_t>(std::size_t(positions.rows()),
                                                   std::max<std::size_t>(k + 1, std::size_t(std::ceil(3.5 * max_hole_size * max_hole_size))));
-  const double cos_cone = std::cos(30 * CGAL_PI / 180);
+  const double cos_cone = std::cos(30 * CGAL_PI / 180), tan_sheet = std::tan(30 * CGAL_PI / 180);
   std::vector<std::array<int, 4>> across(n);
   std::vector<char> is_sparse(n, 0);
   for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
@@ -211,8 +218,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
         candidates.emplace_back(j, d);
         // Within 30 degrees of the tangent plane, facing the same way: not a sample of another sheet (the body
         // under an arm), whose bridge would cross empty space.
-        same_sheet.push_back(std::abs(height) <= std::tan(30 * CGAL_PI / 180) * d.norm() &&
-                             normals.row(j).dot(normal.transpose()) > 0.5);
+        same_sheet.push_back(std::abs(height) <= tan_sheet * d.norm() && normals.row(j).dot(normal.transpose()) > 0.5);
       });
     };
     // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter

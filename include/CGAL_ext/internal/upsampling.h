@@ -71,14 +71,16 @@ private:
 /// so the fit takes the nearest k / 8 samples in each of 8 directions around `x` (among the about
 /// 3 pi (d / h)^2 samples of a disc of radius 2 d), which surround the hole, and a degree-3 surface through
 /// them interpolates the rim: a wave's inflection across a hole is then followed, not flattened.
-inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, std::size_t k, double h, Eigen::Vector3d& x,
+/// `tree` holds the samples; `nearest` keeps its nearest samples to the new point `point`, which `x` is.
+inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, Moving_neighbors& nearest,
+                                 std::size_t point, std::size_t k, double h, Eigen::Vector3d& x,
                                  Eigen::Vector3d& normal)
 {
   thread_local std::vector<int> near;
   near.clear();
   const Position_tree::Point query(x.x(), x.y(), x.z());
   double nearest2 = 0;
-  tree.nearest(query, k, [&](int j, double d2) {
+  nearest.nearest(point, x, k, [&](int j, double d2) {
     if(near.empty()) nearest2 = d2;
     near.push_back(j);
   });
@@ -154,9 +156,11 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     for(std::size_t i = 0; i < empty_radius.size(); ++i) empty_radius[i] = all_empty_factor[i] * all_spacing[i];
     progress.stage(double(round) / settings.max_rounds, double(round + 1) / settings.max_rounds);
     if(!progress.report(0.0)) return false;
-    // The first round's samples are the input: its tree serves.
+    // The first round's samples are the input: its tree serves; later rounds add a tree of the new samples to it.
     std::unique_ptr<Position_tree> round_tree;
-    if(round > 0) round_tree = std::make_unique<Position_tree>(all, ConcurrencyTag());
+    if(round > 0)
+      round_tree = std::make_unique<Position_tree>(input_tree, Matrix_n3(all.bottomRows(all.rows() - Eigen::Index(n))),
+                                                   ConcurrencyTag());
     const Position_tree& tree = round > 0 ? *round_tree : input_tree;
     const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, empty_radius,
                                                                  settings.detection.max_hole_size,
@@ -202,6 +206,12 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
     Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
     std::vector<char> settled(round_points.size(), 1);
+    // Each new point moves at most 0.3 spacings a step: its nearest input samples (for the projections, twice
+    // the fit's) and its nearest samples of earlier rounds (for the repulsion) come from a few lookups.
+    Moving_neighbors near_input(input_tree, round_points.size(), 4 * k);
+    std::unique_ptr<Moving_neighbors> near_earlier;
+    if(round > 0) near_earlier = std::make_unique<Moving_neighbors>(tree, round_points.size(), 24);
+    Moving_neighbors& near_samples = round > 0 ? *near_earlier : near_input;
     for(unsigned int iteration = 0; iteration <= settings.relaxation_iterations; ++iteration) {
       for(std::size_t m = 0; m < round_points.size(); ++m) moving.row(Eigen::Index(m)) = round_points[m].transpose();
       const Position_tree moving_tree(moving, ConcurrencyTag());
@@ -219,20 +229,20 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
               push += w * w * (x - from->row(j).transpose()) / d;
             };
           };
-          const Position_tree::Point query(x.x(), x.y(), x.z());
-          tree.nearest(query, 12, repel(&all));
-          moving_tree.nearest(query, std::min<std::size_t>(12, round_points.size()), repel(&moving));
+          near_samples.nearest(m, x, 12, repel(&all));
+          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), std::min<std::size_t>(12, round_points.size()),
+                              repel(&moving));
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
         }
-        project_onto_surface(positions, input_tree, 2 * k, h, x, normal);
+        project_onto_surface(positions, input_tree, near_input, m, 2 * k, h, x, normal);
         if(iteration == settings.relaxation_iterations) {
           // A projection onto the surface should be a fixed point: projecting the result again must not move
           // it. Where the fit is unstable (a cubic across a tear, in a frame that tilts with the normal) it
           // does, and the point is dropped rather than written off the surface.
           Eigen::Vector3d again = x, again_normal = normal;
-          project_onto_surface(positions, input_tree, 2 * k, h, again, again_normal);
+          project_onto_surface(positions, input_tree, near_input, m, 2 * k, h, again, again_normal);
           settled[m] = (again - x).squaredNorm() <= 0.0625 * h * h; // a quarter spacing
         }
         moved[m] = x;
