@@ -236,13 +236,16 @@ PYBIND11_MODULE(_core, m)
           .c_str());
   m.def(
     "compute_neighbor_graph", &bound_compute_neighbor_graph, "points"_a, py::kw_only(), "k"_a = 10,
-    "progress"_a = py::none(),
+    "symmetric"_a = false, "progress"_a = py::none(),
     doc("The neighbourhoods every function of the package uses: each point's closed ball of its k-th nearest other "
         "point (exactly k points, more where points tie at that distance), whatever the order of the points "
         "(doc/design.md, \"One neighbourhood rule\").",
-        {points_doc, "k : int\n    Neighbours of a point, itself not counted (fewer than the points).", progress_doc},
+        {points_doc, "k : int\n    Neighbours of a point, itself not counted (fewer than the points).",
+         "symmetric : bool\n    The union of the graph and its transpose instead: j is a neighbour of i when either "
+         "lists the other; each row sorted by index.",
+         progress_doc},
         "tuple\n    (offsets (n + 1,), neighbors (m,)), int64: the neighbours of point i are "
-        "neighbors[offsets[i]:offsets[i + 1]], nearest first.")
+        "neighbors[offsets[i]:offsets[i + 1]], nearest first (by index when symmetric).")
       .c_str());
   m.def(
     "compute_local_spacing", &bound_compute_local_spacing, "points"_a,

@@ -190,17 +190,30 @@ Upsampled_result bound_upsample_point_set(const Array_like& points, const Array_
   return py::reinterpret_borrow<py::object>(result_types.upsampled)(new_points, new_normals);
 }
 
-py::tuple bound_compute_neighbor_graph(const Array_like& points, long long k, const Optional_progress& progress)
+py::tuple bound_compute_neighbor_graph(const Array_like& points, long long k, bool symmetric,
+                                       const Optional_progress& progress)
 {
   const Point_input input(points, py::none());
   const std::size_t n = input.size();
   Python_progress reporter(progress);
-  const CGAL_ext::Neighbor_lists lists = with_maps(input, [&](const auto& np) {
+  CGAL_ext::Neighbor_lists lists = with_maps(input, [&](const auto& np) {
     return without_gil([&] {
       return CGAL_ext::compute_neighbor_graph(all_points(n), as_count(k, "k"), np.callback(reporter.callback()));
     });
   });
   reporter.raise_if_cancelled(lists.offsets.size() == n + 1);
+  if(symmetric) {
+    without_gil([&] {
+      CGAL_ext::internal::Neighbor_graph directed;
+      directed.offsets.assign(lists.offsets.begin(), lists.offsets.end());
+      directed.indices.assign(lists.neighbors.begin(), lists.neighbors.end());
+      const CGAL_ext::internal::Neighbor_graph both =
+        CGAL_ext::internal::symmetrize<CGAL::Parallel_if_available_tag>(directed);
+      lists.offsets.assign(both.offsets.begin(), both.offsets.end());
+      lists.neighbors.assign(both.indices.begin(), both.indices.end());
+      return 0;
+    });
+  }
   py::array_t<std::int64_t> offsets(static_cast<py::ssize_t>(lists.offsets.size()));
   py::array_t<std::int64_t> neighbors(static_cast<py::ssize_t>(lists.neighbors.size()));
   std::copy(lists.offsets.begin(), lists.offsets.end(), offsets.mutable_data());

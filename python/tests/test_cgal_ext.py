@@ -145,6 +145,16 @@ def test_the_neighbor_graph_is_the_closed_ball_of_the_kth_nearest(tmp_path):
     o2, n2 = cgal_ext.compute_neighbor_graph(points[order], k=k)
     for a, i in enumerate(order[:200]):
         assert set(order[n2[o2[a]:o2[a + 1]]]) == set(neighbors[offsets[i]:offsets[i + 1]])
+    # Symmetric: the union with the transpose, each row sorted by index, without repeats or the point itself.
+    so, sn = cgal_ext.compute_neighbor_graph(points, k=k, symmetric=True)
+    union = [set() for _ in points]
+    for i in range(len(points)):
+        for j in neighbors[offsets[i]:offsets[i + 1]]:
+            union[i].add(j)
+            union[j].add(i)
+    for i in range(len(points)):
+        row = sn[so[i]:so[i + 1]]
+        assert list(row) == sorted(union[i])
     with pytest.raises(ValueError, match="k = 0"):
         cgal_ext.compute_neighbor_graph(points, k=0)
 

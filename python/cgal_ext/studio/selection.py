@@ -15,16 +15,8 @@ class Graph:
     """The symmetric k-nearest-neighbour graph of `points`, in CSR form (offsets, neighbors)."""
 
     def __init__(self, points, k=K):
-        n = len(points)
-        offsets, neighbors = cgal_ext.compute_neighbor_graph(points, k=min(k, n - 1))
-        rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(offsets))
-        source = np.concatenate([rows, neighbors])
-        target = np.concatenate([neighbors, rows])
-        order = np.argsort(source, kind="stable")
-        self.neighbors = target[order]
-        self.offsets = np.zeros(n + 1, np.int64)
-        np.cumsum(np.bincount(source, minlength=n), out=self.offsets[1:])
-        self.n = n
+        self.n = len(points)
+        self.offsets, self.neighbors = cgal_ext.compute_neighbor_graph(points, k=min(k, self.n - 1), symmetric=True)
 
     def of(self, indices):
         """The neighbours of the points `indices` (with repeats)."""
