@@ -467,6 +467,16 @@ TEST(NeighborGraph, MovingNeighborsAreTheTreesNearestAtEveryStep)
       expect_nearest(points, x[w].transpose(), k,
                      reported(k, [&](std::size_t count, const auto& visit) { near.nearest(w, x[w], count, visit); }));
     }
+  const std::size_t lookups = near.lookups();
+  EXPECT_GT(lookups, walkers); // the jumps and the long steps asked the tree again
+  // Steps of a hundredth of a spacing are answered from the kept rows: no lookup.
+  for(int s = 0; s < 5; ++s)
+    for(std::size_t w = 0; w < walkers; ++w) {
+      x[w] += 0.01 * spacing * Eigen::Vector3d(step(rng), step(rng), step(rng)).normalized();
+      expect_nearest(points, x[w].transpose(), 12,
+                     reported(12, [&](std::size_t count, const auto& visit) { near.nearest(w, x[w], count, visit); }));
+    }
+  EXPECT_LE(near.lookups(), lookups + walkers / 10);
   // Fewer rows than the reach: every row is a candidate, and every step is certain.
   const Matrix_n3 few = random_cloud(20, 13);
   const Position_tree few_tree(few, CGAL::Sequential_tag());
@@ -475,4 +485,5 @@ TEST(NeighborGraph, MovingNeighborsAreTheTreesNearestAtEveryStep)
   for(int s = 0; s < 5; ++s, at.x() += 0.5)
     expect_nearest(few, at.transpose(), 20,
                    reported(30, [&](std::size_t count, const auto& visit) { near_few.nearest(0, at, count, visit); }));
+  EXPECT_EQ(near_few.lookups(), 1u);
 }

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -227,7 +228,8 @@ private:
 /// point keeps the `reach` rows nearest to where it was last looked up, and its `k` <= `reach` nearest are taken
 /// from them while that is certain, that is, while the k-th of them is nearer to it than the reach-th was to the
 /// old place less the distance moved (then no other row can be nearer); otherwise the tree is asked again. The
-/// answer is the tree's, ranked by (squared distance, row), for a few distance computations per step.
+/// answer is the tree's, ranked by (squared distance, row), for `reach` distances and a partial sort where a step
+/// is certain. It keeps `reach` rows and an anchor per point (about 4 reach + 32 bytes).
 class Moving_neighbors
 {
 public:
@@ -242,6 +244,7 @@ public:
   void nearest(std::size_t point, const Eigen::Vector3d& x, std::size_t k, const Visit& visit)
   {
     thread_local std::vector<Ranked_row> ranked;
+    assert(k <= m_reach || m_reach == m_tree.size());
     k = std::min(k, m_reach);
     if(k == 0) return;
     const Position_tree::Point at(x.x(), x.y(), x.z());
@@ -261,6 +264,8 @@ public:
     }
     ranked.clear();
     m_tree.nearest(at, m_reach, [&](int j, double d2) { ranked.emplace_back(d2, j); });
+    assert(ranked.size() == m_reach);
+    ++m_lookups;
     for(std::size_t c = 0; c < m_reach; ++c) candidates[c] = ranked[c].second;
     m_anchor[point] = x;
     // All the rows taken: every later step is certain.
@@ -269,9 +274,13 @@ public:
     for(std::size_t c = 0; c < k; ++c) visit(ranked[c].second, ranked[c].first);
   }
 
+  /// How often the tree was asked (for the tests).
+  std::size_t lookups() const { return m_lookups.load(); }
+
 private:
   const Position_tree& m_tree;
   std::size_t m_reach;
+  std::atomic<std::size_t> m_lookups{0};
   std::vector<Eigen::Vector3d> m_anchor;
   std::vector<double> m_radius; // < 0: not looked up yet
   std::vector<int> m_candidates;

@@ -51,7 +51,7 @@ double typical_spacing(const Matrix_n3& positions, const Position_tree& tree)
 /// Every point's local spacing: the median, over the point and its 15 nearest neighbours, of their mean
 /// distance to their 6 nearest neighbours. The median over a neighbourhood follows a change of density (an
 /// adaptive mesh, a random sampling) but not one point's luck; at a hole's rim it is that of the rim's side.
-/// With `rows`, only theirs are computed (from their neighbourhoods only) and the others are 0.
+/// With `rows` (distinct), only theirs are computed (from their neighbourhoods only) and the others are 0.
 template <typename ConcurrencyTag>
 std::vector<double> local_spacings(const Matrix_n3& positions, const Position_tree& tree,
                                    const std::vector<int>* rows = nullptr)

@@ -206,8 +206,9 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     // The samples of earlier rounds stay put: the round's tree serves them; only the new ones get a tree per step.
     Matrix_n3 moving(Eigen::Index(round_points.size()), 3);
     std::vector<char> settled(round_points.size(), 1);
-    // A step moves each new point little (its push is capped at 0.3 spacings): its nearest input samples (for the
-    // projections, twice the fit's) and its nearest samples of earlier rounds (for the repulsion) are kept.
+    // A step moves most new points little (the push is capped at 0.3 spacings; the projection moves them back onto
+    // the surface): their nearest input samples (for the projections, twice the fit's) and their nearest samples
+    // (input and earlier rounds, for the repulsion) are kept between steps.
     Moving_neighbors near_input(input_tree, round_points.size(), 4 * k);
     std::unique_ptr<Moving_neighbors> near_earlier;
     if(round > 0) near_earlier = std::make_unique<Moving_neighbors>(tree, round_points.size(), 24);
