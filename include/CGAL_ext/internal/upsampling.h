@@ -231,8 +231,21 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
             };
           };
           near_samples.nearest(m, x, 12, repel(&all));
-          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), std::min<std::size_t>(12, round_points.size()),
-                              repel(&moving));
+          // Of the 12 nearest new points (this one among them), those within its reach: from a range search,
+          // which costs less than the 12 nearest.
+          thread_local std::vector<int> near_rows;
+          thread_local std::vector<Ranked_row> within_reach;
+          near_rows.clear();
+          moving_tree.within(Position_tree::Point(x.x(), x.y(), x.z()), radius * (1 + 1e-12), near_rows);
+          within_reach.clear();
+          for(const int j : near_rows) {
+            const double d2 = squared_distance(x.x(), x.y(), x.z(), moving(j, 0), moving(j, 1), moving(j, 2));
+            if(d2 < radius * radius) within_reach.emplace_back(d2, j);
+          }
+          const std::size_t repelling = std::min<std::size_t>(12, within_reach.size());
+          std::partial_sort(within_reach.begin(), within_reach.begin() + std::ptrdiff_t(repelling), within_reach.end());
+          const auto repel_moving = repel(&moving);
+          for(std::size_t c = 0; c < repelling; ++c) repel_moving(within_reach[c].second, within_reach[c].first);
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
