@@ -95,6 +95,10 @@ Announced ply_announced(std::istream& in, const std::string& name)
         property.value = ply_scalar(w[3]);
         if(property.count.bytes == 0 || property.value.bytes == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
         if(property.count.is_real) fail("a list's count type '" + w[2] + "' is not an integer type");
+        // Recorded as a list: CGAL's reader casts nx (or x) to a float type and calls through a null pointer when
+        // it is a list (found by fuzz/fuzz_ply); the checks at end_header refuse it by name.
+        if(e.name == "vertex") vertex_types.emplace(w[4], "list");
+        if(e.name == "vertex") vertex_names.push_back(w[4]);
       } else if(w.size() == 3) {
         property.name = w[2];
         property.value = ply_scalar(w[1]);

@@ -543,6 +543,15 @@ const std::vector<Row>& catalogue()
                                                   "0 0 0 1 0\n1 0 0 1 0\n0 1 0 1 0\n");
        w.expect_failure("details -i " + in + " -o " + w.path("o.ply"), "property 'blue' appears twice");
      }},
+    {"cli_ply_normals_as_lists", [] {
+       Workspace w;
+       const std::string in = w.write("lists.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                                                   "property double y\nproperty double z\nproperty list uchar double nx\n"
+                                                   "property list uchar double ny\nproperty list uchar double nz\nend_header\n"
+                                                   "0 0 0 1 0 1 0 1 1\n1 0 0 1 0 1 0 1 1\n0 1 0 1 0 1 0 1 1\n");
+       w.expect_failure("details -i " + in + " -o " + w.path("o.ply"),
+                        "the normals need nx, ny and nz properties, all float or all double");
+     }},
     {"cli_ply_list_longer_than_the_file", [] {
        Workspace w;
        std::string face(1, char(200)); // a triangle announced with 200 indices, followed by 3
