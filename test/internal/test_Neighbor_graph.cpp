@@ -211,9 +211,10 @@ TEST(NeighborGraph, NearestAreTheNearestRankedByDistanceAndRow)
                      [&](int j, double d2) { got.emplace_back(d2, j); });
         const std::vector<int> expected = brute_force_nearest(points, query, k);
         ASSERT_EQ(got.size(), k);
-        EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
-        for(std::size_t m = 0; m < k; ++m) // the same distances; at the k-th, any of the tied rows
+        for(std::size_t m = 0; m < k; ++m) { // at the k-th distance too, the lowest of the tied rows
+          EXPECT_EQ(got[m].second, expected[m]) << "k " << k << ", query " << q;
           EXPECT_EQ(got[m].first, (points.row(expected[m]) - query).squaredNorm()) << "k " << k << ", query " << q;
+        }
       }
     }
 }
@@ -388,20 +389,72 @@ std::vector<Ranked_row> reported(std::size_t k, const Search& search)
   return got;
 }
 
-// The brute-force ranking of `k` rows, where rows tied at the k-th distance may differ: compared by distance.
+// The brute-force ranking of `k` rows by (squared distance, row), ties at the k-th distance included.
 void expect_nearest(const Matrix_n3& points, const Eigen::RowVector3d& query, std::size_t k,
                     const std::vector<Ranked_row>& got)
 {
   const std::vector<int> expected = brute_force_nearest(points, query, k);
   ASSERT_EQ(got.size(), k);
-  EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
   for(std::size_t m = 0; m < k; ++m) {
-    EXPECT_EQ(got[m].first, (points.row(expected[m]) - query).squaredNorm()) << "rank " << m;
+    EXPECT_EQ(got[m].second, expected[m]) << "rank " << m;
     EXPECT_EQ(got[m].first, (points.row(got[m].second) - query).squaredNorm()) << "rank " << m;
   }
 }
 
 } // namespace
+
+TEST(NeighborGraph, TheKdTreeRanksByDistanceThenRowAndFindsEveryRowWithinARadius)
+{
+  // A lattice (exact ties) with duplicates, and a random cloud; every k from 1 to past the tree's switch from a
+  // sorted insertion to a heap; queries at rows, between rows and outside the cloud's box.
+  for(const Matrix_n3& points : {lattice_with_duplicates(40), random_cloud(700, 5)}) {
+    const Row_kd_tree tree(points, CGAL::Parallel_if_available_tag());
+    ASSERT_EQ(tree.size(), std::size_t(points.rows()));
+    std::vector<Ranked_row> got;
+    std::vector<int> within;
+    for(Eigen::Index q = 0; q < points.rows(); q += 37)
+      for(const Eigen::RowVector3d& shift :
+          {Eigen::RowVector3d(0, 0, 0), Eigen::RowVector3d(1.0 / 16, 1.0 / 16, 0), Eigen::RowVector3d(3, -2, 0.5)}) {
+        const Eigen::RowVector3d query = points.row(q) + shift;
+        std::vector<Ranked_row> expected;
+        for(Eigen::Index j = 0; j < points.rows(); ++j)
+          expected.emplace_back(
+            squared_distance(query(0), query(1), query(2), points(j, 0), points(j, 1), points(j, 2)), int(j));
+        std::sort(expected.begin(), expected.end());
+        for(std::size_t k = 1; k <= expected.size(); k += k < 20 ? 1 : 37) {
+          tree.nearest(query.data(), k, got);
+          EXPECT_TRUE(std::equal(got.begin(), got.end(), expected.begin()) && got.size() == k)
+            << "k " << k << ", query " << q;
+        }
+        tree.nearest(query.data(), expected.size() + 5, got);
+        EXPECT_EQ(got, expected);
+        // Radii at exact lattice distances: the rows at the radius are within it.
+        for(const double radius : {0.0, 0.125, 0.25, 0.3}) {
+          within.clear();
+          tree.within(query.data(), radius, within);
+          std::sort(within.begin(), within.end());
+          std::vector<int> inside;
+          for(const Ranked_row& e : expected)
+            if(e.first <= radius * radius) inside.push_back(e.second);
+          std::sort(inside.begin(), inside.end());
+          EXPECT_EQ(within, inside) << "radius " << radius << ", query " << q;
+        }
+      }
+  }
+  // An empty tree and a tree of one row.
+  const double origin[3] = {0, 0, 0};
+  std::vector<Ranked_row> got{{1.0, 1}};
+  std::vector<int> within;
+  Row_kd_tree(Matrix_n3(0, 3), CGAL::Sequential_tag()).nearest(origin, 3, got);
+  EXPECT_TRUE(got.empty());
+  Row_kd_tree(Matrix_n3(0, 3), CGAL::Sequential_tag()).within(origin, 1.0, within);
+  EXPECT_TRUE(within.empty());
+  const Row_kd_tree one(Matrix_n3::Ones(1, 3), CGAL::Sequential_tag());
+  one.nearest(origin, 3, got);
+  EXPECT_EQ(got, std::vector<Ranked_row>({{3.0, 0}}));
+  one.within(origin, std::sqrt(3.0) * 0.999, within);
+  EXPECT_TRUE(within.empty());
+}
 
 TEST(NeighborGraph, ATreeOfAppendedRowsAnswersAsATreeOverAllRows)
 {

@@ -6,18 +6,14 @@
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Cell_grid.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/Row_kd_tree.h>
 #include <CGAL_ext/internal/compiled_instances.h>
 #include <CGAL_ext/internal/parallel.h>
 
-#include <CGAL/Fuzzy_sphere.h>
-#include <CGAL/Kd_tree.h>
-#include <CGAL/Orthogonal_k_neighbor_search.h>
-#include <CGAL/Search_traits_3.h>
-#include <CGAL/Search_traits_adapter.h>
-
-#include <boost/iterator/counting_iterator.hpp>
+#include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -57,30 +53,15 @@ inline void check_neighbor_count(std::size_t k, std::size_t n, const char* who)
   }
 }
 
-/// The squared distance of two points: the one formula every ranking of neighbours uses, so that two searches
-/// over different sets of points (a whole scan and a tile of it) rank the same pair alike.
-inline double squared_distance(double ax, double ay, double az, double bx, double by, double bz)
-{
-  const double dx = ax - bx, dy = ay - by, dz = az - bz;
-  return dx * dx + dy * dy + dz * dz;
-}
-
-/// (squared distance, row): the order in which every search ranks its candidates.
-using Ranked_row = std::pair<double, int>;
-
-/// CGAL's kd-tree over the rows of a position array: nearest-neighbour queries that report row indices, ranked by
-/// (squared distance, row); a closed ball of the k-th nearest depends on the positions alone (doc/design.md, "One
-/// neighbourhood rule").
+/// A kd-tree over the rows of a position array (Row_kd_tree), or over those of another tree followed by rows
+/// of its own: nearest-neighbour queries that report row indices, ranked by (squared distance, row); a closed
+/// ball of the k-th nearest depends on the positions alone (doc/design.md, "One neighbourhood rule").
 class Position_tree
 {
   using SC = CGAL::Simple_cartesian<double>;
-  using Point_pmap = CGAL::Pointer_property_map<SC::Point_3>::const_type;
-  using Traits = CGAL::Search_traits_adapter<int, Point_pmap, CGAL::Search_traits_3<SC>>;
-  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
-  using Tree = typename Search::Tree;
 
-  // Distances within this relative margin of the k-th are checked by a range search: the tree reports the k + 1
-  // nearest by its own rounding of the distance, which may differ from ours in the last bits.
+  // The radius of a range search that must take in the rows at a squared distance: larger by this relative
+  // margin, for the rounding of the square root.
   static constexpr double tie_margin = 1e-12;
 
 public:
@@ -97,15 +78,10 @@ public:
   }
 
   template <typename ConcurrencyTag>
-  explicit Position_tree(const Matrix_n3& positions, ConcurrencyTag)
-    : m_points(std::size_t(positions.rows())), m_pmap(nullptr)
+  explicit Position_tree(const Matrix_n3& positions, ConcurrencyTag tag)
+      : m_points(std::size_t(positions.rows())), m_tree(positions, tag)
   {
     for(std::size_t i = 0; i < m_points.size(); ++i) m_points[i] = point(positions, Eigen::Index(i));
-    m_pmap = Point_pmap(m_points.data());
-    if(m_points.empty()) return; // only as the appended rows of another tree
-    m_tree = std::make_unique<Tree>(boost::counting_iterator<int>(0), boost::counting_iterator<int>(int(m_points.size())),
-                                    typename Tree::Splitter(), Traits(m_pmap));
-    m_tree->template build<ConcurrencyTag>();
   }
 
   /// A tree over the rows of `base` followed by those of `appended` (rows `base.size()` on), built over the
@@ -124,8 +100,7 @@ public:
   }
 
   /// Calls `visit(row, squared_distance)` for the `min(k, size())` rows nearest to `query` in the order
-  /// (squared distance, row), nearest first. Of rows tied at the k-th distance the tree keeps those it meets first:
-  /// its inner order is a function of the rows it was built on, and those are in the order of their positions.
+  /// (squared distance, row), nearest first: of rows tied at the k-th distance, those of the lowest rows.
   template <typename Visit>
   void nearest(const Point& query, std::size_t k, const Visit& visit) const
   {
@@ -145,7 +120,7 @@ public:
     };
     search(query, std::min(k + 2, size()), out); // the point itself, k others and one to see a tie
     drop_self();
-    if(out.size() > k && out[k].first <= out[k - 1].first * (1 + tie_margin)) {
+    if(out.size() > k && out[k].first <= out[k - 1].first) {
       gather_ties(query, out[k - 1].first, out);
       drop_self();
     }
@@ -155,44 +130,33 @@ public:
     out.resize(end);
   }
 
-  /// Appends to `out` the rows within `radius` of `centre` (and perhaps some a rounding farther).
+  /// Appends to `out` the rows within `radius` of `centre`.
   void within(const Point& centre, double radius, std::vector<int>& out) const
   {
     if(m_base) m_base->within(centre, radius, out);
     const std::size_t first = out.size();
-    if(!m_points.empty())
-      m_tree->search(std::back_inserter(out), CGAL::Fuzzy_sphere<Traits>(centre, radius, 0, Traits(m_pmap)));
+    m_tree.within(coordinates(centre).data(), radius, out);
     for(std::size_t i = first; i < out.size(); ++i) out[i] += int(m_first_own_row);
   }
 
 private:
-  // The tree's `count` nearest to `query`, ranked.
-  void search(const Point& query, std::size_t count, std::vector<Ranked_row>& out) const
+  static std::array<double, 3> coordinates(const Point& p) { return {p.x(), p.y(), p.z()}; }
+
+  // The tree's `count` nearest to `query`, ranked; with `bound`, only those at most at that squared distance.
+  void search(const Point& query, std::size_t count, std::vector<Ranked_row>& out,
+              double bound = std::numeric_limits<double>::infinity()) const
   {
-    out.clear();
-    if(m_base) m_base->search(query, std::min(count, m_base->size()), out);
-    const std::size_t first = out.size();
-    if(!m_points.empty() && first == count && count > 0) {
-      // Only appended rows within the base's count-th distance can be among the nearest.
-      const double kth = out.back().first;
-      thread_local std::vector<int> rows;
-      rows.clear();
-      m_tree->search(std::back_inserter(rows),
-                     CGAL::Fuzzy_sphere<Traits>(query, std::sqrt(kth) * (1 + tie_margin), 0, Traits(m_pmap)));
-      for(const int row : rows) {
-        const double d2 = squared_distance(query, m_points[std::size_t(row)]);
-        if(d2 <= kth) out.emplace_back(d2, row + int(m_first_own_row));
-      }
-      std::sort(out.begin() + std::ptrdiff_t(first), out.end());
-    } else if(!m_points.empty()) {
-      Search search(*m_tree, query, unsigned(std::min(count, m_points.size())), 0, true,
-                    typename Search::Distance(m_pmap), true);
-      for(auto it = search.begin(); it != search.end(); ++it)
-        out.emplace_back(squared_distance(query, m_points[std::size_t(it->first)]), it->first + int(m_first_own_row));
+    if(!m_base) {
+      m_tree.nearest(coordinates(query).data(), count, out, bound);
+      return;
     }
-    // Nearest first already, but for ties (and our rounding of the distance): an insertion sort, linear here.
-    for(std::size_t i = first + 1; i < out.size(); ++i)
-      for(std::size_t j = i; j > first && out[j] < out[j - 1]; --j) std::swap(out[j], out[j - 1]);
+    // The base's nearest first, then the appended rows': only those within the base's count-th distance can be
+    // among the nearest.
+    m_base->search(query, std::min(count, m_base->size()), out, bound);
+    thread_local std::vector<Ranked_row> own;
+    m_tree.nearest(coordinates(query).data(), count, own, out.size() == count ? out.back().first : bound);
+    const std::size_t first = out.size();
+    for(const Ranked_row& entry : own) out.emplace_back(entry.first, entry.second + int(m_first_own_row));
     if(first > 0 && first < out.size()) { // the base's nearest and the appended rows' nearest: merged, cut to count
       thread_local std::vector<Ranked_row> merged;
       merged.clear();
@@ -202,8 +166,8 @@ private:
     }
   }
 
-  // Replaces `out` by every row within the margin of `kth` (a squared distance), ranked: the rows tied with the k-th
-  // that the tree's k + 1 may have left out.
+  // Replaces `out` by every row at most at `kth` (a squared distance), ranked: the rows tied with the k-th that a
+  // search for k + 1 leaves out.
   void gather_ties(const Point& query, double kth, std::vector<Ranked_row>& out) const
   {
     thread_local std::vector<int> rows;
@@ -212,14 +176,13 @@ private:
     out.clear();
     for(const int row : rows) {
       const double d2 = squared_distance(query, (*this)[std::size_t(row)]);
-      if(d2 <= kth * (1 + tie_margin)) out.emplace_back(d2, row);
+      if(d2 <= kth) out.emplace_back(d2, row);
     }
     std::sort(out.begin(), out.end());
   }
 
   std::vector<Point> m_points;
-  Point_pmap m_pmap;
-  std::unique_ptr<Tree> m_tree;
+  Row_kd_tree m_tree;
   const Position_tree* m_base = nullptr; // the rows before m_first_own_row
   std::size_t m_first_own_row = 0;
 };
@@ -386,7 +349,7 @@ inline bool nearest_ball_in_block(const Cell_grid::Block& block, double margin, 
 /// Directed k-nearest-neighbour graph under the package's one rule: each row holds the closed ball of its k-th
 /// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Each row
 /// ranks the points of the block of grid cells around its own, then of a wider block where its ball reaches past
-/// it; CGAL's kd-tree answers the rows no block can (doc/editing_at_scale.md, "The k-nearest graph on a grid").
+/// it; the kd-tree (Position_tree) answers the rows no block can (doc/editing_at_scale.md, "The k-nearest graph on a grid").
 /// Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
