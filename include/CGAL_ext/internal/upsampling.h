@@ -16,6 +16,7 @@
 #include <CGAL/number_type_config.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <tuple>
@@ -37,14 +38,20 @@ public:
   {
     return Key((long long)std::floor(p.x() / m_cell), (long long)std::floor(p.y() / m_cell), (long long)std::floor(p.z() / m_cell));
   }
-  /// Whether a point of the set lies within `radius` (at most `cell`) of `p`.
+  /// Whether a point of the set lies within `radius` of `p`.
   bool near(const Eigen::Vector3d& p, double radius, const std::vector<Eigen::Vector3d>& points) const
   {
-    const Key c = key(p);
-    for(long long dx = -1; dx <= 1; ++dx)
-      for(long long dy = -1; dy <= 1; ++dy)
-        for(long long dz = -1; dz <= 1; ++dz) {
-          const auto it = m_members.find(Key(std::get<0>(c) + dx, std::get<1>(c) + dy, std::get<2>(c) + dz));
+    // The cells the ball meets (widened a little for the rounding of the division).
+    const double reach = radius * (1 + 1e-9);
+    long long low[3], high[3];
+    for(int d = 0; d < 3; ++d) {
+      low[d] = (long long)std::floor((p[d] - reach) / m_cell);
+      high[d] = (long long)std::floor((p[d] + reach) / m_cell);
+    }
+    for(long long x = low[0]; x <= high[0]; ++x)
+      for(long long y = low[1]; y <= high[1]; ++y)
+        for(long long z = low[2]; z <= high[2]; ++z) {
+          const auto it = m_members.find(Key(x, y, z));
           if(it == m_members.end()) continue;
           for(int m : it->second)
             if((points[std::size_t(m)] - p).norm() < radius) return true;
@@ -175,27 +182,42 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     double widest = 0;
     for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
     Cell_set kept(0.5 * widest);
+    // Each candidate as (gap, step, steps); whether a sample lies within half a spacing of it is asked of the tree
+    // for all of them at once, in parallel; the kept candidates are chosen in order after.
+    std::vector<std::array<int, 3>> candidates;
+    for(std::size_t g = 0; g < gaps.size(); ++g) {
+      const double ha = all_spacing[std::size_t(gaps[g].from)], hb = all_spacing[std::size_t(gaps[g].across)];
+      const int steps = int(std::lround((all.row(gaps[g].across) - all.row(gaps[g].from)).norm() / (0.5 * (ha + hb))));
+      for(int s = 1; s < steps; ++s) candidates.push_back({int(g), s, steps});
+    }
+    const auto place = [&](const std::array<int, 3>& candidate, double& t, double& h) {
+      const Hole_gap& g = gaps[std::size_t(candidate[0])];
+      t = double(candidate[1]) / candidate[2];
+      h = (1 - t) * all_spacing[std::size_t(g.from)] + t * all_spacing[std::size_t(g.across)];
+      return Eigen::Vector3d(all.row(g.from).transpose() + t * (all.row(g.across) - all.row(g.from)).transpose());
+    };
+    std::vector<char> near_sample(candidates.size(), 0);
+    for_range<ConcurrencyTag>(0, candidates.size(), [&](std::size_t c) {
+      double t, h;
+      const Eigen::Vector3d x = place(candidates[c], t, h);
+      tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1,
+                   [&](int, double d2) { near_sample[c] = d2 < 0.25 * h * h; });
+    });
     std::vector<Eigen::Vector3d> round_points, round_normals;
     std::vector<double> round_spacing, round_empty_factor;
-    for(const Hole_gap& g : gaps) {
-      const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
+    for(std::size_t c = 0; c < candidates.size(); ++c) {
+      double t, h;
+      const Eigen::Vector3d x = place(candidates[c], t, h);
+      if(near_sample[c] || kept.near(x, 0.5 * h, round_points)) continue;
+      const Hole_gap& g = gaps[std::size_t(candidates[c][0])];
       const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
-      const double ha = all_spacing[std::size_t(g.from)], hb = all_spacing[std::size_t(g.across)];
-      const int steps = int(std::lround((b - a).norm() / (0.5 * (ha + hb))));
-      for(int s = 1; s < steps; ++s) {
-        const double t = double(s) / steps, h = (1 - t) * ha + t * hb;
-        const Eigen::Vector3d x = a + t * (b - a);
-        bool crowded = kept.near(x, 0.5 * h, round_points);
-        if(!crowded)
-          tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1, [&](int, double d2) { crowded = d2 < 0.25 * h * h; });
-        if(crowded) continue;
-        kept.insert(x, int(round_points.size()));
-        round_points.push_back(x);
-        Eigen::Vector3d normal = (1 - t) * na + t * nb;
-        round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
-        round_spacing.push_back(h);
-        round_empty_factor.push_back((1 - t) * all_empty_factor[std::size_t(g.from)] + t * all_empty_factor[std::size_t(g.across)]);
-      }
+      kept.insert(x, int(round_points.size()));
+      round_points.push_back(x);
+      Eigen::Vector3d normal = (1 - t) * na + t * nb;
+      round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
+      round_spacing.push_back(h);
+      round_empty_factor.push_back((1 - t) * all_empty_factor[std::size_t(g.from)] +
+                                   t * all_empty_factor[std::size_t(g.across)]);
     }
     if(round_points.empty()) break;
     ++result.rounds;
