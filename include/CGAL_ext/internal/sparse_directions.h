@@ -205,7 +205,13 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
     const std::size_t i = rows ? std::size_t((*rows)[r]) : r;
     const double empty_within = empty_radius[i], max_gap = max_hole_size * spacing[i];
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
-    thread_local std::vector<std::pair<int, Eigen::Vector3d>> candidates; // row, tangent offset
+    struct Candidate
+    {
+      int row;
+      Eigen::Vector3d offset; // tangent
+      double length;          // of the offset
+    };
+    thread_local std::vector<Candidate> candidates;
     thread_local std::vector<char> same_sheet; // whether a sample across a gap may continue this point's surface
     auto gather = [&](std::size_t count) {
       candidates.clear();
@@ -215,43 +221,39 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
         Eigen::Vector3d d = positions.row(j).transpose() - p;
         const double height = d.dot(normal);
         d -= height * normal;
-        candidates.emplace_back(j, d);
+        candidates.push_back({j, d, d.norm()});
         // Within 30 degrees of the tangent plane, facing the same way: not a sample of another sheet (the body
         // under an arm), whose bridge would cross empty space.
-        same_sheet.push_back(std::abs(height) <= tan_sheet * d.norm() && normals.row(j).dot(normal.transpose()) > 0.5);
+        same_sheet.push_back(std::abs(height) <= tan_sheet * candidates.back().length &&
+                             normals.row(j).dot(normal.transpose()) > 0.5);
       });
     };
     // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter
     // looks empty among them.
     gather(std::min(reach, std::max<std::size_t>(k, 16) + 1));
-    const bool all_quarters_seen = [&] {
-      const Eigen::Vector3d a =
-        principal_tangent_axis(std::min(k, candidates.size()), [&](std::size_t m) { return candidates[m].second; }, normal);
-      if(!a.allFinite()) return false;
-      const Eigen::Vector3d b = normal.cross(a);
-      int seen = 0;
-      for(const Eigen::Vector3d& d : {a, Eigen::Vector3d(-a), b, Eigen::Vector3d(-b)})
-        for(const auto& candidate : candidates) {
-          const double length = candidate.second.norm();
-          if(length > 0 && length < empty_within && candidate.second.dot(d) > std::sqrt(0.5) * length) { ++seen; break; }
-        }
-      return seen == 4;
-    }();
-    if(all_quarters_seen) return;
-    gather(reach);
-    // Principal axes of the k nearest projected neighbours.
-    const Eigen::Vector3d e1 =
-      principal_tangent_axis(std::min(k, candidates.size()), [&](std::size_t m) { return candidates[m].second; }, normal);
+    // Principal axes of the k nearest projected neighbours (the wide query's first k are the same rows: both
+    // rank by distance, then row).
+    const Eigen::Vector3d e1 = principal_tangent_axis(
+      std::min(k, candidates.size()), [&](std::size_t m) { return candidates[m].offset; }, normal);
     if(!e1.allFinite()) return;
     const Eigen::Vector3d e2 = normal.cross(e1);
     const std::array<Eigen::Vector3d, 4> directions{e1, Eigen::Vector3d(-e1), e2, Eigen::Vector3d(-e2)};
+    int seen = 0;
+    for(const Eigen::Vector3d& d : directions)
+      for(const Candidate& candidate : candidates)
+        if(candidate.length > 0 && candidate.length < empty_within &&
+           candidate.offset.dot(d) > std::sqrt(0.5) * candidate.length) {
+          ++seen;
+          break;
+        }
+    if(seen == 4) return;
+    gather(reach);
     for(int q = 0; q < 4; ++q) {
       const Eigen::Vector3d& d = directions[std::size_t(q)];
       bool empty = true;
       double best = max_gap;
       for(std::size_t c = 0; c < candidates.size(); ++c) {
-        const auto& [j, offset] = candidates[c];
-        const double length = offset.norm();
+        const auto& [j, offset, length] = candidates[c];
         if(!(length > 0)) continue;
         const double along = offset.dot(d) / length;
         if(length < empty_within && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
