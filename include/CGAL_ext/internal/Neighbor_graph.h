@@ -237,6 +237,9 @@ public:
     for(std::size_t c = 0; c < k; ++c) visit(ranked[c].second, ranked[c].first);
   }
 
+  /// How many rows each point keeps.
+  std::size_t reach() const { return m_reach; }
+
   /// How often the tree was asked (for the tests).
   std::size_t lookups() const { return m_lookups.load(); }
 

@@ -78,10 +78,11 @@ private:
 /// so the fit takes the nearest k / 8 samples in each of 8 directions around `x` (among the about
 /// 3 pi (d / h)^2 samples of a disc of radius 2 d), which surround the hole, and a degree-3 surface through
 /// them interpolates the rim: a wave's inflection across a hole is then followed, not flattened.
-/// `tree` holds the samples; `nearest` keeps its nearest samples to the new point `point`, which `x` is.
+/// `tree` holds the samples; `nearest` keeps its nearest samples to the new point `point`, which `x` is, and
+/// `nearest_in_hole` more of them for the fits inside a hole.
 inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, Moving_neighbors& nearest,
-                                 std::size_t point, std::size_t k, double h, Eigen::Vector3d& x,
-                                 Eigen::Vector3d& normal)
+                                 Moving_neighbors& nearest_in_hole, std::size_t point, std::size_t k, double h,
+                                 Eigen::Vector3d& x, Eigen::Vector3d& normal)
 {
   thread_local std::vector<int> near;
   near.clear();
@@ -100,7 +101,7 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     constexpr double pi = CGAL_PI;
     const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
     std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    tree.nearest(query, std::min<std::size_t>(candidates, std::size_t(samples.rows())), [&](int j, double) {
+    const auto take = [&](int j, double) {
       const Eigen::Vector3d d = samples.row(j).transpose() - x;
       const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
       std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
@@ -108,7 +109,12 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
         ++in_direction;
         near.push_back(j);
       }
-    });
+    };
+    const std::size_t wanted = std::min<std::size_t>(candidates, std::size_t(samples.rows()));
+    if(wanted <= nearest_in_hole.reach())
+      nearest_in_hole.nearest(point, x, wanted, take);
+    else
+      tree.nearest(query, wanted, take);
   }
   fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
   x = fit.project(x);
@@ -232,6 +238,10 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     // the surface): their nearest input samples (for the projections, twice the fit's) and their nearest samples
     // (input and earlier rounds, for the repulsion) are kept between steps.
     Moving_neighbors near_input(input_tree, round_points.size(), 4 * k);
+    // Inside a hole a fit takes the nearest 2 k + 3 pi (d / h)^2 rows (`project_onto_surface`): 8 k of them cover
+    // a distance d to the nearest sample of up to about 2.8 spacings, most of a stretch's holes; wider ones ask the
+    // tree.
+    Moving_neighbors near_input_in_hole(input_tree, round_points.size(), 8 * k);
     std::unique_ptr<Moving_neighbors> near_earlier;
     if(round > 0) near_earlier = std::make_unique<Moving_neighbors>(tree, round_points.size(), 24);
     Moving_neighbors& near_samples = round > 0 ? *near_earlier : near_input;
@@ -272,13 +282,13 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
         }
-        project_onto_surface(positions, input_tree, near_input, m, 2 * k, h, x, normal);
+        project_onto_surface(positions, input_tree, near_input, near_input_in_hole, m, 2 * k, h, x, normal);
         if(iteration == settings.relaxation_iterations) {
           // A projection onto the surface should be a fixed point: projecting the result again must not move
           // it. Where the fit is unstable (a cubic across a tear, in a frame that tilts with the normal) it
           // does, and the point is dropped rather than written off the surface.
           Eigen::Vector3d again = x, again_normal = normal;
-          project_onto_surface(positions, input_tree, near_input, m, 2 * k, h, again, again_normal);
+          project_onto_surface(positions, input_tree, near_input, near_input_in_hole, m, 2 * k, h, again, again_normal);
           settled[m] = (again - x).squaredNorm() <= 0.0625 * h * h; // a quarter spacing
         }
         moved[m] = x;
