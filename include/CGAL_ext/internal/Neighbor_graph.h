@@ -154,7 +154,7 @@ private:
     // among the nearest.
     m_base->search(query, std::min(count, m_base->size()), out, bound);
     thread_local std::vector<Ranked_row> own;
-    m_tree.nearest(coordinates(query).data(), count, own, out.size() == count ? out.back().first : bound);
+    m_tree.nearest(coordinates(query).data(), count, own, count > 0 && out.size() == count ? out.back().first : bound);
     const std::size_t first = out.size();
     for(const Ranked_row& entry : own) out.emplace_back(entry.first, entry.second + int(m_first_own_row));
     if(first > 0 && first < out.size()) { // the base's nearest and the appended rows' nearest: merged, cut to count
@@ -352,8 +352,8 @@ inline bool nearest_ball_in_block(const Cell_grid::Block& block, double margin, 
 /// Directed k-nearest-neighbour graph under the package's one rule: each row holds the closed ball of its k-th
 /// nearest other point (exactly k, more where points tie at that distance), ranked by (distance, row). Each row
 /// ranks the points of the block of grid cells around its own, then of a wider block where its ball reaches past
-/// it; the kd-tree (Position_tree) answers the rows no block can (doc/editing_at_scale.md, "The k-nearest graph on a grid").
-/// Returns an empty graph when cancelled.
+/// it; the kd-tree (Position_tree) answers the rows no block can (doc/editing_at_scale.md, "The k-nearest graph on
+/// a grid"). Returns an empty graph when cancelled.
 template <typename ConcurrencyTag>
 Neighbor_graph k_nearest_neighbor_graph(const Matrix_n3& positions, std::size_t k, Progress& progress)
 {
