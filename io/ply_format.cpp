@@ -95,18 +95,18 @@ Announced ply_announced(std::istream& in, const std::string& name)
         property.value = ply_scalar(w[3]);
         if(property.count.bytes == 0 || property.value.bytes == 0) fail("unknown list types '" + w[2] + " " + w[3] + "'");
         if(property.count.is_real) fail("a list's count type '" + w[2] + "' is not an integer type");
-        // Recorded as a list: CGAL's reader casts nx (or x) to a float type and calls through a null pointer when
-        // it is a list (found by fuzz/fuzz_ply); the checks at end_header refuse it by name.
-        if(e.name == "vertex") vertex_types.emplace(w[4], "list");
-        if(e.name == "vertex") vertex_names.push_back(w[4]);
       } else if(w.size() == 3) {
         property.name = w[2];
         property.value = ply_scalar(w[1]);
         if(property.value.bytes == 0) fail("unknown property type '" + w[1] + "'");
-        if(e.name == "vertex") vertex_types.emplace(w[2], w[1]);
-        if(e.name == "vertex") vertex_names.push_back(w[2]);
       } else
         fail("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME'");
+      // A list is recorded as "list": CGAL's reader casts nx (or x) to a float type and calls through a null pointer
+      // when it is a list (found by fuzz/fuzz_ply); the checks at end_header refuse it by name.
+      if(e.name == "vertex") {
+        vertex_types.emplace(property.name, w.size() == 5 ? "list" : w[1]);
+        vertex_names.push_back(property.name);
+      }
       // CGAL's reader looks a property up by name and casts it to the type it asked for: a twin of another type
       // (a list "blue" and an int "blue") made it call through a null pointer (found by fuzz/fuzz_ply).
       for(const Ply_property& other : e.properties)

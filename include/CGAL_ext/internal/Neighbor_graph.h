@@ -100,12 +100,14 @@ public:
   }
 
   /// Calls `visit(row, squared_distance)` for the `min(k, size())` rows nearest to `query` in the order
-  /// (squared distance, row), nearest first: of rows tied at the k-th distance, those of the lowest rows.
+  /// (squared distance, row), nearest first: of rows tied at the k-th distance, those of the lowest rows. With
+  /// `bound`, only rows at most at that squared distance.
   template <typename Visit>
-  void nearest(const Point& query, std::size_t k, const Visit& visit) const
+  void nearest(const Point& query, std::size_t k, const Visit& visit,
+               double bound = std::numeric_limits<double>::infinity()) const
   {
     thread_local std::vector<Ranked_row> found;
-    search(query, std::min(k, size()), found);
+    search(query, std::min(k, size()), found, bound);
     for(const Ranked_row& entry : found) visit(entry.second, entry.first);
   }
 

@@ -16,7 +16,6 @@
 #include <CGAL/number_type_config.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <memory>
 #include <tuple>
@@ -188,34 +187,37 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     double widest = 0;
     for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
     Cell_set kept(0.5 * widest);
-    // Each candidate as (gap, step, steps); whether a sample lies within half a spacing of it is asked of the tree
-    // for all of them at once, in parallel; the kept candidates are chosen in order after.
-    std::vector<std::array<int, 3>> candidates;
-    for(std::size_t g = 0; g < gaps.size(); ++g) {
-      const double ha = all_spacing[std::size_t(gaps[g].from)], hb = all_spacing[std::size_t(gaps[g].across)];
-      const int steps = int(std::lround((all.row(gaps[g].across) - all.row(gaps[g].from)).norm() / (0.5 * (ha + hb))));
-      for(int s = 1; s < steps; ++s) candidates.push_back({int(g), s, steps});
-    }
-    const auto place = [&](const std::array<int, 3>& candidate, double& t, double& h) {
-      const Hole_gap& g = gaps[std::size_t(candidate[0])];
-      t = double(candidate[1]) / candidate[2];
-      h = (1 - t) * all_spacing[std::size_t(g.from)] + t * all_spacing[std::size_t(g.across)];
-      return Eigen::Vector3d(all.row(g.from).transpose() + t * (all.row(g.across) - all.row(g.from)).transpose());
+    // Whether a sample lies that near is asked of the tree for every candidate at once, in parallel; those kept are
+    // chosen in order after.
+    struct Candidate
+    {
+      const Hole_gap* gap;
+      double t, h; // along the gap, and the spacing there
+      Eigen::Vector3d x;
     };
+    std::vector<Candidate> candidates;
+    for(const Hole_gap& g : gaps) {
+      const Eigen::Vector3d a = all.row(g.from).transpose(), b = all.row(g.across).transpose();
+      const double ha = all_spacing[std::size_t(g.from)], hb = all_spacing[std::size_t(g.across)];
+      const int steps = int(std::lround((b - a).norm() / (0.5 * (ha + hb))));
+      for(int s = 1; s < steps; ++s) {
+        const double t = double(s) / steps;
+        candidates.push_back({&g, t, (1 - t) * ha + t * hb, a + t * (b - a)});
+      }
+    }
     std::vector<char> near_sample(candidates.size(), 0);
     for_range<ConcurrencyTag>(0, candidates.size(), [&](std::size_t c) {
-      double t, h;
-      const Eigen::Vector3d x = place(candidates[c], t, h);
+      const Candidate& candidate = candidates[c];
+      const Eigen::Vector3d& x = candidate.x;
       tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1,
-                   [&](int, double d2) { near_sample[c] = d2 < 0.25 * h * h; });
+                   [&](int, double d2) { near_sample[c] = d2 < 0.25 * candidate.h * candidate.h; });
     });
     std::vector<Eigen::Vector3d> round_points, round_normals;
     std::vector<double> round_spacing, round_empty_factor;
     for(std::size_t c = 0; c < candidates.size(); ++c) {
-      double t, h;
-      const Eigen::Vector3d x = place(candidates[c], t, h);
+      const auto& [gap, t, h, x] = candidates[c];
       if(near_sample[c] || kept.near(x, 0.5 * h, round_points)) continue;
-      const Hole_gap& g = gaps[std::size_t(candidates[c][0])];
+      const Hole_gap& g = *gap;
       const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
       kept.insert(x, int(round_points.size()));
       round_points.push_back(x);
@@ -263,21 +265,10 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
             };
           };
           near_samples.nearest(m, x, 12, repel(&all));
-          // Of the 12 nearest new points (this one among them), those within its reach: from a range search,
-          // which costs less than the 12 nearest.
-          thread_local std::vector<int> near_rows;
-          thread_local std::vector<Ranked_row> within_reach;
-          near_rows.clear();
-          moving_tree.within(Position_tree::Point(x.x(), x.y(), x.z()), radius * (1 + 1e-12), near_rows);
-          within_reach.clear();
-          for(const int j : near_rows) {
-            const double d2 = squared_distance(x.x(), x.y(), x.z(), moving(j, 0), moving(j, 1), moving(j, 2));
-            if(d2 < radius * radius) within_reach.emplace_back(d2, j);
-          }
-          const std::size_t repelling = std::min<std::size_t>(12, within_reach.size());
-          std::partial_sort(within_reach.begin(), within_reach.begin() + std::ptrdiff_t(repelling), within_reach.end());
-          const auto repel_moving = repel(&moving);
-          for(std::size_t c = 0; c < repelling; ++c) repel_moving(within_reach[c].second, within_reach[c].first);
+          // Of the 12 nearest new points (this one among them), those within its reach: a search bounded there
+          // costs less than the 12 nearest.
+          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, repel(&moving),
+                              std::nextafter(radius * radius, 0.0));
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
