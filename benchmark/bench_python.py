@@ -5,8 +5,9 @@ gets it (set_handle_transform, deform, diffuse into the caller's arrays, reused 
 repetitions (a drag: of every repetition's drags). Writes OUT/python_results.csv and OUT/python_results.md.
 
 It runs, as point-detail does, with glibc's malloc on transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1,
-set by re-executing itself unless GLIBC_TUNABLES is set): a fresh array's first touch then costs one page fault per
-2 MiB, not per 4 KiB, which on a virtual machine halves the time of reading a large file.
+set by re-executing itself unless GLIBC_TUNABLES sets hugetlb or POINT_DETAIL_HUGE_PAGES is 0): a fresh array's
+first touch then costs one page fault per 2 MiB, not per 4 KiB, which on a virtual machine halves the time of
+reading a large file.
 
 Usage: PYTHONPATH=build/python benchmark/bench_python.py --out DIR [--build build] [--data data] [--quick]
 """
@@ -23,6 +24,7 @@ import time
 import numpy as np
 
 import cgal_ext
+from cgal_ext._process import reexecute_tuned
 
 
 def median(values):
@@ -102,8 +104,7 @@ def harness_arguments():
 
 
 def main():
-    if "GLIBC_TUNABLES" not in os.environ:
-        os.execve(sys.executable, [sys.executable] + sys.argv, dict(os.environ, GLIBC_TUNABLES="glibc.malloc.hugetlb=1"))
+    reexecute_tuned([sys.executable] + sys.argv)
     args = harness_arguments()
     n, reps, drags = (100000, 1, 5) if args.quick else (1000000, 5, 20)
     program = os.path.join(args.build, "src", "point-detail")
@@ -163,7 +164,7 @@ def main():
              "%d repetitions; a sampling of CGAL's "
              "armadillo with normals; a drag is `set_handle_transform`, `deform` and `diffuse(P, N)` into arrays reused "
              "from drag to drag, in the caller's order. Each row's reference is named in its last column; the library's "
-             "times are its statistics." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(), os.environ["GLIBC_TUNABLES"], reps),
+             "times are its statistics." % (" --quick" if args.quick else "", cgal_ext.get_num_threads(), os.environ.get("GLIBC_TUNABLES", "unset"), reps),
              "",
              "| measure | points | Python | reference | ratio | reference is |", "|---|---|---|---|---|---|"]
     for measure, points_n, python_s, reference_s, reference in rows:

@@ -10,7 +10,8 @@
   while a drag is live, at 100k, 1M, 4M and 10M points (above 1M with the page's point budget of 1M and without),
   and the background seen through the silhouette at the default view.
 
-Medians over the repetitions. Writes OUT/studio_results.csv and OUT/studio_results.md.
+The server's handlers run in this process, which starts as `python3 -m cgal_ext.studio` does: glibc's malloc on
+huge pages. Medians over the repetitions. Writes OUT/studio_results.csv and OUT/studio_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_studio.py --out DIR [--build build] [--data data] [--quick]
 """
 import asyncio
@@ -25,6 +26,7 @@ import time
 import numpy as np
 
 import cgal_ext
+from cgal_ext._process import reexecute_tuned
 from cgal_ext.studio.server import pack
 from cgal_ext.studio.session import Session
 
@@ -231,6 +233,7 @@ def browser_costs(folder, name, frame_seconds, budgets, renders=5):
 
 
 def main():
+    reexecute_tuned([sys.executable] + sys.argv)
     args = harness_arguments()
     server_sizes, browser_sizes = ([100000], [100000]) if args.quick else ([1000000, 4000000],
                                                                            [100000, 1000000, 4000000, 10000000])

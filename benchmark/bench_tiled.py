@@ -1,38 +1,42 @@
 #!/usr/bin/python3
-"""The tiled runs on Dask (doc/scaling.md) on seeded samplings of CGAL's armadillo with normals, against the
+"""The tiled runs on Dask (doc/scaling.md) on seeded samplings of CGAL's models with normals, against the
 one-process program on 1M points of the same model:
 
 - the program (`point-detail details`, quadric, read + compute + write) and the library call alone at 1M;
-- `cgal_ext.tiled.run("details", ...)` on a LocalCluster of one worker per core (one thread each) at 10M, 30M and
-  100M points (--quick: 1M and 2M): wall time from the call to the renamed output (the cluster already started),
-  points per second, the peak resident memory of every worker process (sampled every 0.1 s) and of the client;
+- the command users run, `python3 -m cgal_ext.tiled details SCAN -o OUT.ply` with its defaults (a LocalCluster of
+  one worker per core, one thread each), on the armadillo at 10M, 30M and 100M points and on the fandisk and the
+  lion head at 10M (--quick: the armadillo at 1M and 2M): wall time from the command's start to its exit (Python's
+  start and the cluster's included), points per second, the peak resident memory of every worker process
+  (sampled every 0.1 s) and of the command;
 - the per-tile costs (read, neighbours and certificate, compute, save) the 10^9 estimate of doc/scaling.md is
-  computed from, and the scratch disk's sequential write throughput, which bounds the passes that write.
+  computed from (the command's --report), and the scratch disk's sequential write throughput, which bounds the
+  passes that write.
 
-Medians over the repetitions (5 at 1M, 3 at 10M, 1 above); the tiled runs are also compared with the program's
-fastest run, whose file writes this machine delayed least (they vary from run to run by up to twice the
-computation). Writes OUT/tiled_results.csv and OUT/tiled_results.md.
+The program runs before each tiled run, on 1M points of the same model (five runs at least), so that both meet the
+machine at the same speed. Medians over the repetitions (5 at 1M, 3 at 10M, 1 above); the tiled runs are also
+compared with the program's fastest run. Writes OUT/tiled_results.csv and OUT/tiled_results.md.
 Usage: PYTHONPATH=build/python benchmark/bench_tiled.py --out DIR [--build build] [--data data] [--quick]
 """
 import csv
+import json
 import os
-import resource
 import subprocess
+import sys
 import tempfile
 import threading
 import time
 
 import psutil
-from distributed import Client, LocalCluster
 
 import cgal_ext
-from cgal_ext import tiled
+from cgal_ext._process import reexecute_tuned
 
 from bench_python import harness_arguments, median
 
 
 class PeakMemory:
-    """The largest resident set of each process below this one (the Dask workers), sampled in a thread."""
+    """The largest resident set of each process below this one (the command and its Dask workers), sampled in a
+    thread."""
 
     def __init__(self):
         self.peaks, self._stop = {}, threading.Event()
@@ -56,11 +60,41 @@ class PeakMemory:
         self._thread.join()
 
 
-def sample(args, tmp, n):
-    path = os.path.join(tmp, f"armadillo_{n}.ply")
+def sample(args, tmp, model, n, name=None):
+    path = os.path.join(tmp, name or f"{model}_{n}.ply")
     subprocess.run([os.path.join(args.build, "benchmark", "sample_scan"),
-                    os.path.join(args.data, "meshes", "armadillo.off"), str(n), path], check=True)
+                    os.path.join(args.data, "meshes", f"{model}.off"), str(n), path], check=True)
     return path
+
+
+def program_run(args, tmp, scan):
+    """The program's wall time on `scan`, and the library call's alone."""
+    start = time.perf_counter()
+    subprocess.run([os.path.join(args.build, "src", "point-detail"), "details", "-i", scan, "-o",
+                    os.path.join(tmp, "one.ply")], check=True, capture_output=True)
+    wall = time.perf_counter() - start
+    points, normals, _ = cgal_ext.read_points(scan)
+    start = time.perf_counter()
+    cgal_ext.compute_geometric_details(points, normals)
+    return wall, time.perf_counter() - start
+
+
+def tiled_command(tmp, scan):
+    """One run of the tiled command as a user types it: its wall time, its report, the peak resident memory of
+    its largest worker and its own."""
+    output, report = os.path.join(tmp, "tiled.ply"), os.path.join(tmp, "report.json")
+    with PeakMemory() as memory:
+        start = time.perf_counter()
+        command = subprocess.Popen([sys.executable, "-m", "cgal_ext.tiled", "details", scan, "-o", output,
+                                    "--report", report], stdout=subprocess.DEVNULL)
+        if command.wait():
+            raise SystemExit(f"bench_tiled: the tiled command failed on {scan} (status {command.returncode})")
+        seconds = time.perf_counter() - start
+    os.remove(output)
+    with open(report) as f:
+        result = json.load(f)
+    workers = [peak for pid, peak in memory.peaks.items() if pid != command.pid]
+    return seconds, result, max(workers), memory.peaks.get(command.pid, 0)
 
 
 def disk_write_throughput(folder, size=2 << 30):
@@ -80,89 +114,101 @@ def disk_write_throughput(folder, size=2 << 30):
 
 
 def main():
+    reexecute_tuned([sys.executable] + sys.argv)  # the library call alone runs as point-detail and the workers do
     args = harness_arguments()
-    sizes, reps = ([1_000_000, 2_000_000], {}) if args.quick else ([10_000_000, 30_000_000, 100_000_000],
-                                                                     {10_000_000: 3})
+    # (model, sizes, repetitions per size): the armadillo's rows come first, as the manual's figures are bound to them.
+    if args.quick:
+        runs = [("armadillo", [1_000_000, 2_000_000], {})]
+    else:
+        runs = [("armadillo", [10_000_000, 30_000_000, 100_000_000], {10_000_000: 3}),
+                ("fandisk", [10_000_000], {10_000_000: 3}), ("lion-head", [10_000_000], {10_000_000: 3})]
     baseline_reps = 1 if args.quick else 5
     workers = os.cpu_count()
-    rows = []
+    rows, late_rows, model_rows, command_peaks = [], [], [], []
     with tempfile.TemporaryDirectory(dir=os.environ.get("BENCHMARK_TMP")) as tmp:
-        scan = sample(args, tmp, 1_000_000)
-        program = os.path.join(args.build, "src", "point-detail")
-        wall, compute = [], []
-        for _ in range(baseline_reps):
-            start = time.perf_counter()
-            subprocess.run([program, "details", "-i", scan, "-o", os.path.join(tmp, "one.ply")], check=True,
-                           capture_output=True)
-            wall.append(time.perf_counter() - start)
-            points, normals, _ = cgal_ext.read_points(scan)
-            start = time.perf_counter()
-            cgal_ext.compute_geometric_details(points, normals)
-            compute.append(time.perf_counter() - start)
-            del points, normals
-        one_process = 1_000_000 / median(wall)
-        rows.append(("one process: point-detail details (read, compute, write)", 1_000_000, median(wall), "s",
-                     f"{workers} threads"))
-        rows.append(("one process: point-detail details, throughput", 1_000_000, one_process, "points/s", ""))
-        rows.append(("one process: compute_geometric_details alone", 1_000_000, median(compute), "s",
-                     f"{workers} threads"))
-        os.remove(scan)
-        rows.append(("scratch disk: sequential write, flushed (2 GiB)", 0,
-                     disk_write_throughput(tmp, (256 << 20) if args.quick else (2 << 30)) / 1e6, "MB/s", ""))
-
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit="3GiB",
-                               dashboard_address=None, silence_logs=40)
-        client = Client(cluster)
-        late_rows = []
-        for n in sizes:
-            scan = sample(args, tmp, n)
-            times, worker_peaks, report = [], [], None
-            for _ in range(reps.get(n, 1)):
-                output = os.path.join(tmp, "tiled.ply")
-                with PeakMemory() as memory:
-                    start = time.perf_counter()
-                    report = tiled.run("details", scan, output, client=client)
-                    times.append(time.perf_counter() - start)
-                worker_peaks.append(max(memory.peaks.values()))
-                os.remove(output)
-            os.remove(scan)
-            throughput = n / median(times)
-            rows.append(("tiled details: wall time", n, median(times), "s",
-                         f"{report['tiles']} tiles, {workers} workers x 1 thread"))
-            rows.append(("tiled details: throughput", n, throughput, "points/s",
-                         ">= 70 % of the one-process throughput at 1M" if n == sizes[-1] else ""))
-            rows.append(("tiled details: throughput / one-process throughput at 1M", n,
-                         100 * throughput / one_process, "%", ">= 70 %" if n == sizes[-1] else ""))
-            rows.append(("tiled details: peak resident memory per worker", n, max(worker_peaks) / 2 ** 30, "GiB",
-                         "<= 3 GiB, the same at 10M and 100M"))
-            rows.append(("tiled details: points read per own point (halo overhead)", n,
-                         report["read_points"] / n, "", ""))
-            tile_seconds = report["seconds"]["tiles"] * workers / report["tiles"]
-            rows.append(("tiled details: seconds per tile (one worker)", n, tile_seconds, "s",
-                         f"{n // report['tiles']} own points per tile"))
-            for step, seconds in report["tile_seconds"].items():
-                rows.append((f"tiled details: per tile, step '{step}' (one worker)", n, seconds / report["tiles"], "s",
-                             ""))
-            for stage, seconds in report["seconds"].items():
-                rows.append((f"tiled details: pass '{stage}'", n, seconds, "s", ""))
-            late_rows.append(("tiled details: throughput / the one-process program's fastest run's at 1M", n,
-                              100 * throughput * min(wall) / 1_000_000, "%", ""))
-            summaries = report["tile_summaries"]
-            searched = sum(s["searched"] * s["read"] for s in summaries) / report["read_points"]
-            late_rows.append(("tiled details: points read whose k nearest the certificate searched", n,
-                              100 * searched, "%",
-                              f"{sum(1 for s in summaries if s['searched'] > 0)} of {len(summaries)} tiles searched any"))
-            for step, seconds in report["client_seconds"].items():
-                late_rows.append((f"tiled details: client step '{step}'", n, seconds, "s", "between the passes"))
-        client.close()
-        cluster.close()
-    rows.append(("client peak resident memory (whole harness)", sizes[-1],
-                 resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20, "GiB", "never the whole scan"))
+        for model, sizes, reps in runs:
+            # The program runs on 1M points of the model before each tiled run (and as often as it takes to make
+            # five), so that both meet the machine at the same speed: on this shared machine it drifts by a
+            # fifth within the hour.
+            baseline = sample(args, tmp, model, 1_000_000, f"{model}_baseline.ply")
+            wall, compute, done = [], [], []
+            for n in sizes:
+                scan = sample(args, tmp, model, n)
+                times, worker_peaks, report = [], [], None
+                for _ in range(reps.get(n, 1)):
+                    for measure, value in zip((wall, compute), program_run(args, tmp, baseline)):
+                        measure.append(value)
+                    seconds, report, worker_peak, command_peak = tiled_command(tmp, scan)
+                    times.append(seconds)
+                    worker_peaks.append(worker_peak)
+                    command_peaks.append(command_peak)
+                os.remove(scan)
+                done.append((n, times, worker_peaks, report))
+            while len(wall) < baseline_reps:
+                for measure, value in zip((wall, compute), program_run(args, tmp, baseline)):
+                    measure.append(value)
+            os.remove(baseline)
+            one_process_throughput = 1_000_000 / median(wall)
+            if model == "armadillo":
+                armadillo_wall = wall
+                rows.append(("one process: point-detail details (read, compute, write)", 1_000_000, median(wall),
+                             "s", f"{workers} threads"))
+                rows.append(("one process: point-detail details, throughput", 1_000_000, one_process_throughput,
+                             "points/s", ""))
+                rows.append(("one process: compute_geometric_details alone", 1_000_000, median(compute), "s",
+                             f"{workers} threads"))
+                rows.append(("scratch disk: sequential write, flushed (2 GiB)", 0,
+                             disk_write_throughput(tmp, (256 << 20) if args.quick else (2 << 30)) / 1e6, "MB/s", ""))
+            for n, times, worker_peaks, report in done:
+                throughput = n / median(times)
+                if model != "armadillo":
+                    model_rows += [(f"{model}: point-detail details at 1M", 1_000_000, median(wall), "s",
+                                    f"{workers} threads"),
+                                   (f"{model}: tiled details, wall time", n, median(times), "s",
+                                    f"{report['tiles']} tiles"),
+                                   (f"{model}: tiled details, throughput / one-process throughput at 1M", n,
+                                    100 * throughput / one_process_throughput, "%", ">= 70 %"),
+                                   (f"{model}: tiled details, peak resident memory per worker", n,
+                                    max(worker_peaks) / 2 ** 30, "GiB", "<= 3 GiB")]
+                    continue
+                last = n == sizes[-1]
+                rows.append(("tiled details: wall time", n, median(times), "s",
+                             f"{report['tiles']} tiles, {workers} workers x 1 thread"))
+                rows.append(("tiled details: throughput", n, throughput, "points/s",
+                             ">= 70 % of the one-process throughput at 1M" if last else ""))
+                rows.append(("tiled details: throughput / one-process throughput at 1M", n,
+                             100 * throughput / one_process_throughput, "%", ">= 70 %" if last else ""))
+                rows.append(("tiled details: peak resident memory per worker", n, max(worker_peaks) / 2 ** 30, "GiB",
+                             "<= 3 GiB, the same at 10M and 100M"))
+                rows.append(("tiled details: points read per own point (halo overhead)", n,
+                             report["read_points"] / n, "", ""))
+                tile_seconds = report["seconds"]["tiles"] * workers / report["tiles"]
+                rows.append(("tiled details: seconds per tile (one worker)", n, tile_seconds, "s",
+                             f"{n // report['tiles']} own points per tile"))
+                for step, seconds in report["tile_seconds"].items():
+                    rows.append((f"tiled details: per tile, step '{step}' (one worker)", n,
+                                 seconds / report["tiles"], "s", ""))
+                for stage, seconds in report["seconds"].items():
+                    rows.append((f"tiled details: pass '{stage}'", n, seconds, "s", ""))
+                late_rows.append(("tiled details: throughput / the one-process program's fastest run's at 1M", n,
+                                  100 * throughput * min(wall) / 1_000_000, "%", ""))
+                summaries = report["tile_summaries"]
+                searched = sum(s["searched"] * s["read"] for s in summaries) / report["read_points"]
+                late_rows.append(("tiled details: points read whose k nearest the certificate searched", n,
+                                  100 * searched, "%",
+                                  f"{sum(1 for s in summaries if s['searched'] > 0)} of {len(summaries)} tiles "
+                                  "searched any"))
+                for step, seconds in report["client_seconds"].items():
+                    late_rows.append((f"tiled details: client step '{step}'", n, seconds, "s", "between the passes"))
+    largest = runs[0][1][-1]
+    rows.append(("the command's peak resident memory (the client)", largest, max(command_peaks) / 2 ** 30, "GiB",
+                 "never the whole scan"))
     # The spread of the baseline, which the throughput targets divide by (its file writes vary from run to run).
-    rows.append(("one process: point-detail details, fastest run", 1_000_000, min(wall), "s",
+    rows.append(("one process: point-detail details, fastest run", 1_000_000, min(armadillo_wall), "s",
                  f"of {baseline_reps}"))
-    rows.append(("one process: point-detail details, slowest run", 1_000_000, max(wall), "s",
+    rows.append(("one process: point-detail details, slowest run", 1_000_000, max(armadillo_wall), "s",
                  f"of {baseline_reps}"))
+    rows.extend(model_rows)
     rows.extend(late_rows)  # after the rows the manual's figures are bound to
 
     with open(os.path.join(args.out, "tiled_results.csv"), "w", newline="") as f:
@@ -172,8 +218,9 @@ def main():
             writer.writerow([row[0], row[1], f"{row[2]:.6g}", row[3], row[4]])
     with open(os.path.join(args.out, "tiled_results.md"), "w") as f:
         f.write("# Tiled runs on Dask (benchmark/bench_tiled.py)\n\n"
-                f"Seeded samplings of CGAL's armadillo with normals, quadric details; LocalCluster of {workers} "
-                "workers, one thread each, 3 GiB memory limit each. Medians over the repetitions.\n\n"
+                "Seeded samplings of CGAL's models with normals, quadric details; the command `python3 -m "
+                f"cgal_ext.tiled details` with its defaults: a LocalCluster of {workers} workers, one thread each. "
+                "Medians over the repetitions.\n\n"
                 "| measure | points | value | unit | target |\n|---|---:|---:|---|---|\n")
         for row in rows:
             f.write(f"| {row[0]} | {row[1]:,} | {row[2]:.4g} | {row[3]} | {row[4]} |\n")

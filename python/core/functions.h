@@ -300,7 +300,7 @@ Point_set_result read_points(const Path_like& path_object)
 }
 
 /// The record layout of a binary PCD or LAS file (point_detail::record_layout) as a dict, for the tiled runs'
-/// memory maps.
+/// readers.
 py::dict record_layout(const Path_like& path_object)
 {
   const fs::path path = path_of(path_object, "path");

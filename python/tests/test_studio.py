@@ -66,6 +66,14 @@ def test_the_page_cookie_opens_its_static_files_only(page):
     assert error.value.code == 403
 
 
+def test_the_command_runs_on_huge_pages(page):
+    """Like point-detail, the command restarts itself with glibc's malloc on transparent huge pages."""
+    server, _ = page
+    with open("/proc/%d/environ" % server.process.pid, "rb") as f:
+        environ = f.read().split(b"\0")
+    assert any(v.startswith(b"GLIBC_TUNABLES=") and b"glibc.malloc.hugetlb=1" in v for v in environ), environ
+
+
 def test_paint_drag_save_matches_the_program(page, scan):
     server, driver = page
     wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", what="the scan")

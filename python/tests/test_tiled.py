@@ -12,7 +12,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import zarr
-from distributed import Client, LocalCluster
 from scipy.spatial import cKDTree
 
 import cgal_ext
@@ -61,11 +60,41 @@ def read_output(path):
 
 @pytest.fixture(scope="module")
 def client():
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="4GiB",
-                           dashboard_address=None, silence_logs=40)
-    with Client(cluster) as c:
+    """The cluster the command starts: two workers of one thread, here with 4 GiB each."""
+    c, cluster = tiled._connect(None, 2, "4GiB", 20, lambda message: None)
+    with c:
         yield c
     cluster.close()
+
+
+def test_the_workers_run_as_point_detail(client):
+    """The workers start with glibc's malloc on huge pages and without the trim threshold Dask would set, which
+    turns off glibc's adaptive mmap threshold: an 8 MiB array allocated again after its first free then comes from
+    the heap, faulting no page in, instead of from a fresh mapping that faults at least one."""
+    def environment_and_faults():
+        import resource
+        for _ in range(2):  # the first free raises the mmap threshold, the second allocation grows the heap
+            array = np.ones(1 << 20)
+            del array
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        for _ in range(20):
+            array = np.ones(1 << 20)
+            del array
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+        return os.environ.get("GLIBC_TUNABLES", ""), os.environ.get("MALLOC_TRIM_THRESHOLD_"), faults
+
+    for tunables, trim, faults in client.run(environment_and_faults).values():
+        assert "glibc.malloc.hugetlb=1" in tunables and trim is None
+        assert faults < 20, faults
+
+
+def test_the_tuned_environment_adds_huge_pages_once():
+    from cgal_ext._process import tuned_environment
+    assert tuned_environment({}) == {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=1"}
+    assert tuned_environment({"GLIBC_TUNABLES": "glibc.malloc.tcache_count=0"}) == {
+        "GLIBC_TUNABLES": "glibc.malloc.tcache_count=0:glibc.malloc.hugetlb=1"}
+    assert tuned_environment({"GLIBC_TUNABLES": "glibc.malloc.hugetlb=0"}) == {}  # the user's choice stands
+    assert tuned_environment({"POINT_DETAIL_HUGE_PAGES": "0"}) == {}
 
 
 @pytest.fixture(scope="module")
@@ -192,10 +221,10 @@ def test_enhancement_matches_the_one_process_call(scan, client, tmp_path):
     assert np.abs(out["displacement"] - np.einsum("ij,ij->i", moved - scan.points, scan.normals)).max() <= 1e-9
 
 
-def test_an_unreadable_tile_fails_the_run_naming_it(scan, client, tmp_path):
+def test_unreadable_rows_fail_the_run_naming_them(scan, client, tmp_path):
     write_zarr(tmp_path / "scan.zarr", scan.small_points, scan.small_normals, chunk=20_000)
-    (tmp_path / "scan.zarr" / "nx" / "2").write_bytes(b"not a compressed chunk")
-    with pytest.raises(tiled.TiledError, match=r"tile\(s\) [\d, ]+ cannot be read: the normals of rows 0\.\.99999"):
+    (tmp_path / "scan.zarr" / "nx" / "2").write_bytes(b"not a compressed chunk")  # read first by the bucket pass
+    with pytest.raises(tiled.TiledError, match=r"rows 0\.\.99999 of .*scan.zarr cannot be read"):
         tiled.run("curvature", tmp_path / "scan.zarr", tmp_path / "out.ply", client=client, tiles=8)
     assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
     (tmp_path / "scan.zarr" / "x" / "1").write_bytes(b"garbage")
@@ -232,8 +261,8 @@ def test_bad_inputs_get_clear_errors(scan, client, tmp_path):
     assert time.monotonic() - started < 30
 
 
-def test_binary_pcd_and_las_are_mapped_as_the_program_reads_them(scan, client, tmp_path):
-    """The tiled runs map a binary PCD (x y z and normals as floats, a padding field between) and a LAS file
+def test_binary_pcd_and_las_are_read_as_the_program_reads_them(scan, client, tmp_path):
+    """The tiled runs read a binary PCD (x y z and normals as floats, a padding field between) and a LAS file
     (integers, scale and offset) at the record layout of the I/O layer; the details equal the one-process call on
     the points read_points reads."""
     from test_formats import OFFSET, SCALE, las_file, las_points

@@ -5,11 +5,14 @@ import pathlib
 import sys
 import webbrowser
 
+from .._process import reexecute_tuned
 from .server import Studio, serve
 from .session import StudioError
 
 
 def main(argv=None):
+    if argv is None:  # the command: its large arrays on huge pages, as point-detail's
+        reexecute_tuned([sys.executable, "-m", "cgal_ext.studio", *sys.argv[1:]])
     parser = argparse.ArgumentParser(prog="python3 -m cgal_ext.studio",
                                      description="Paint a region and handles on a scan, drag, keep its details, save. "
                                                  "Files are read and written only inside the scan's folder.")

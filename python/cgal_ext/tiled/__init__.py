@@ -1,5 +1,5 @@
 """Tiled runs on Dask distributed for scans larger than one machine's memory: details, normals, curvature and
-enhancement of a binary PLY, binary PCD or LAS file (read by memory map) or a Zarr group, written tile by tile
+enhancement of a binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group, written tile by tile
 to PLY or Zarr.
 
     from cgal_ext import tiled
@@ -16,6 +16,7 @@ import shutil
 import uuid
 from pathlib import Path
 
+from .._process import tuned_environment
 from . import ops
 from .runner import Run, timed
 from .store import TiledError, open_source
@@ -34,7 +35,7 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     operation : {"details", "normals", "curvature", "enhance"}
         What to compute; the output holds the fields of the program's PLY for that subcommand.
     input : path
-        A binary PLY, binary PCD or LAS file (memory-mapped) or a Zarr group with 1-D arrays x, y, z (and nx,
+        A binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group with 1-D arrays x, y, z (and nx,
         ny, nz).
     output : path
         OUT.ply or OUT.zarr; written under a temporary name and renamed when complete. Never the input.
@@ -47,7 +48,7 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     memory_limit : str or int
         Memory limit per LocalCluster worker ("3GiB", bytes, or "auto").
     tiles : int, optional
-        Number of tiles (default: about 262,000 points each, at least two per worker).
+        Number of tiles (default: about 262,000 points each, a multiple of the workers, at least two per worker).
     halo : float, optional
         The first halo width (default: from the operation's rings and the scan's spacing); a halo too small for
         a tile is widened by that tile.
@@ -100,7 +101,22 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             cluster.close()
 
 
+def worker_environment():
+    """The environment Dask sets for the LocalCluster's worker processes before they start, without the
+    MALLOC_TRIM_THRESHOLD_ it adds, and with glibc's malloc on huge pages, as point-detail runs. A trim threshold
+    turns off glibc's adaptive mmap threshold: each of a tile's arrays would then be a fresh mapping, faulted in
+    page by page (doc/scaling.md, "Worker processes"). The workers inherit the rest of this process's environment,
+    a trim threshold set in it included. Asked once distributed is imported (its defaults join Dask's
+    configuration then)."""
+    import dask
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    environ.update(tuned_environment())
+    return environ
+
+
 def _connect(scheduler, workers, memory_limit, timeout, log):
+    import dask
     from distributed import Client, LocalCluster
     if scheduler:
         try:
@@ -111,8 +127,9 @@ def _connect(scheduler, workers, memory_limit, timeout, log):
         return client, None
     workers = workers or os.cpu_count() or 1
     dashboard = ":0" if importlib.util.find_spec("bokeh") else None  # Dask's dashboard needs bokeh
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit=memory_limit,
-                           dashboard_address=dashboard, silence_logs=40)
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": worker_environment()}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit=memory_limit,
+                               dashboard_address=dashboard, silence_logs=40)
     client = Client(cluster)
     log(f"LocalCluster of {workers} worker(s), memory limit {memory_limit} each; dashboard: "
         + (client.dashboard_link if dashboard else "none (install bokeh for Dask's dashboard)"))

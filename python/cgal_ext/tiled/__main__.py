@@ -12,9 +12,9 @@ def parser():
     main = argparse.ArgumentParser(
         prog="python3 -m cgal_ext.tiled",
         description="Details, normals, curvature or enhancement of a scan larger than memory, tile by tile on Dask. "
-                    "The input is a binary PLY, binary PCD or LAS file (memory-mapped) or a Zarr group; the output "
-                    "OUT.ply or OUT.zarr holds the fields of the program's PLY for the same subcommand and is written "
-                    "whole or not at all.")
+                    "The input is a binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group; the "
+                    "output OUT.ply or OUT.zarr holds the fields of the program's PLY for the same subcommand and is "
+                    "written whole or not at all.")
     commands = main.add_subparsers(dest="operation", required=True, metavar="OPERATION")
 
     def command(name, help_text):

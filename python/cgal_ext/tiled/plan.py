@@ -55,27 +55,30 @@ class Tiling:
     def tile_of(self, points):
         """The tile that owns each point."""
         out = np.empty(len(points), dtype=np.int64)
-        self._descend(points, np.arange(len(points)), self.root, 0.0, lambda tile, rows: out.__setitem__(rows, tile))
+        self._descend(np.ascontiguousarray(points.T), np.arange(len(points)), self.root, 0.0,
+                      lambda tile, rows: out.__setitem__(rows, tile))
         return out
 
     def read_sets(self, points, halo):
         """{tile: rows of `points` inside the tile's box grown by `halo`} (rows ascending)."""
         found = {}
-        self._descend(points, np.arange(len(points)), self.root, halo,
+        self._descend(np.ascontiguousarray(points.T), np.arange(len(points)), self.root, halo,
                       lambda tile, rows: found.__setitem__(tile, rows))
         return found
 
-    def _descend(self, points, rows, node, halo, visit):
+    def _descend(self, columns, rows, node, halo, visit):
+        """Visits each leaf under `node` with the `rows` whose point (x, y and z in `columns`) its box grown by
+        `halo` holds."""
         if node < 0:
             visit(-node - 1, rows)
             return
         axis, split, left, right = self.nodes[node]
-        x = points[rows, axis]
+        x = columns[axis][rows]
         below, above = x < split + halo, x >= split - halo
         if below.any():
-            self._descend(points, rows[below], left, halo, visit)
+            self._descend(columns, rows[below], left, halo, visit)
         if above.any():
-            self._descend(points, rows[above], right, halo, visit)
+            self._descend(columns, rows[above], right, halo, visit)
 
 
 def read_box(lo, hi, halo):

@@ -43,26 +43,26 @@ def bucket_rows(begin, end, source, tiling, halo, folder):
     """Copies, for every tile, the rows of [begin, end) its read box holds (row number, point, normal) to
     `folder/c{begin}_t{tile}.npy`, so that the tile tasks read small files instead of the whole scan."""
     try:
-        points = source.coordinates(begin, end)
+        points, normals = source.points_and_normals(begin, end)
     except Exception as error:
         raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
     read_sets = tiling.read_sets(points, halo)
-    try:
-        normals = source.normals(begin, end)
-    except Exception as error:
-        raise TiledError(f"tile(s) {', '.join(map(str, sorted(read_sets)))} cannot be read: the normals of rows "
-                         f"{begin}..{end - 1} of {source.path}: {error}") from None
     counts = {}
     for tile, rows in read_sets.items():
-        np.save(folder / f"c{begin}_t{tile}.npy", _bucket(begin + rows, points[rows],
-                                                         None if normals is None else normals[rows]))
+        np.save(folder / f"c{begin}_t{tile}.npy", _bucket(begin, rows, points, normals))
         counts[tile] = len(rows)
     return counts
 
 
-def _bucket(rows, points, normals):
-    """Row numbers (exact in float64 below 2^53), points and normals side by side."""
-    return np.column_stack([rows.astype(np.float64), points] + ([] if normals is None else [normals]))
+def _bucket(begin, rows, points, normals):
+    """Row numbers begin + rows (exact in float64 below 2^53), and the points and normals at `rows`, side by side."""
+    table = np.empty((len(rows), 4 if normals is None else 7))
+    table[:, 0] = begin + rows
+    # Gathered straight into the table's columns ("clip": the rows are valid, and it spares a buffered copy).
+    np.take(points, rows, axis=0, out=table[:, 1:4], mode="clip")
+    if normals is not None:
+        np.take(normals, rows, axis=0, out=table[:, 4:7], mode="clip")
+    return table
 
 
 def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_starts):
@@ -73,11 +73,9 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
     else:  # widened beyond the buckets: scan the source for the larger box
         parts = []
         for begin in range(0, source.count, CHUNK_ROWS):
-            end = min(source.count, begin + CHUNK_ROWS)
-            points = source.coordinates(begin, end)
+            points, normals = source.points_and_normals(begin, min(source.count, begin + CHUNK_ROWS))
             inside = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
-            normals = source.normals(begin, end)
-            parts.append(_bucket(begin + inside, points[inside], None if normals is None else normals[inside]))
+            parts.append(_bucket(begin, inside, points, normals))
     width = 7 if source.has_normals else 4
     table = np.concatenate(parts) if parts else np.empty((0, width))
     return (table[:, 0].astype(np.int64), np.ascontiguousarray(table[:, 1:4]),
@@ -246,8 +244,8 @@ def write_rows(begin, end, pieces, source, sink, operation, estimate_normals, sc
     (tile, a, b) of `pieces`, and writes them to the sink."""
     count = end - begin
     columns = {name: np.empty(count, dtype=kind) for name, kind in operation.fields()}
-    points = source.coordinates(begin, end)
-    normals = None if estimate_normals else source.normals(begin, end)
+    points, normals = source.points_and_normals(begin, end)
+    normals = None if estimate_normals else normals
     for axis, name in enumerate("xyz"):
         columns[name][:] = points[:, axis]
     if normals is not None:
@@ -320,8 +318,9 @@ class Run:
             raise TiledError(f"{self.source.path}: the scan has no points")
         starts = list(range(0, n, CHUNK_ROWS))
         ranges = [(b, min(n, b + CHUNK_ROWS)) for b in starts]
-        tile_count = self.tiles or max(2 * len(self.client.scheduler_info()["workers"]),
-                                       -(-n // POINTS_PER_TILE))
+        workers = max(1, len(self.client.scheduler_info()["workers"]))
+        # A multiple of the workers, so that none is left alone with the last tile.
+        tile_count = self.tiles or workers * max(2, -(-n // (POINTS_PER_TILE * workers)))
         stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
 
         scans = self._map(scan_rows, ranges, self.source, stride, what="scan")

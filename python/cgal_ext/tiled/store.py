@@ -1,10 +1,10 @@
-"""Where the tiled runs read and write points: binary PLY, binary PCD and LAS by memory map and Zarr groups, row
-ranges at a time.
+"""Where the tiled runs read and write points: binary PLY, binary PCD and LAS files at their record layout, and
+Zarr groups, row ranges at a time.
 
-A source never loads its file whole: `rows(a, b)` reads one row range at a time. A PLY file is mapped for the
-call only: pages of a mapping that stays open count in the worker's resident memory, which Dask's memory limit
-watches, and would grow to the file's size. Sources and sinks are small picklable descriptions (a path and a
-layout); each Dask worker opens the file itself.
+A source never loads its file whole: `read(a, b)` reads the records of one row range, with one read of the file
+into a fresh array (a memory map of the file, faulted in 4 KiB at a time, cost more than the copy; and its pages
+count in the worker's resident memory, which Dask's memory limit watches). Sources and sinks are small picklable
+descriptions (a path and a layout); each Dask worker opens the file itself.
 """
 import os
 import re
@@ -34,7 +34,7 @@ def open_source(path):
     if path.suffix.lower() in (".pcd", ".las", ".laz"):
         return RecordSource(path)
     if path.suffix.lower() != ".ply":
-        raise TiledError(f"{path}: the tiled runs read binary PLY, binary PCD and LAS (by memory map) or a Zarr "
+        raise TiledError(f"{path}: the tiled runs read binary PLY, binary PCD and LAS (by row ranges) or a Zarr "
                          f"group, not '{path.suffix}' files; rewrite it as PLY (cgal_ext.read_points, then "
                          "cgal_ext.write_ply)")
     return PlySource(path)
@@ -60,8 +60,8 @@ def _parse_ply_header(path):
         if words[0] == "format":
             formats = {"binary_little_endian": "<", "binary_big_endian": ">"}
             if len(words) < 2 or words[1] not in formats:
-                raise TiledError(f"{path}: format '{' '.join(words[1:])}' cannot be memory-mapped; the tiled "
-                                 "runs read binary PLY (write it with cgal_ext.write_ply)")
+                raise TiledError(f"{path}: format '{' '.join(words[1:])}' cannot be read by row ranges; the "
+                                 "tiled runs read binary PLY (write it with cgal_ext.write_ply)")
             order = formats[words[1]]
         elif words[0] == "element" and len(words) == 3 and re.fullmatch(r"\d+", words[2]):
             elements.append((words[1], int(words[2]), []))
@@ -86,33 +86,52 @@ def _parse_ply_header(path):
     return count, dtype, offset
 
 
-class MappedSource:
-    """Fixed-size records of a file, read by memory map a row range at a time: `path`, `dtype`, `offset`, `count`,
-    the fields of the coordinates and of the normals (None when there are none), and optionally a `scale` and a
-    `shift` of the coordinates."""
+class Source:
+    """What the passes ask of an input: `path`, `count`, `dtype`, the fields of the coordinates and of the normals
+    (None when there are none), optionally a `scale` and a `shift` of the coordinates, and `read(begin, end)`: the
+    records of rows [begin, end), a structured array with those fields."""
     scale = shift = None
-
-    def _records(self, begin, end):
-        records = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset, shape=(self.count,))
-        part = np.array(records[begin:end])
-        del records  # unmapped: its pages leave the resident set
-        return part
 
     @staticmethod
     def _columns(records, names):
-        return np.stack([records[n].astype(np.float64) for n in names], axis=1)
+        columns = np.empty((len(records), len(names)))
+        for axis, name in enumerate(names):
+            columns[:, axis] = records[name]
+        return columns
+
+    def points_of(self, records):
+        """The points of `records`, float64 (n, 3)."""
+        points = self._columns(records, self.coordinate_names)
+        return points if self.scale is None else points * self.scale + self.shift
+
+    def normals_of(self, records):
+        """The normals of `records`, float64 (n, 3); None when the scan has none."""
+        return self._columns(records, self.normal_names) if self.has_normals else None
 
     def coordinates(self, begin, end):
         """The points of rows [begin, end), float64 (n, 3)."""
-        points = self._columns(self._records(begin, end), self.coordinate_names)
-        return points if self.scale is None else points * self.scale + self.shift
+        return self.points_of(self.read(begin, end))
 
-    def normals(self, begin, end):
-        """The normals of rows [begin, end), float64 (n, 3); None when the scan has none."""
-        return self._columns(self._records(begin, end), self.normal_names) if self.has_normals else None
+    def points_and_normals(self, begin, end):
+        """coordinates(begin, end) and normals(begin, end) from one read."""
+        records = self.read(begin, end)
+        return self.points_of(records), self.normals_of(records)
 
 
-class PlySource(MappedSource):
+class FileSource(Source):
+    """Fixed-size records of a file at `offset`, read a row range at a time."""
+
+    def read(self, begin, end):
+        # One read into a fresh array: faulting a mapping of the file in page by page cost more than the copy.
+        with open(self.path, "rb") as f:
+            records = np.fromfile(f, dtype=self.dtype, count=end - begin,
+                                  offset=self.offset + begin * self.dtype.itemsize)
+        if len(records) != end - begin:
+            raise TiledError(f"{self.path}: rows {begin}..{end - 1} lie past the end of the file")
+        return records
+
+
+class PlySource(FileSource):
     """A binary PLY file's vertices."""
 
     def __init__(self, path):
@@ -130,7 +149,7 @@ class PlySource(MappedSource):
         self.coordinate_names, self.normal_names = ("x", "y", "z"), ("nx", "ny", "nz") if self.has_normals else None
 
 
-class RecordSource(MappedSource):
+class RecordSource(FileSource):
     """A binary PCD or LAS file's points, at the offsets the I/O layer's header check gives
     (cgal_ext._core.record_layout): LAS coordinates are the records' integers times the scale plus the shift."""
 
@@ -150,18 +169,20 @@ class RecordSource(MappedSource):
         self.scale, self.shift = np.array(layout["scale"]), np.array(layout["shift"])
         self.has_normals = self.normal_names is not None
 
-    def coordinates(self, begin, end):
-        points = super().coordinates(begin, end)
+    def read(self, begin, end):
+        records = super().read(begin, end)
         # The program leaves out a PCD point whose x, y and z are all NaN; a tiled run cannot drop rows.
-        missing = np.flatnonzero(np.isnan(points).all(axis=1))
-        if len(missing):
-            raise TiledError(f"{self.path}: point {begin + missing[0]} has no position (x, y and z NaN); the tiled "
-                             "runs need every row to be a point: write the scan without them first (point-detail "
-                             "leaves them out of its PLY outputs)")
-        return points
+        if all(records.dtype[name].kind == "f" for name in self.coordinate_names):
+            missing = np.flatnonzero(np.logical_and.reduce([np.isnan(records[name])
+                                                            for name in self.coordinate_names]))
+            if len(missing):
+                raise TiledError(f"{self.path}: point {begin + missing[0]} has no position (x, y and z NaN); the "
+                                 "tiled runs need every row to be a point: write the scan without them first "
+                                 "(point-detail leaves them out of its PLY outputs)")
+        return records
 
 
-class ZarrSource:
+class ZarrSource(Source):
     """A Zarr group with one 1-D array per field (x, y, z; nx, ny, nz when it has normals), as the runs write."""
 
     def __init__(self, path):
@@ -185,17 +206,25 @@ class ZarrSource:
             if group[f].dtype.kind != "f":
                 raise TiledError(f"{self.path}: array {f} holds {group[f].dtype}, not floating-point numbers")
         self.count = shapes["x"][0]
+        self.dtype = np.dtype([(f, group[f].dtype) for f in fields])
+        self.coordinate_names, self.normal_names = ("x", "y", "z"), ("nx", "ny", "nz") if self.has_normals else None
 
-    def _columns(self, names, selection):
+    def read(self, begin, end, names=None):
+        """The records of rows [begin, end), with the fields `names` only when given."""
         import zarr
         group = zarr.open_group(self.path, mode="r")
-        return np.stack([np.asarray(group[n][selection], dtype=np.float64) for n in names], axis=1)
+        names = names or self.dtype.names
+        records = np.empty(end - begin, dtype=[(name, self.dtype.fields[name][0]) for name in names])
+        for name in names:
+            records[name] = group[name][begin:end]
+        return records
 
     def coordinates(self, begin, end):
-        return self._columns("xyz", slice(begin, end))
+        return self.points_of(self.read(begin, end, self.coordinate_names))
 
-    def normals(self, begin, end):
-        return self._columns(("nx", "ny", "nz"), slice(begin, end)) if self.has_normals else None
+
+def _physical_memory():
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
 def temporary_beside(path):
@@ -218,6 +247,10 @@ class PlySink:
                   f"element vertex {count}"]
         header += [f"property {PLY_NAMES[kind]} {name}" for name, kind in fields]
         self.header = ("\n".join(header) + "\nend_header\n").encode("ascii")
+        # A write pass far larger than memory whose pages are left for the kernel to write back ran slower on this
+        # package's test machine, and one that fits ran faster: only an output over an eighth of the memory is
+        # synced range by range (doc/scaling.md, "Costs").
+        self.sync = len(self.header) + count * self.dtype.itemsize > _physical_memory() // 8
 
     def create(self):
         with open(self.temporary, "wb") as f:
@@ -227,8 +260,7 @@ class PlySink:
     def write(self, begin, columns):
         rows = len(next(iter(columns.values())))
         # Records interleaved a block of rows at a time, which stays in the processor's cache while each field is
-        # filled in. The range is on the disk (or the file server) when the task ends: a write pass far larger than
-        # memory whose pages are left for the kernel to write back runs slower on this package's test machine.
+        # filled in.
         block = np.empty(min(rows, self.BLOCK_ROWS), dtype=self.dtype)
         fd = os.open(self.temporary, os.O_WRONLY)
         try:
@@ -241,7 +273,8 @@ class PlySink:
                 while data:
                     written = os.pwrite(fd, data, offset)
                     data, offset = data[written:], offset + written
-            os.fdatasync(fd)
+            if self.sync:
+                os.fdatasync(fd)
         finally:
             os.close(fd)
 
