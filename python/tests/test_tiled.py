@@ -67,25 +67,45 @@ def client():
     cluster.close()
 
 
+def environment_and_faults():
+    """A worker's GLIBC_TUNABLES and MALLOC_TRIM_THRESHOLD_, and the pages 20 allocations of an 8 MiB array fault
+    in after the first two: none when the heap keeps it, at least one each when every one is a fresh mapping."""
+    import resource
+    for _ in range(2):  # the first free raises the mmap threshold, the second allocation grows the heap
+        array = np.ones(1 << 20)
+        del array
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(20):
+        array = np.ones(1 << 20)
+        del array
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+    return os.environ.get("GLIBC_TUNABLES", ""), os.environ.get("MALLOC_TRIM_THRESHOLD_"), faults
+
+
 def test_the_workers_run_as_point_detail(client):
     """The workers start with glibc's malloc on huge pages and without the trim threshold Dask would set, which
-    turns off glibc's adaptive mmap threshold: an 8 MiB array allocated again after its first free then comes from
-    the heap, faulting no page in, instead of from a fresh mapping that faults at least one."""
-    def environment_and_faults():
-        import resource
-        for _ in range(2):  # the first free raises the mmap threshold, the second allocation grows the heap
-            array = np.ones(1 << 20)
-            del array
-        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-        for _ in range(20):
-            array = np.ones(1 << 20)
-            del array
-        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
-        return os.environ.get("GLIBC_TUNABLES", ""), os.environ.get("MALLOC_TRIM_THRESHOLD_"), faults
-
+    turns off glibc's adaptive mmap threshold."""
     for tunables, trim, faults in client.run(environment_and_faults).values():
         assert "glibc.malloc.hugetlb=1" in tunables and trim is None
         assert faults < 20, faults
+
+
+def test_workers_started_by_dask_keep_their_freed_memory_in_the_tasks():
+    """Workers the tiled runs did not start (a scheduler of the user's) have Dask's trim threshold: their first
+    task fixes glibc's thresholds."""
+    from distributed import Client, LocalCluster
+    from cgal_ext.tiled.runner import task
+    environ = dict(os.environ)
+    try:
+        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=40)
+    finally:  # Dask's nanny put its variables in this process's environment, where later workers would find them
+        os.environ.clear()
+        os.environ.update(environ)
+    with cluster, Client(cluster) as c:
+        _, trim, faults_before = c.submit(environment_and_faults, pure=False).result()
+        _, _, faults_in_a_task = c.submit(task, environment_and_faults, pure=False).result()
+    assert trim is not None and faults_before >= 20 and faults_in_a_task < 20, (trim, faults_before, faults_in_a_task)
 
 
 def test_the_tuned_environment_adds_huge_pages_once():

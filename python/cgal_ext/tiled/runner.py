@@ -4,6 +4,7 @@ The client holds only a sample of the scan, the tiles' boxes and each task's sma
 from the input file to the tasks and from the tasks to the output through a scratch folder that every worker can
 reach. See doc/scaling.md.
 """
+import ctypes
 import os
 import shutil
 import time
@@ -26,6 +27,33 @@ SPACING_QUERIES = 20_000
 
 
 # ---- tasks (run on the workers; arguments and results are small) -------------------------------------------------
+
+_allocator_checked = False
+
+
+def keep_freed_memory():
+    """Once per worker process: when it started with a malloc trim threshold (Dask sets one for workers the tiled
+    runs did not start) and no mmap threshold, fixes glibc's thresholds so that a tile's arrays are reused instead
+    of given back when freed and faulted in again page by page (doc/scaling.md, "Worker processes")."""
+    global _allocator_checked
+    if _allocator_checked:
+        return
+    _allocator_checked = True
+    if "MALLOC_TRIM_THRESHOLD_" in os.environ and "MALLOC_MMAP_THRESHOLD_" not in os.environ:
+        m_trim_threshold, m_mmap_threshold = -1, -3  # glibc's <malloc.h>
+        try:
+            libc = ctypes.CDLL(None)
+            libc.mallopt(m_mmap_threshold, 32 << 20)  # glibc's largest
+            libc.mallopt(m_trim_threshold, 256 << 20)
+        except (OSError, AttributeError):  # not glibc
+            pass
+
+
+def task(function, *args, **kwargs):
+    """Runs a pass's `function` on a worker whose allocator keeps freed memory."""
+    keep_freed_memory()
+    return function(*args, **kwargs)
+
 
 def scan_rows(begin, end, source, stride):
     """Bounding box, first non-finite row and every stride-th point of rows [begin, end)."""
@@ -309,7 +337,8 @@ class Run:
                 raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
 
     def _map(self, function, items, *args, what, **kwargs):
-        futures = [self.client.submit(function, *item, *args, pure=False, **kwargs) for item in items]
+        futures = [self.client.submit(task, function, *item, *args, key=f"{function.__name__}-{uuid.uuid4().hex}",
+                                      **kwargs) for item in items]
         return self._gather(futures, what)
 
     def execute(self):
