@@ -254,6 +254,7 @@ def test_unreadable_rows_fail_the_run_naming_them(scan, client, tmp_path):
 
 
 def test_bad_inputs_get_clear_errors(scan, client, tmp_path):
+    assert issubclass(tiled.TiledError, ValueError)  # caught with the library's own errors
     with pytest.raises(tiled.TiledError, match="no such file"):
         tiled.run("details", tmp_path / "missing.ply", tmp_path / "out.ply", client=client)
     (tmp_path / "nox.ply").write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double a\n"

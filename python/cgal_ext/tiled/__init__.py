@@ -71,6 +71,12 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     -------
     dict
         The run's report: tiles, halos, widened tiles, orientation, timings per pass.
+
+    Raises
+    ------
+    TiledError
+        A ValueError naming what stopped the run: bad input or options, a tile that cannot be read, a cluster
+        that does not answer. Nothing is written then.
     """
     log = log or (lambda message: None)
     op = ops.operation(operation, **options)

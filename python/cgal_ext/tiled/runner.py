@@ -11,7 +11,9 @@ import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -142,25 +144,70 @@ class _Stopwatch:
         self._last = now
 
 
-def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals, tiling, chunk_starts, scratch,
-             diagonal, spacing, threads_per_task):
-    """Computes one tile: reads its box and halo, widens the halo until every own point is certified (or the halo
-    spans the scan: then the tile read every point), and saves the own points' result table under
-    `scratch/tile_{tile}`. Returns the tile's summary, with the range of its table's rows in each chunk of the
-    file (`bounds`) and the seconds of each step.
+@dataclass(frozen=True)
+class TileJob:
+    """One tile task: the tile, its first halo, the halo its buckets were cut with, the k-th-neighbour distance it
+    may assume its neighbours' points have (`reach`), and the run's input, operation and settings."""
+    tile: int
+    halo: float
+    bucket_halo: float
+    reach: float
+    source: Any
+    operation: Any
+    estimate_normals: bool
+    tiling: Any
+    chunk_starts: List[int]
+    scratch: Path
+    diagonal: float
+    spacing: float
+    threads_per_task: Optional[int]
+
+
+@dataclass
+class TileSummary:
+    """What a tile task returns: its own and read points, the halo it ended with and the attempts before, the
+    largest k-th-neighbour distance of its own points (`kth`) and the reach it assumed, the fraction of the points
+    read whose k nearest the certificate searched, where each chunk of the file starts in its table (`bounds`),
+    the seconds of each step; and, as the operation needs them, the bound and depth of the points it did not
+    search (`interior`), its highest own point's height and whether its normal points up (`top`), and its largest
+    magnitude (`largest`)."""
+    tile: int
+    own: int
+    read: int
+    halo: float
+    attempts: List[Dict[str, Any]]
+    kth: float
+    reach: float
+    searched: float
+    bounds: np.ndarray
+    seconds: Dict[str, float] = field(default_factory=dict)
+    interior: Optional[Tuple[float, float]] = None
+    top: Optional[Tuple[float, bool]] = None
+    largest: Optional[float] = None
+
+    def for_report(self):
+        """The summary as the run's report keeps it: everything but `bounds`."""
+        return {key: value for key, value in asdict(self).items() if key != "bounds"}
+
+
+def run_tile(job):
+    """Computes one tile (a TileJob): reads its box and halo, widens the halo until every own point is certified
+    (or the halo spans the scan: then the tile read every point), and saves the own points' result table under
+    `scratch/tile_{tile}`. Returns its TileSummary.
 
     An operation that measures its neighbourhoods' radii while computing (given normals) computes first and is
-    certified with them (plan.certify_with_radius); the others are certified before they compute. `searched` in
-    the summary: the fraction of the points read whose k nearest the certificate searched."""
-    with threads(threads_per_task):
-        lo, hi = tiling.lo[tile], tiling.hi[tile]
+    certified with them (plan.certify_with_radius); the others are certified before they compute."""
+    tile, halo, reach, source, operation = job.tile, job.halo, job.reach, job.source, job.operation
+    estimate_normals, chunk_starts, scratch = job.estimate_normals, job.chunk_starts, job.scratch
+    with threads(job.threads_per_task):
+        lo, hi = job.tiling.lo[tile], job.tiling.hi[tile]
         k = operation.neighbors(estimate_normals)
         compute_first = operation.measures_radius and not estimate_normals
         attempts = []
         watch = _Stopwatch()
         while True:
             try:
-                rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", bucket_halo,
+                rows, points, normals = _read_tile(source, tile, lo, hi, halo, scratch / "buckets", job.bucket_halo,
                                                    chunk_starts)
                 watch.lap("read")
             except Exception as error:
@@ -169,9 +216,8 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             own = plan.own_mask(points, lo, hi)
             if not own.any():
                 watch.lap("neighbours")
-                return {"tile": tile, "own": 0, "read": len(rows), "halo": halo, "attempts": attempts, "kth": 0.0,
-                        "reach": reach, "searched": 0.0, "bounds": np.zeros(len(chunk_starts) + 1, dtype=np.int64),
-                        "seconds": watch.seconds}
+                return TileSummary(tile, 0, len(rows), halo, attempts, 0.0, reach, 0.0,
+                                   np.zeros(len(chunk_starts) + 1, dtype=np.int64), watch.seconds)
             border = plan.border_distance(points, lo - halo, hi + halo)
             neighborhoods = interior = values = None
             if compute_first:
@@ -185,7 +231,7 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             else:
                 if operation.banded:
                     neighborhoods, interior = plan.banded_neighborhoods(points, k, border, reach, operation.rings(),
-                                                                        halo, spacing)
+                                                                        halo, job.spacing)
                 else:
                     neighborhoods = plan.Neighborhoods(points, k, border)
                 kth = float(neighborhoods.kth_distance(operation.own_neighbors())[own].max())
@@ -194,7 +240,7 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
                 searched = float(neighborhoods.searched.mean())
             needed = operation.required_halo(neighborhoods, own)
             watch.lap("neighbours")
-            if (certified.all() and halo >= needed) or halo > diagonal:
+            if (certified.all() and halo >= needed) or halo > job.diagonal:
                 break
             attempts.append({"halo": halo, "uncertified": int((~certified).sum()), "needed": needed})
             halo = max(2 * halo, 1.1 * needed, operation.halo(kth))
@@ -215,9 +261,9 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
         if estimate_normals:
             table[:, -3:] = normals[own_rows]
         np.save(partial / "table.npy", table)
-        summary = {"tile": tile, "own": int(own.sum()), "read": len(rows), "halo": halo, "attempts": attempts,
-                   "kth": kth, "interior": interior, "reach": tile_reach, "searched": searched,
-                   "bounds": np.searchsorted(rows[own_rows], [*chunk_starts, source.count]).astype(np.int64)}
+        summary = TileSummary(tile, int(own.sum()), len(rows), halo, attempts, kth, tile_reach, searched,
+                              np.searchsorted(rows[own_rows], [*chunk_starts, source.count]).astype(np.int64),
+                              interior=interior)
         if estimate_normals:
             # Halo points whose normal is the whole scan's up to its sign: the votes on the tiles' orientations.
             shared = ~own & neighborhoods.exact(operation.normal_neighbors())
@@ -226,13 +272,13 @@ def run_tile(tile, halo, bucket_halo, reach, source, operation, estimate_normals
             np.save(partial / "halo_rows.npy", rows[shared])
             np.save(partial / "halo_normals.npy", normals[shared])
             top = int(np.argmax(np.where(own, points[:, 2], -np.inf)))
-            summary["top"] = (float(points[top, 2]), bool(normals[top, 2] >= 0))
+            summary.top = (float(points[top, 2]), bool(normals[top, 2] >= 0))
         if operation.color_field:
-            summary["largest"] = float(np.abs(values[operation.color_field][own_rows]).max())
+            summary.largest = float(np.abs(values[operation.color_field][own_rows]).max())
         shutil.rmtree(folder, ignore_errors=True)  # a rerun of the task (its worker died) replaces the old result
         os.replace(partial, folder)
         watch.lap("save")
-        summary["seconds"] = watch.seconds
+        summary.seconds = watch.seconds
         return summary
 
 
@@ -386,7 +432,7 @@ class Run:
             sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
             sink.create()
         try:
-            bounds = np.stack([summaries[t]["bounds"] for t in all_tiles])
+            bounds = np.stack([summaries[t].bounds for t in all_tiles])
             pieces = [[(t, int(bounds[t, c]), int(bounds[t, c + 1]))
                        for t in np.flatnonzero(bounds[:, c + 1] > bounds[:, c])] for c in range(len(ranges))]
             self._map(write_rows, [(*r, p) for r, p in zip(ranges, pieces)], self.source, sink, self.operation,
@@ -396,14 +442,13 @@ class Run:
         except BaseException:
             sink.discard()
             raise
-        widened = [s for s in summaries.values() if s["attempts"]]
+        widened = [s for s in summaries.values() if s.attempts]
         self.report.update(widened_tiles=len(widened), flipped_tiles=sum(1 for f in flips.values() if f),
-                           largest_halo=max(s["halo"] for s in summaries.values()),
-                           read_points=int(sum(s["read"] for s in summaries.values())),
+                           largest_halo=max(s.halo for s in summaries.values()),
+                           read_points=int(sum(s.read for s in summaries.values())),
                            color_limit=limit,
-                           tile_summaries=[{key: value for key, value in summaries[t].items() if key != "bounds"}
-                                           for t in all_tiles],
-                           tile_seconds={step: sum(s["seconds"].get(step, 0.0) for s in summaries.values())
+                           tile_summaries=[summaries[t].for_report() for t in all_tiles],
+                           tile_seconds={step: sum(s.seconds.get(step, 0.0) for s in summaries.values())
                                          for step in ("read", "neighbours", "compute", "save")},
                            tile_boxes=[[float(v) if np.isfinite(v) else None for v in (*tiling.lo[t], *tiling.hi[t])]
                                        for t in all_tiles])
@@ -420,11 +465,12 @@ class Run:
 
     def _run_tiles(self, tiling, bucket_halo, starts, tiles):
         """Runs the tiles {tile: (first halo, assumed reach)}."""
-        items = [(t, halo, bucket_halo, reach) for t, (halo, reach) in tiles.items()]
-        results = self._map(run_tile, items, self.source, self.operation, self.estimate_normals, tiling, starts,
-                            self.scratch, self.report["diagonal"], self.report["spacing"], self.threads_per_task,
-                            what="tiles")
-        return {s["tile"]: s for s in results}
+        jobs = [(TileJob(tile=t, halo=halo, bucket_halo=bucket_halo, reach=reach, source=self.source,
+                         operation=self.operation, estimate_normals=self.estimate_normals, tiling=tiling,
+                         chunk_starts=starts, scratch=self.scratch, diagonal=self.report["diagonal"],
+                         spacing=self.report["spacing"], threads_per_task=self.threads_per_task),)
+                for t, (halo, reach) in tiles.items()]
+        return {s.tile: s for s in self._map(run_tile, jobs, what="tiles")}
 
     def _verify_reach(self, summaries, tiling, halo, starts):
         """Reruns the tiles whose certification assumed a k-th-neighbour distance smaller than a neighbouring
@@ -434,14 +480,14 @@ class Run:
         lo, hi = tiling.boxes()
         for _ in range(8):
             rerun = {}
-            kth = np.array([summaries[u]["kth"] for u in range(tiling.count)])
+            kth = np.array([summaries[u].kth for u in range(tiling.count)])
             # A tile's points not searched (banded_neighborhoods): their bound, and the box they lie in.
-            bound, depth = np.array([summaries[u].get("interior") or (0.0, 0.0) for u in range(tiling.count)]).T
+            bound, depth = np.array([summaries[u].interior or (0.0, 0.0) for u in range(tiling.count)]).T
             inner_lo, inner_hi = lo + depth[:, None], hi - depth[:, None]
             for t, s in summaries.items():
-                read_lo, read_hi = plan.read_box(lo[t], hi[t], s["halo"])
-                reaching = (kth >= s["reach"]) & (plan.box_distances(read_lo, read_hi, lo, hi) <= kth)
-                inner = (bound >= s["reach"]) & np.all(inner_lo <= inner_hi, axis=1)
+                read_lo, read_hi = plan.read_box(lo[t], hi[t], s.halo)
+                reaching = (kth >= s.reach) & (plan.box_distances(read_lo, read_hi, lo, hi) <= kth)
+                inner = (bound >= s.reach) & np.all(inner_lo <= inner_hi, axis=1)
                 inner &= plan.box_distances(read_lo, read_hi, inner_lo, inner_hi) < bound
                 inner[t] = False  # its own points lie inside its read box
                 if reaching.any() or inner.any():
@@ -449,9 +495,9 @@ class Run:
             if not rerun:
                 return summaries
             self.log(f"{len(rerun)} tile(s) rerun with the k-th-neighbour distance their neighbours measured")
-            again = self._run_tiles(tiling, halo, starts, {t: (summaries[t]["halo"], r) for t, r in rerun.items()})
+            again = self._run_tiles(tiling, halo, starts, {t: (summaries[t].halo, r) for t, r in rerun.items()})
             for t, s in again.items():
-                s["attempts"] = summaries[t]["attempts"] + [{"reach": summaries[t]["reach"]}] + s["attempts"]
+                s.attempts = summaries[t].attempts + [{"reach": summaries[t].reach}] + s.attempts
                 summaries[t] = s
         raise TiledError("the tiles' k-th-neighbour distances did not settle after 8 reruns")
 
@@ -460,10 +506,10 @@ class Run:
         over a maximum spanning tree of the tile graph, and each component turned so that its highest point's
         normal points up (+z), as the one-process orientation does."""
         lo, hi = tiling.boxes()
-        live = [t for t, s in summaries.items() if s["own"] > 0]
+        live = [t for t, s in summaries.items() if s.own > 0]
         items = []
         for t in live:
-            read_lo, read_hi = plan.read_box(lo[t], hi[t], summaries[t]["halo"])
+            read_lo, read_hi = plan.read_box(lo[t], hi[t], summaries[t].halo)
             meets = plan.box_distances(read_lo, read_hi, lo[live], hi[live]) == 0
             items.append((self.scratch, t, [u for u, m in zip(live, meets) if m and u != t]))
         votes = self._map(orientation_votes, items, what="orient")
@@ -498,8 +544,8 @@ class Run:
                         flips[u] = flips[t] != opposite
                         component.append(u)
                         queue.append(u)
-            top = max(component, key=lambda t: summaries[t]["top"][0])
-            if summaries[top]["top"][1] == flips[top]:  # the highest normal would point down
+            top = max(component, key=lambda t: summaries[t].top[0])
+            if summaries[top].top[1] == flips[top]:  # the highest normal would point down
                 for t in component:
                     flips[t] = not flips[t]
         for (t, u), v in weight.items():
@@ -511,9 +557,9 @@ class Run:
     def _color_limit(self, summaries):
         """The colour map's saturation over the whole scan, exactly as the one-process map computes it: the
         98th percentile of the magnitudes, found digit by digit from the tiles' histograms."""
-        live = [t for t, s in summaries.items() if s["own"] > 0]
-        largest = max(summaries[t]["largest"] for t in live)
-        n = sum(summaries[t]["own"] for t in live)
+        live = [t for t, s in summaries.items() if s.own > 0]
+        largest = max(summaries[t].largest for t in live)
+        n = sum(summaries[t].own for t in live)
         column = result_columns(self.operation, self.estimate_normals).index(self.operation.color_field)
         ranked = sum(c for c, _ in self._map(magnitude_histogram, [(self.scratch, t) for t in live], column,
                                              largest, False, 0, 48, what="colours"))

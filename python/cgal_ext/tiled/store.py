@@ -20,7 +20,7 @@ PLY_NAMES = {"u1": "uchar", "f8": "double", "f4": "float", "i4": "int", "u4": "u
 MAX_HEADER = 1 << 20
 
 
-class TiledError(Exception):
+class TiledError(ValueError):
     """A tiled run cannot go on: bad input, a tile that cannot be read, a cluster that does not answer."""
 
 
