@@ -300,17 +300,26 @@ def orientation_votes(scratch, tile, neighbours):
     return votes
 
 
-def magnitude_histogram(scratch, tile, column, largest, every, prefix, shift):
-    """Counts of the 16-bit digit at `shift` of the magnitudes (as ordered bit patterns) in the result table's
-    `column` under `prefix`, and the count of the magnitudes the colour map ranks (all when `every`, else those
-    above 1e-12 of the largest)."""
-    magnitude = np.abs(np.asarray(_load_table(scratch, tile)[:, column]))
-    if not every:
-        magnitude = magnitude[magnitude > 1e-12 * largest]
-    bits = magnitude.view(np.int64)
+def _digit_counts(bits, prefix, shift):
+    """The 16-bit digits at `shift` of the bit patterns under `prefix` (the bits above the digit), and how many of
+    each: only the digits that occur, a few hundred where a dense histogram would send 65,536 counts a tile."""
     if shift < 48:
         bits = bits[(bits >> (shift + 16)) == prefix]
-    return len(magnitude), np.bincount((bits >> shift) & 0xFFFF, minlength=1 << 16)
+    counts = np.bincount((bits >> shift) & 0xFFFF, minlength=1 << 16)
+    digits = np.flatnonzero(counts)
+    return digits, counts[digits]
+
+
+def magnitude_histogram(scratch, tile, column, largest, every, prefix, shift):
+    """The digit counts (_digit_counts) of the magnitudes in the result table's `column`, as ordered bit patterns,
+    that the colour map ranks: all when `every`, else those above 1e-12 of the largest. With `every` None (the
+    first pass, which does not know yet which it ranks): how many are above, and the counts of both."""
+    magnitude = np.abs(np.asarray(_load_table(scratch, tile)[:, column]))
+    above = magnitude[magnitude > 1e-12 * largest]
+    if every is None:
+        return (len(above), _digit_counts(magnitude.view(np.int64), prefix, shift),
+                _digit_counts(above.view(np.int64), prefix, shift))
+    return _digit_counts((magnitude if every else above).view(np.int64), prefix, shift)
 
 
 def write_rows(begin, end, pieces, source, sink, operation, estimate_normals, scratch, flips, color_limit):
@@ -556,13 +565,14 @@ class Run:
 
     def _color_limit(self, summaries):
         """The colour map's saturation over the whole scan, exactly as the one-process map computes it: the
-        98th percentile of the magnitudes, found digit by digit from the tiles' histograms."""
+        98th percentile of the magnitudes, found digit by digit from the tiles' histograms (four passes)."""
         live = [t for t, s in summaries.items() if s.own > 0]
         largest = max(summaries[t].largest for t in live)
         n = sum(summaries[t].own for t in live)
         column = result_columns(self.operation, self.estimate_normals).index(self.operation.color_field)
-        ranked = sum(c for c, _ in self._map(magnitude_histogram, [(self.scratch, t) for t in live], column,
-                                             largest, False, 0, 48, what="colours"))
+        tiles = [(self.scratch, t) for t in live]
+        first = self._map(magnitude_histogram, tiles, column, largest, None, 0, 48, what="colours")
+        ranked = sum(count for count, _, _ in first)
         every = 2 * ranked > n
         total = n if every else ranked
         if total == 0:
@@ -570,9 +580,14 @@ class Run:
         rank = min(total - 1, int(0.98 * (total - 1)))
         prefix = 0
         for shift in (48, 32, 16, 0):
-            histograms = self._map(magnitude_histogram, [(self.scratch, t) for t in live], column, largest, every,
-                                   prefix, shift, what="colours")
-            counts = np.sum([h for _, h in histograms], axis=0)
+            if shift == 48:  # the first pass counted the top digits of both
+                histograms = [both[1] if every else both[2] for both in first]
+            else:
+                histograms = self._map(magnitude_histogram, tiles, column, largest, every, prefix, shift,
+                                       what="colours")
+            counts = np.zeros(1 << 16, dtype=np.int64)
+            for digits, tile_counts in histograms:
+                np.add.at(counts, digits, tile_counts)
             cumulative = np.cumsum(counts)
             digit = int(np.searchsorted(cumulative, rank, side="right"))
             rank -= int(cumulative[digit - 1]) if digit else 0
