@@ -114,7 +114,7 @@ def disk_write_throughput(folder, size=2 << 30):
 
 
 def main():
-    reexecute_tuned([sys.executable] + sys.argv)  # the library call alone runs as point-detail and the workers do
+    reexecute_tuned([sys.executable] + sys.argv)  # the library call alone on huge pages, as point-detail runs it
     args = harness_arguments()
     # (model, sizes, repetitions per size): the armadillo's rows come first, as the manual's figures are bound to them.
     if args.quick:

@@ -5,13 +5,13 @@ from the input file to the tasks and from the tasks to the output through a scra
 reach. See doc/scaling.md.
 """
 import ctypes
+import dataclasses
 import os
 import shutil
 import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -144,7 +144,7 @@ class _Stopwatch:
         self._last = now
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class TileJob:
     """One tile task: the tile, its first halo, the halo its buckets were cut with, the k-th-neighbour distance it
     may assume its neighbours' points have (`reach`), and the run's input, operation and settings."""
@@ -163,7 +163,7 @@ class TileJob:
     threads_per_task: Optional[int]
 
 
-@dataclass
+@dataclasses.dataclass
 class TileSummary:
     """What a tile task returns: its own and read points, the halo it ended with and the attempts before, the
     largest k-th-neighbour distance of its own points (`kth`) and the reach it assumed, the fraction of the points
@@ -180,14 +180,14 @@ class TileSummary:
     reach: float
     searched: float
     bounds: np.ndarray
-    seconds: Dict[str, float] = field(default_factory=dict)
+    seconds: Dict[str, float] = dataclasses.field(default_factory=dict)
     interior: Optional[Tuple[float, float]] = None
     top: Optional[Tuple[float, bool]] = None
     largest: Optional[float] = None
 
     def for_report(self):
         """The summary as the run's report keeps it: everything but `bounds`."""
-        return {key: value for key, value in asdict(self).items() if key != "bounds"}
+        return {key: value for key, value in dataclasses.asdict(self).items() if key != "bounds"}
 
 
 def run_tile(job):
