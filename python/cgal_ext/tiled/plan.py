@@ -55,16 +55,17 @@ class Tiling:
     def tile_of(self, points):
         """The tile that owns each point."""
         out = np.empty(len(points), dtype=np.int64)
-        self._descend(np.ascontiguousarray(points.T), np.arange(len(points)), self.root, 0.0,
-                      lambda tile, rows: out.__setitem__(rows, tile))
+        self._visit_leaves(points, 0.0, lambda tile, rows: out.__setitem__(rows, tile))
         return out
 
     def read_sets(self, points, halo):
         """{tile: rows of `points` inside the tile's box grown by `halo`} (rows ascending)."""
         found = {}
-        self._descend(np.ascontiguousarray(points.T), np.arange(len(points)), self.root, halo,
-                      lambda tile, rows: found.__setitem__(tile, rows))
+        self._visit_leaves(points, halo, lambda tile, rows: found.__setitem__(tile, rows))
         return found
+
+    def _visit_leaves(self, points, halo, visit):
+        self._descend(np.ascontiguousarray(points.T), np.arange(len(points)), self.root, halo, visit)
 
     def _descend(self, columns, rows, node, halo, visit):
         """Visits each leaf under `node` with the `rows` whose point (x, y and z in `columns`) its box grown by
