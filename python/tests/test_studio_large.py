@@ -1,13 +1,15 @@
-# The studio in Chromium on a scan of 10M points, ten times the page's point budget: it opens, and while the view
+# The studio in Chromium on a scan of 4M points, four times the page's default point budget: it opens with the
+# background through at most 1 % of the silhouette (the largest size of doc/studio.md's target), and while the view
 # is turned by the mouse it draws the budget only, a subset that still covers the surface; every point again
-# when the mouse is released. (The frame times with and without the budget are the benchmark's: bench_studio.py.)
+# when the mouse is released. (10M points, and the frame times with and without the budget, are the benchmark's:
+# bench_studio.py.)
 import pytest
 
 import cgal_ext
 from conftest import bumpy_sphere
 from studio_support import Server, chromium, hole_fraction, idle, pointer_path, wait_for
 
-POINTS = 10_000_000
+POINTS = 4_000_000
 BUDGET = 1_000_000  # the page's default
 
 
@@ -22,7 +24,7 @@ def page(tmp_path_factory):
     driver.set_script_timeout(300)
     try:
         driver.get(server.url)
-        wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", timeout=400, what="the 10M-point scan")
+        wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan", timeout=400, what="the 4M-point scan")
         # The local spacing, computed in the background, sizes the discs once it arrives.
         wait_for(driver, "studio.spacing && studio.spacing.length === studio.n", timeout=400, what="the spacing")
         idle(driver)
@@ -32,7 +34,7 @@ def page(tmp_path_factory):
         server.stop()
 
 
-def test_ten_times_the_budget_opens_and_draws_the_budget_while_the_view_turns(page):
+def test_four_times_the_budget_opens_whole_and_draws_the_budget_while_the_view_turns(page):
     server, driver = page
     assert driver.execute_script("return studio.n") == POINTS
     assert driver.execute_script("return studio.view.budget") == BUDGET
