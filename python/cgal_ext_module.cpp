@@ -47,6 +47,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -121,6 +122,27 @@ py::tuple triad_bandwidth(std::size_t elements, int repetitions)
   return py::make_tuple(rates[rates.size() / 2], rates.back());
 }
 
+/// m.def(name, function, extra...) that also records, in `parameters` (the module's `_parameters`), each parameter
+/// of the function and its default (inspect.Parameter.empty where it has none), taken from the argument objects
+/// that define them. The tiled runs read there what they may pass on and what the library does by default.
+template <typename Function, typename... Extra>
+void def_with_parameters(py::module_& m, py::dict& parameters, const char* name, Function&& function,
+                         const Extra&... extra)
+{
+  const py::object required = py::module_::import("inspect").attr("Parameter").attr("empty");
+  py::dict defaults;
+  auto record = [&](const auto& e) {
+    using E = std::decay_t<decltype(e)>;
+    if constexpr(std::is_same_v<E, py::arg_v>)
+      defaults[e.name] = e.value ? py::object(e.value) : py::object(py::none());
+    else if constexpr(std::is_same_v<E, py::arg>)
+      defaults[e.name] = required;
+  };
+  (record(extra), ...);
+  parameters[name] = defaults;
+  m.def(name, std::forward<Function>(function), extra...);
+}
+
 PYBIND11_MODULE(_core, m)
 {
   m.doc() = "The compiled part of cgal_ext: high-frequency geometric details of point-sampled surfaces (Miao et al. "
@@ -141,101 +163,109 @@ PYBIND11_MODULE(_core, m)
                                        "(n, 3) or None, and the other per-point properties by name (float64 arrays; "
                                        "colours as 'colors', (n, 3) uint8).");
 
+  py::dict parameters; // of the library's functions, as m._parameters
   const Detail_filter filter;
   const unsigned int laplacian_k = default_laplacian_neighbors;
   const std::string default_order = setting_name(filter.order);
   const std::string default_weights = setting_name(Laplacian_weights().weighting);
 
-  m.def("compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(),
-        py::kw_only(), "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
-        "weights"_a = default_weights, "progress"_a = py::none(), "neighbor_radius"_a = py::none(),
-        doc("The detail vector delta = f(K) p of every point and its oriented magnitude +-|delta| (the sign of "
-            "delta . n); K = I - W is the point-set Laplacian (doc/geometric_details.md).",
-            {points_doc, normals_doc, filter_doc, progress_doc,
-             "neighbor_radius : numpy.ndarray, optional\n    A writable contiguous (n,) float64 array that receives "
-             "each point's distance to its k-th\n    nearest neighbour (the tiled runs check with it that a tile held "
-             "every neighbour used)."},
-            "Details\n    (details (n, 3), magnitude (n,)), new float64 arrays.")
-          .c_str());
+  def_with_parameters(
+    m, parameters, "compute_geometric_details", &bound_compute_geometric_details, "points"_a, "normals"_a = py::none(),
+    py::kw_only(), "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
+    "weights"_a = default_weights, "progress"_a = py::none(), "neighbor_radius"_a = py::none(),
+    doc("The detail vector delta = f(K) p of every point and its oriented magnitude +-|delta| (the sign of "
+        "delta . n); K = I - W is the point-set Laplacian (doc/geometric_details.md).",
+        {points_doc, normals_doc, filter_doc, progress_doc,
+         "neighbor_radius : numpy.ndarray, optional\n    A writable contiguous (n,) float64 array that receives "
+         "each point's distance to its k-th\n    nearest neighbour (the tiled runs check with it that a tile held "
+         "every neighbour used)."},
+        "Details\n    (details (n, 3), magnitude (n,)), new float64 arrays.")
+      .c_str());
   const std::string region_doc = R"(roi : array_like of int or bool
     The region of interest: point indices, or a boolean mask of all the points.)";
   const std::string anchors_doc = R"(anchors : array_like of int or bool, optional
     Points held where they are (indices or a mask); None lets the function anchor the region's border.)";
-  m.def("scale_geometric_details",
-        [](const Array_like& points, const Optional_array_like& normals, const Array_like& roi, double s,
-           const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
-           const std::string& weights, const Optional_progress& progress) {
-          return manipulate(false, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
-        },
-        "points"_a, "normals"_a = py::none(), py::kw_only(), "roi"_a, "s"_a, "anchors"_a = py::none(), "k"_a = laplacian_k,
-        "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu, "weights"_a = default_weights,
-        "progress"_a = py::none(),
-        doc("The points with the details of a region scaled by s (Miao et al. 2007, Sect. 4): a least-squares "
-            "solve that keeps the rest of the shape (doc/detail_scaling.md).",
-            {points_doc, normals_doc, region_doc, "s : float\n    The scale of the details: 0 removes them, 1 keeps the points, 2 doubles them.",
-             anchors_doc, filter_doc, progress_doc},
-            "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it; the input is "
-            "not changed).")
-          .c_str());
-  m.def("enhance_geometric_details",
-        [](const Array_like& points, const Optional_array_like& normals, double s, const Optional_array_like& roi,
-           const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
-           const std::string& weights, const Optional_progress& progress) {
-          return manipulate(true, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
-        },
-        "points"_a, "normals"_a = py::none(), py::kw_only(), "s"_a, "roi"_a = py::none(), "anchors"_a = py::none(),
-        "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
-        "weights"_a = default_weights, "progress"_a = py::none(),
-        doc("The points with their details against a smooth base surface (the balanced curvature flow) enhanced by "
-            "s (Miao et al. 2007, Sect. 4; doc/detail_scaling.md).",
-            {points_doc, normals_doc, "s : float\n    The enhancement: 1 keeps the points, 2 doubles the details.",
-             "roi : array_like of int or bool, optional\n    The region enhanced (indices or a mask); None: every point.",
-             anchors_doc, filter_doc, progress_doc},
-            "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it).")
-          .c_str());
-  m.def("estimate_mean_curvature", &bound_estimate_mean_curvature, "points"_a, "normals"_a = py::none(), py::kw_only(),
-        "k"_a = default_curvature_neighbors, "fitting"_a = setting_name(Curvature_fitting::closed_form),
-        "progress"_a = py::none(),
-        doc("The signed mean curvature of every point: a sphere with outward normals has +1/r (doc/curvature.md).",
-            {points_doc, normals_doc, "k : int\n    Neighbours of each local fit (itself not counted).",
-             "fitting : {\"closed_form\", \"monge\"}\n    A closed-form degree-2 fit, or CGAL's Monge jet fitting.",
-             progress_doc},
-            "numpy.ndarray\n    (n,) float64.")
-          .c_str());
+  def_with_parameters(
+    m, parameters, "scale_geometric_details",
+    [](const Array_like& points, const Optional_array_like& normals, const Array_like& roi, double s,
+       const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
+       const std::string& weights, const Optional_progress& progress) {
+      return manipulate(false, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
+    },
+    "points"_a, "normals"_a = py::none(), py::kw_only(), "roi"_a, "s"_a, "anchors"_a = py::none(), "k"_a = laplacian_k,
+    "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu, "weights"_a = default_weights,
+    "progress"_a = py::none(),
+    doc("The points with the details of a region scaled by s (Miao et al. 2007, Sect. 4): a least-squares "
+        "solve that keeps the rest of the shape (doc/detail_scaling.md).",
+        {points_doc, normals_doc, region_doc,
+         "s : float\n    The scale of the details: 0 removes them, 1 keeps the points, 2 doubles them.", anchors_doc,
+         filter_doc, progress_doc},
+        "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it; the input is "
+        "not changed).")
+      .c_str());
+  def_with_parameters(
+    m, parameters, "enhance_geometric_details",
+    [](const Array_like& points, const Optional_array_like& normals, double s, const Optional_array_like& roi,
+       const Optional_array_like& anchors, long long k, const std::string& order, double lam, double mu,
+       const std::string& weights, const Optional_progress& progress) {
+      return manipulate(true, points, normals, roi, s, anchors, k, order, lam, mu, weights, progress);
+    },
+    "points"_a, "normals"_a = py::none(), py::kw_only(), "s"_a, "roi"_a = py::none(), "anchors"_a = py::none(),
+    "k"_a = laplacian_k, "order"_a = default_order, "lam"_a = filter.lambda, "mu"_a = filter.mu,
+    "weights"_a = default_weights, "progress"_a = py::none(),
+    doc("The points with their details against a smooth base surface (the balanced curvature flow) enhanced by "
+        "s (Miao et al. 2007, Sect. 4; doc/detail_scaling.md).",
+        {points_doc, normals_doc, "s : float\n    The enhancement: 1 keeps the points, 2 doubles the details.",
+         "roi : array_like of int or bool, optional\n    The region enhanced (indices or a mask); None: every point.",
+         anchors_doc, filter_doc, progress_doc},
+        "numpy.ndarray\n    The moved points (n, 3), a new array (the points are read once into it).")
+      .c_str());
+  def_with_parameters(
+    m, parameters, "estimate_mean_curvature", &bound_estimate_mean_curvature, "points"_a, "normals"_a = py::none(),
+    py::kw_only(), "k"_a = default_curvature_neighbors, "fitting"_a = setting_name(Curvature_fitting::closed_form),
+    "progress"_a = py::none(),
+    doc("The signed mean curvature of every point: a sphere with outward normals has +1/r (doc/curvature.md).",
+        {points_doc, normals_doc, "k : int\n    Neighbours of each local fit (itself not counted).",
+         "fitting : {\"closed_form\", \"monge\"}\n    A closed-form degree-2 fit, or CGAL's Monge jet fitting.",
+         progress_doc},
+        "numpy.ndarray\n    (n,) float64.")
+      .c_str());
   const Simplification_settings simplification;
-  m.def("compute_simplification_sample_points", &bound_compute_simplification_sample_points, "points"_a,
-        "normals"_a = py::none(), py::kw_only(), "target_count"_a = simplification.target_count,
-        "max_cluster_size"_a = py::none(), "mode_threshold"_a = simplification.mode_spread_threshold,
-        "k"_a = default_mean_shift_neighbors, "progress"_a = py::none(),
-        doc("The simplification sample point (SSP) of every point: a 7D mean shift over position, normal and "
-            "curvature, and clusters that are dense where the surface bends (doc/simplification.md).",
-            {points_doc, normals_doc, "target_count : int\n    About how many sample points to make.",
-             "max_cluster_size : int, optional\n    The most points a sample point may have, instead of target_count.",
-             "mode_threshold : float\n    How far apart (in the mean shift's range units) two modes must be to split a "
-             "cluster.",
-             "k : int\n    Neighbours of the mean shift (itself not counted).", progress_doc},
-            "numpy.ndarray\n    (n,) int64, the sample point of each point, 0 .. number of sample points - 1.")
-          .c_str());
+  def_with_parameters(
+    m, parameters, "compute_simplification_sample_points", &bound_compute_simplification_sample_points, "points"_a,
+    "normals"_a = py::none(), py::kw_only(), "target_count"_a = simplification.target_count,
+    "max_cluster_size"_a = py::none(), "mode_threshold"_a = simplification.mode_spread_threshold,
+    "k"_a = default_mean_shift_neighbors, "progress"_a = py::none(),
+    doc("The simplification sample point (SSP) of every point: a 7D mean shift over position, normal and "
+        "curvature, and clusters that are dense where the surface bends (doc/simplification.md).",
+        {points_doc, normals_doc, "target_count : int\n    About how many sample points to make.",
+         "max_cluster_size : int, optional\n    The most points a sample point may have, instead of target_count.",
+         "mode_threshold : float\n    How far apart (in the mean shift's range units) two modes must be to split a "
+         "cluster.",
+         "k : int\n    Neighbours of the mean shift (itself not counted).", progress_doc},
+        "numpy.ndarray\n    (n,) int64, the sample point of each point, 0 .. number of sample points - 1.")
+      .c_str());
   const Upsampling_settings upsampling;
-  m.def("upsample_point_set", &bound_upsample_point_set, "points"_a, "normals"_a, py::kw_only(),
-        "spacing"_a = upsampling.detection.spacing, "max_hole_size"_a = upsampling.detection.max_hole_size,
-        "k"_a = upsampling.neighbors, "roi"_a = py::none(), "spacing_before"_a = py::none(), "progress"_a = py::none(),
-        doc("New samples that fill the holes and sparse parts of an oriented point set (doc/upsampling.md).",
-            {points_doc,
-             "normals : (n, 3) array_like\n    Unit normals (required: the holes and the new samples' surface "
-             "come from them).",
-             "spacing : float\n    The spacing of the new samples; 0: each point's local spacing.",
-             "max_hole_size : float\n    The widest hole filled, in spacings.",
-             "k : int\n    Neighbours of the principal axes and of the local surface fits (at least 6).",
-             "roi : array_like of int or bool, optional\n    Only holes next to these points are filled.",
-             "spacing_before : (n,) array_like, optional\n    Each point's local spacing before an edit "
-             "(local_spacing of the points it started from; needs roi): the gaps are measured against it, so that only "
-             "what the edit stretched is filled (point-detail edit --upsample).",
-             progress_doc},
-            "Upsampled\n    (points (m, 3), normals (m, 3)), the new samples only.")
-          .c_str());
-  m.def(
-    "compute_neighbor_graph", &bound_compute_neighbor_graph, "points"_a, py::kw_only(), "k"_a = 10,
+  def_with_parameters(
+    m, parameters, "upsample_point_set", &bound_upsample_point_set, "points"_a, "normals"_a, py::kw_only(),
+    "spacing"_a = upsampling.detection.spacing, "max_hole_size"_a = upsampling.detection.max_hole_size,
+    "k"_a = upsampling.neighbors, "roi"_a = py::none(), "spacing_before"_a = py::none(), "progress"_a = py::none(),
+    doc("New samples that fill the holes and sparse parts of an oriented point set (doc/upsampling.md).",
+        {points_doc,
+         "normals : (n, 3) array_like\n    Unit normals (required: the holes and the new samples' surface "
+         "come from them).",
+         "spacing : float\n    The spacing of the new samples; 0: each point's local spacing.",
+         "max_hole_size : float\n    The widest hole filled, in spacings.",
+         "k : int\n    Neighbours of the principal axes and of the local surface fits (at least 6).",
+         "roi : array_like of int or bool, optional\n    Only holes next to these points are filled.",
+         "spacing_before : (n,) array_like, optional\n    Each point's local spacing before an edit "
+         "(local_spacing of the points it started from; needs roi): the gaps are measured against it, so that only "
+         "what the edit stretched is filled (point-detail edit --upsample).",
+         progress_doc},
+        "Upsampled\n    (points (m, 3), normals (m, 3)), the new samples only.")
+      .c_str());
+  def_with_parameters(
+    m, parameters, "compute_neighbor_graph", &bound_compute_neighbor_graph, "points"_a, py::kw_only(), "k"_a = 10,
     "symmetric"_a = false, "progress"_a = py::none(),
     doc("The neighbourhoods every function of the package uses: each point's closed ball of its k-th nearest other "
         "point (exactly k points, more where points tie at that distance), whatever the order of the points "
@@ -247,14 +277,14 @@ PYBIND11_MODULE(_core, m)
         "tuple\n    (offsets (n + 1,), neighbors (m,)), int64: the neighbours of point i are "
         "neighbors[offsets[i]:offsets[i + 1]], nearest first (by index when symmetric).")
       .c_str());
-  m.def(
-    "compute_local_spacing", &bound_compute_local_spacing, "points"_a,
+  def_with_parameters(
+    m, parameters, "compute_local_spacing", &bound_compute_local_spacing, "points"_a,
     doc("Each point's local spacing: the median, over the point and its 15 nearest neighbours, of their mean distance "
         "to their 6 nearest (doc/upsampling.md).",
         {points_doc}, "numpy.ndarray\n    (n,) float64.")
       .c_str());
-  m.def(
-    "refit_normals", &bound_refit_normals, "points"_a, "normals"_a, "moved"_a, py::kw_only(),
+  def_with_parameters(
+    m, parameters, "refit_normals", &bound_refit_normals, "points"_a, "normals"_a, "moved"_a, py::kw_only(),
     "k"_a = default_normal_neighbors,
     doc("The normals re-fitted where points moved (after scale_geometric_details or enhance_geometric_details, as "
         "point-detail scale does): each moved point's normal and its neighbours' from a degree-2 fit, on the side of "
@@ -303,16 +333,19 @@ PYBIND11_MODULE(_core, m)
              "**scalars : (n,) array_like\n    Per-point values, written as double properties in the order given."},
             "", true)
           .c_str());
-  m.def("estimate_oriented_normals", &bound_estimate_oriented_normals, "points"_a, py::kw_only(),
-        "k"_a = default_normal_neighbors, "progress"_a = py::none(),
-        doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
-            "estimates them for an input without normals).",
-            {points_doc,
-             "k : int\n    Neighbours of each point's fit, the point itself not counted; at least 5, fewer than the "
-             "number of points.",
-             progress_doc},
-            "numpy.ndarray\n    (n, 3) float64 normals.")
-          .c_str());
+  def_with_parameters(
+    m, parameters, "estimate_oriented_normals", &bound_estimate_oriented_normals, "points"_a, py::kw_only(),
+    "k"_a = default_normal_neighbors, "progress"_a = py::none(),
+    doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
+        "estimates them for an input without normals).",
+        {points_doc,
+         "k : int\n    Neighbours of each point's fit, the point itself not counted; at least 5, fewer than the "
+         "number of points.",
+         progress_doc},
+        "numpy.ndarray\n    (n, 3) float64 normals.")
+      .c_str());
+  m.attr("_parameters") = parameters;
+
   m.def("sequential_colors", [](const Array_like& values) { return colors_by(point_detail::sequential_colors, values); },
         "values"_a,
         doc("The program's sequential colour map (the edit's distance moved), from the 2nd to the 98th "

@@ -93,6 +93,33 @@ def test_defaults_are_the_libraries():
         assert str(actual) == shown or (shown == "None" and actual is None) or float(shown) == actual, key
 
 
+def test_the_exported_parameters_are_the_signatures():
+    """What the tiled runs read (_core._parameters): every library function's parameters in order, with the
+    defaults its help() shows, and no default where it shows none."""
+    import inspect
+    exported = cgal_ext._core._parameters
+    assert {"compute_geometric_details", "enhance_geometric_details", "estimate_mean_curvature",
+            "estimate_oriented_normals"} <= set(exported)
+    for name, parameters in exported.items():
+        function = getattr(cgal_ext, name)
+        assert list(parameters) == parameters_of(name, function), name
+        signature = function.__doc__.splitlines()[0]
+        inside, depth, parts = signature[signature.index("(") + 1:signature.rindex(") ->")], 0, [""]
+        for c in inside:  # split at the commas outside brackets
+            depth += (c == "[") - (c == "]")
+            if c == "," and depth == 0:
+                parts.append("")
+            else:
+                parts[-1] += c
+        shown = {part.split(":")[0].strip(): part.split(" = ", 1)[1] if " = " in part else ""
+                 for part in parts if part.strip() != "*"}
+        for parameter, default in parameters.items():
+            if default is inspect.Parameter.empty:
+                assert shown[parameter] == "", (name, parameter)
+            else:
+                assert shown[parameter] == repr(default), (name, parameter, default)
+
+
 # ---- arrays as users have them ------------------------------------------------------------------------------------
 
 def test_pickled_float32_and_list_inputs_give_the_float64_results(sphere):

@@ -2,10 +2,10 @@
 writes, and which of its own points the halo certifies.
 
 Each operation calls the package's one-process function on the tile's points; nothing here re-implements it.
-Options the caller leaves out are left to those functions, whose defaults are read from their signatures.
+Options the caller leaves out are left to those functions, whose keywords and defaults the extension exports
+(`_core._parameters`, recorded from the arguments that define them).
 """
-import ast
-import re
+import inspect
 from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
@@ -19,16 +19,16 @@ RGB = [("red", "u1"), ("green", "u1"), ("blue", "u1")]
 RINGS = {"linear": 1, "quadric": 2, "cubic": 3}  # the highest power of K in f(K)
 
 
-def signature_defaults(function):
-    """{keyword: default} of a compiled function, from the signature line of its docstring."""
-    line = function.__doc__.splitlines()[0]
-    defaults = {}
-    for name, value in re.findall(r"(\w+): [^=,()]+ = ('[^']*'|[-\w.]+)", line):
-        try:
-            defaults[name] = ast.literal_eval(value)
-        except ValueError:
-            pass  # None-like or an expression: nothing the runs need
-    return defaults
+def keywords(function):
+    """{keyword: default} of a compiled function of the library, without its arrays and its progress callback;
+    inspect.Parameter.empty where the keyword has no default."""
+    parameters = _core._parameters[function.__name__]
+    return {name: value for name, value in parameters.items() if name not in ("points", "normals", "progress")}
+
+
+def defaults(function):
+    """{keyword: default} of the keywords of a compiled function that have one."""
+    return {name: value for name, value in keywords(function).items() if value is not inspect.Parameter.empty}
 
 
 class Operation:
@@ -46,13 +46,11 @@ class Operation:
     extra_defaults: Dict[str, Any] = {}
 
     def __init__(self, **options):
-        signature = self.function.__doc__.splitlines()[0]
-        keywords = set(re.findall(r"(\w+): ", signature)) - {"points", "normals", "progress"}
-        unknown = set(options) - keywords - set(self.extra_options)
+        unknown = set(options) - set(keywords(self.function)) - set(self.extra_options)
         if unknown:
             raise ValueError(f"{self.name}: unknown option(s) {', '.join(sorted(unknown))}")
         self.options = options
-        self.settings = {**signature_defaults(self.function), **self.extra_defaults, **options}
+        self.settings = {**defaults(self.function), **self.extra_defaults, **options}
         if self.settings.get("order", "linear") not in RINGS:
             raise ValueError(f"{self.name}: order must be one of {', '.join(RINGS)}, not '{self.settings['order']}'")
 
@@ -80,7 +78,7 @@ class Operation:
 
     def normal_neighbors(self):
         """The neighbours of an estimated normal's fit (itself not counted)."""
-        return signature_defaults(_core.estimate_oriented_normals)["k"]
+        return defaults(_core.estimate_oriented_normals)["k"]
 
     def own_neighbors(self):
         """The neighbours (itself not counted) of the operation's own values."""
