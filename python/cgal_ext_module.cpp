@@ -7,6 +7,7 @@
 // converted once. Results are new arrays, named tuples where there are several. The GIL is released while the
 // library computes; a `progress` callable is called from the calling thread with the GIL taken back, and an
 // exception it raises (or Ctrl-C) cancels the computation and is raised.
+// The module is registered by concern: the library's functions, the program's I/O, the threads, the editing class.
 #include <CGAL_ext/Detail_preserving_deformation.h>
 #include <CGAL_ext/compute_geometric_details.h>
 #include <CGAL_ext/compute_neighbor_graph.h>
@@ -97,8 +98,6 @@ std::string doc(const std::string& summary, const std::vector<std::string>& para
   return text;
 }
 
-} // namespace
-
 // STREAM's triad on TBB's threads, as the diffusion's loops run: (median, best) GB/s over `repetitions` passes.
 py::tuple triad_bandwidth(std::size_t elements, int repetitions)
 {
@@ -143,26 +142,9 @@ void def_with_parameters(py::module_& m, py::dict& parameters, const char* name,
   m.def(name, std::forward<Function>(function), extra...);
 }
 
-PYBIND11_MODULE(_core, m)
+/// The library's functions on arrays, and the table of their parameters (`_parameters`).
+void bind_functions(py::module_& m)
 {
-  m.doc() = "The compiled part of cgal_ext: high-frequency geometric details of point-sampled surfaces (Miao et al. "
-            "2007) on numpy arrays.";
-  m.attr("__version__") = CGAL_EXT_VERSION;
-  // The library's exceptions: Invalid_input is a std::invalid_argument (ValueError), Numerical_failure a
-  // std::runtime_error (RuntimeError); pybind11 translates both with their messages.
-  result_types.details = named_tuple(m, "Details", {"details", "magnitude"},
-                                     "Details(details, magnitude): the detail vector of every point (n, 3) and its "
-                                     "oriented magnitude (n,), positive where the detail stands out along the normal.");
-  result_types.upsampled = named_tuple(m, "Upsampled", {"points", "normals"},
-                                       "Upsampled(points, normals): the new samples (m, 3) and their normals (m, 3).");
-  result_types.deformed = named_tuple(m, "Deformed", {"points", "normals"},
-                                      "Deformed(points, normals): every point's and normal's deformed position (n, 3), "
-                                      "in the input order.");
-  result_types.point_set = named_tuple(m, "PointSet", {"points", "normals", "properties"},
-                                       "PointSet(points, normals, properties): the points (n, 3) float64, their normals "
-                                       "(n, 3) or None, and the other per-point properties by name (float64 arrays; "
-                                       "colours as 'colors', (n, 3) uint8).");
-
   py::dict parameters; // of the library's functions, as m._parameters
   const Detail_filter filter;
   const unsigned int laplacian_k = default_laplacian_neighbors;
@@ -295,6 +277,23 @@ PYBIND11_MODULE(_core, m)
         "numpy.ndarray\n    (n, 3) float64, a new array.")
       .c_str());
 
+  def_with_parameters(
+    m, parameters, "estimate_oriented_normals", &bound_estimate_oriented_normals, "points"_a, py::kw_only(),
+    "k"_a = default_normal_neighbors, "progress"_a = py::none(),
+    doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
+        "estimates them for an input without normals).",
+        {points_doc,
+         "k : int\n    Neighbours of each point's fit, the point itself not counted; at least 5, fewer than the "
+         "number of points.",
+         progress_doc},
+        "numpy.ndarray\n    (n, 3) float64 normals.")
+      .c_str());
+  m.attr("_parameters") = parameters;
+}
+
+/// The program's readers, writers, colour maps and pictures.
+void bind_io(py::module_& m)
+{
   m.def("record_layout", &record_layout, "path"_a,
         doc("Where the points of a binary PCD or a LAS file are, for mapping the file instead of reading it (the "
             "tiled runs): the header checked as read_points checks it.",
@@ -333,19 +332,6 @@ PYBIND11_MODULE(_core, m)
              "**scalars : (n,) array_like\n    Per-point values, written as double properties in the order given."},
             "", true)
           .c_str());
-  def_with_parameters(
-    m, parameters, "estimate_oriented_normals", &bound_estimate_oriented_normals, "points"_a, py::kw_only(),
-    "k"_a = default_normal_neighbors, "progress"_a = py::none(),
-    doc("Unit normals by jet fitting, oriented consistently along a minimum spanning tree (as the program "
-        "estimates them for an input without normals).",
-        {points_doc,
-         "k : int\n    Neighbours of each point's fit, the point itself not counted; at least 5, fewer than the "
-         "number of points.",
-         progress_doc},
-        "numpy.ndarray\n    (n, 3) float64 normals.")
-      .c_str());
-  m.attr("_parameters") = parameters;
-
   m.def("sequential_colors", [](const Array_like& values) { return colors_by(point_detail::sequential_colors, values); },
         "values"_a,
         doc("The program's sequential colour map (the edit's distance moved), from the 2nd to the 98th "
@@ -386,6 +372,11 @@ PYBIND11_MODULE(_core, m)
              "\"displacement, model units\"; letters, digits, spaces and .,-+/()_)."},
             "bytes\n    The PNG file's bytes.")
           .c_str());
+}
+
+/// The library's threads, and what the tests and the benchmarks measure through the module.
+void bind_threads(py::module_& m)
+{
   m.def("set_num_threads", &set_num_threads, "count"_a,
         doc("Limits the library's worker threads (TBB's max_allowed_parallelism), as the program's --threads does. "
             "cgal_ext.threads(n) does the same for a with-block.",
@@ -404,7 +395,11 @@ PYBIND11_MODULE(_core, m)
         "Benchmarks only: the memory bandwidth of STREAM's triad a[i] = b[i] + 3 c[i] over three arrays of `elements` "
         "doubles on the library's threads, in GB/s counting 24 bytes per element: the median and the best of "
         "`repetitions` passes after one untimed.");
+}
 
+/// The editing class.
+void bind_deformation(py::module_& m)
+{
   const Deformation::Settings defaults;
   py::class_<Deformation>(
     m, "Deformation",
@@ -588,4 +583,33 @@ PYBIND11_MODULE(_core, m)
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)
     .def("__repr__", &Deformation::repr);
+}
+
+} // namespace
+
+PYBIND11_MODULE(_core, m)
+{
+  m.doc() = "The compiled part of cgal_ext: high-frequency geometric details of point-sampled surfaces (Miao et al. "
+            "2007) on numpy arrays.";
+  m.attr("__version__") = CGAL_EXT_VERSION;
+  // The library's exceptions: Invalid_input is a std::invalid_argument (ValueError), Numerical_failure a
+  // std::runtime_error (RuntimeError); pybind11 translates both with their messages.
+  result_types.details = named_tuple(m, "Details", {"details", "magnitude"},
+                                     "Details(details, magnitude): the detail vector of every point (n, 3) and its "
+                                     "oriented magnitude (n,), positive where the detail stands out along the normal.");
+  result_types.upsampled = named_tuple(m, "Upsampled", {"points", "normals"},
+                                       "Upsampled(points, normals): the new samples (m, 3) and their normals (m, 3).");
+  result_types.deformed = named_tuple(m, "Deformed", {"points", "normals"},
+                                      "Deformed(points, normals): every point's and normal's deformed position (n, 3), "
+                                      "in the input order.");
+  result_types.point_set =
+    named_tuple(m, "PointSet", {"points", "normals", "properties"},
+                "PointSet(points, normals, properties): the points (n, 3) float64, their normals "
+                "(n, 3) or None, and the other per-point properties by name (float64 arrays; "
+                "colours as 'colors', (n, 3) uint8).");
+
+  bind_functions(m);
+  bind_io(m);
+  bind_threads(m);
+  bind_deformation(m);
 }
