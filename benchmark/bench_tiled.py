@@ -157,9 +157,9 @@ def main():
                              "points/s", ""))
                 rows.append(("one process: compute_geometric_details alone", 1_000_000, median(compute), "s",
                              f"{workers} threads"))
-                written = "256 MiB" if args.quick else "2 GiB"
+                written, size = ("256 MiB", 256 << 20) if args.quick else ("2 GiB", 2 << 30)
                 rows.append((f"scratch disk: sequential write, flushed ({written})", 0,
-                             disk_write_throughput(tmp, (256 << 20) if args.quick else (2 << 30)) / 1e6, "MB/s", ""))
+                             disk_write_throughput(tmp, size) / 1e6, "MB/s", ""))
             for n, times, worker_peaks, report in done:
                 throughput = n / median(times)
                 if model != "armadillo":

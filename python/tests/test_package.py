@@ -51,23 +51,26 @@ def init_signature():
     return next(line[len("1. "):] for line in lines if line.startswith("1. __init__("))
 
 
-def parameters_of(name, function):
-    """The parameter names of a function, from pybind11's signature line (or Python's own)."""
-    if name == "Deformation":
-        signature = init_signature()
-    elif name == "threads":
-        import inspect
-        return [p for p in inspect.signature(function).parameters]
-    else:
-        signature = function.__doc__.splitlines()[0]
+def signature_parameters(signature):
+    """{name: its default as shown, "" where it has none} of a pybind11 signature line, in order."""
     inside = signature[signature.index("(") + 1:signature.rindex(")")]
-    names = []
+    shown = {}
     for part in re.split(r",\s*(?![^\[]*\])", inside):
         part = part.strip()
         if part in ("", "*") or part.startswith("self"):
             continue
-        names.append(part.split(":")[0].split("=")[0].strip())
-    return names
+        shown[part.split(":")[0].split("=")[0].strip()] = part.split(" = ", 1)[1] if " = " in part else ""
+    return shown
+
+
+def parameters_of(name, function):
+    """The parameter names of a function, from pybind11's signature line (or Python's own)."""
+    if name == "Deformation":
+        return list(signature_parameters(init_signature()))
+    if name == "threads":
+        import inspect
+        return [p for p in inspect.signature(function).parameters]
+    return list(signature_parameters(function.__doc__.splitlines()[0]))
 
 
 @pytest.mark.parametrize("name, function", list(public_callables()), ids=lambda x: x if isinstance(x, str) else "")
@@ -101,18 +104,8 @@ def test_the_exported_parameters_are_the_signatures():
     assert {"compute_geometric_details", "enhance_geometric_details", "estimate_mean_curvature",
             "estimate_oriented_normals"} <= set(exported)
     for name, parameters in exported.items():
-        function = getattr(cgal_ext, name)
-        assert list(parameters) == parameters_of(name, function), name
-        signature = function.__doc__.splitlines()[0]
-        inside, depth, parts = signature[signature.index("(") + 1:signature.rindex(") ->")], 0, [""]
-        for c in inside:  # split at the commas outside brackets
-            depth += (c == "[") - (c == "]")
-            if c == "," and depth == 0:
-                parts.append("")
-            else:
-                parts[-1] += c
-        shown = {part.split(":")[0].strip(): part.split(" = ", 1)[1] if " = " in part else ""
-                 for part in parts if part.strip() != "*"}
+        shown = signature_parameters(getattr(cgal_ext, name).__doc__.splitlines()[0])
+        assert list(parameters) == list(shown), name
         for parameter, default in parameters.items():
             if default is inspect.Parameter.empty:
                 assert shown[parameter] == "", (name, parameter)
