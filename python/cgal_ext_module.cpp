@@ -56,10 +56,11 @@ namespace py = pybind11;
 using namespace pybind11::literals;
 
 #include "core/arrays.h"
+#include "core/deformation_settings.h"
+#include "core/editing.h"
+#include "core/functions.h"
 #include "core/progress.h"
 #include "core/settings.h"
-#include "core/functions.h"
-#include "core/editing.h"
 
 namespace {
 
@@ -397,103 +398,38 @@ void bind_threads(py::module_& m)
         "`repetitions` passes after one untimed.");
 }
 
-/// The editing class.
+/// The editing class; its constructor's keywords are the rows of deformation_keywords().
 void bind_deformation(py::module_& m)
 {
-  const Deformation::Settings defaults;
-  py::class_<Deformation>(
+  std::vector<std::string> parameters = {points_doc, normals_doc};
+  for(std::string& entry : deformation_keyword_docs()) parameters.push_back(std::move(entry));
+  py::class_<Deformation> deformation(
     m, "Deformation",
     doc("Detail-preserving editing of a point set (Miao et al. 2007, Sect. 6), shaped like CGAL's "
         "Surface_mesh_deformation: select a region of interest and handle groups, preprocess(), "
         "then per frame of a drag set_handle_transform(), deform() and diffuse(), and "
         "restore_details() once the drag ends (doc/editing.md). The points and normals are "
         "copied at construction. The settings are keyword-only; `settings` reads them back.",
-        {points_doc,
-         normals_doc,
-         "order, lam, mu : str, float, float\n    The detail transfer function, as in compute_geometric_details.",
-         "k : int\n    Neighbours of the sample points' Laplacian.",
-         "handle_weight : float\n    inf: handles are hard constraints; else their weight in the "
-         "least squares.",
-         "rotations : {\"propagate\", \"arap\", \"none\"}\n    How the details turn: by the strength "
-         "field, fitted as rigid as possible, or not.",
-         "rigid_iterations : int\n    Local/global iterations per step in \"arap\" mode.",
-         "rigid_rotation_smoothing : float\n    SRE-ARAP's smooth-rotation weight (0: plain ARAP).",
-         "rigid_rotation_smoothing_scale : {\"edge_lengths\", \"surface_area\"}\n    How that weight "
-         "is scaled.",
-         "rigid_edge_weights : {\"uniform\", \"cotangent\"}\n    Edge weights of the \"arap\" energy.",
-         "strength_distance : {\"euclidean\", \"geodesic\"}\n    The distance of the strength "
-         "field.",
-         "target_count : int\n    About how many sample points to make.",
-         "max_cluster_size : int, optional\n    The most points per sample point, instead.",
-         "diffusion_samples : int\n    Sample points blended per point by the diffusion.",
-         "diffusion_origin : {\"own\", \"nearest\"}\n    Where each point's offset is taken from.",
-         "diffusion_turn : {\"affine\", \"fitted\", \"frames\"}\n    How each sample point carries "
-         "its points.",
-         "detail_iterations : int\n    The most conjugate-gradient iterations of restore_details().",
-         "detail_tolerance : float\n    Its relative residual to stop at.",
-         "detail_anchor : float\n    How strongly it keeps the diffusion's coarse shape.",
-         "strength : str, optional\n    The older spelling of strength_distance, still read."},
-        "", true)
-      .c_str())
-    .def(py::init([](const Array_like& points, const Optional_array_like& normals, const std::string& order, double lam,
-                     double mu, long long k, double handle_weight, const std::string& rotations,
-                     long long rigid_iterations, double rigid_rotation_smoothing,
-                     const std::string& rigid_rotation_smoothing_scale, const std::string& rigid_edge_weights,
-                     const std::string& strength_distance, long long target_count, const Optional_int& max_cluster_size,
-                     long long diffusion_samples, const std::string& diffusion_origin,
-                     const std::string& diffusion_turn, long long detail_iterations, double detail_tolerance,
-                     double detail_anchor, const std::optional<std::string>& strength) {
-           Deformation::Settings s;
-           s.filter = Detail_filter{parse_setting<Detail_order>(order, "order"), lam, mu};
-           s.sample_neighbors = as_count(k, "k");
-           s.handle_weight = handle_weight;
-           s.rotations = parse_setting<Detail_rotation>(rotations, "rotations");
-           s.rigid_iterations = as_count(rigid_iterations, "rigid_iterations");
-           s.rigid_rotation_smoothing = rigid_rotation_smoothing;
-           s.rigid_rotation_smoothing_scale =
-             parse_setting<Rotation_smoothing_scale>(rigid_rotation_smoothing_scale, "rigid_rotation_smoothing_scale");
-           s.rigid_edge_weights = parse_setting<Rigid_edge_weights>(rigid_edge_weights, "rigid_edge_weights");
-           if(strength && strength_distance != setting_name(Deformation::Settings().strength_distance))
-             throw py::value_error("give strength_distance (strength is its older spelling), not both");
-           s.strength_distance = strength ? parse_setting<Strength_distance>(*strength, "strength")
-                                          : parse_setting<Strength_distance>(strength_distance, "strength_distance");
-           if(target_count < 1)
-             throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
-           s.simplification.target_count = std::size_t(target_count);
-           if(!max_cluster_size.is_none()) {
-             const long long size = max_cluster_size.cast<long long>();
-             if(size < 1) throw py::value_error("max_cluster_size must be at least 1, not " + std::to_string(size));
-             s.simplification.max_cluster_size = std::size_t(size);
-           }
-           s.diffusion_samples = as_count(diffusion_samples, "diffusion_samples");
-           s.diffusion_origin = parse_setting<Diffusion_origin>(diffusion_origin, "diffusion_origin");
-           s.diffusion_turn = parse_setting<Sample_turn>(diffusion_turn, "diffusion_turn");
-           s.detail_iterations = as_count(detail_iterations, "detail_iterations");
-           s.detail_tolerance = detail_tolerance;
-           s.detail_anchor = detail_anchor;
-           s.validate();
-           return std::make_unique<Deformation>(points, normals, s);
-         }),
-         "points"_a, "normals"_a = py::none(), py::kw_only(), "order"_a = setting_name(defaults.filter.order),
-         "lam"_a = defaults.filter.lambda, "mu"_a = defaults.filter.mu, "k"_a = defaults.sample_neighbors,
-         "handle_weight"_a = defaults.handle_weight, "rotations"_a = setting_name(defaults.rotations),
-         "rigid_iterations"_a = defaults.rigid_iterations,
-         "rigid_rotation_smoothing"_a = defaults.rigid_rotation_smoothing,
-         "rigid_rotation_smoothing_scale"_a = setting_name(defaults.rigid_rotation_smoothing_scale),
-         "rigid_edge_weights"_a = setting_name(defaults.rigid_edge_weights),
-         "strength_distance"_a = setting_name(defaults.strength_distance),
-         "target_count"_a = defaults.simplification.target_count, "max_cluster_size"_a = py::none(),
-         "diffusion_samples"_a = defaults.diffusion_samples,
-         "diffusion_origin"_a = setting_name(defaults.diffusion_origin),
-         "diffusion_turn"_a = setting_name(defaults.diffusion_turn), "detail_iterations"_a = defaults.detail_iterations,
-         "detail_tolerance"_a = defaults.detail_tolerance, "detail_anchor"_a = defaults.detail_anchor,
-         "strength"_a = py::none())
-    // Reached only when the arguments matched no constructor: pybind11 alone says "incompatible constructor
-    // arguments"; this names the keyword that is no setting (and the setting nearest to it), or else the call.
-    .def(py::init([](const py::args& args, const py::kwargs& kwargs) -> std::unique_ptr<Deformation> {
-           refuse_arguments(py::type::of<Deformation>().attr("__init__"), "Deformation", args, kwargs);
-         }),
-         "Any other arguments: a TypeError naming the keyword that is no setting, or the arguments' types.")
+        parameters, "", true)
+      .c_str());
+  {
+    // The keywords arrive as **kwargs, so the signature line help() shows is written from the rows instead.
+    py::options written_signature;
+    written_signature.disable_function_signatures();
+    deformation.def(
+      py::init([](const Array_like& points, const Optional_array_like& normals, const py::args& more,
+                  const py::kwargs& kwargs) {
+        if(!more.empty()) // else pybind11 answers with every argument printed, arrays included
+          throw py::type_error("Deformation() takes the points and the normals by position and its "
+                               "settings by keyword (" +
+                               std::to_string(more.size() + 2) + " positional arguments given)");
+        return std::make_unique<Deformation>(points, normals, deformation_settings(kwargs));
+      }),
+      "points"_a, "normals"_a = py::none(),
+      (deformation_signature() + "\n\nThe parameters are the class's (help(cgal_ext.Deformation)).").c_str());
+  }
+  m.attr("_parameters")["Deformation"] = deformation_defaults(); // beside the functions' (bind_functions)
+  deformation
     .def("insert_roi", &Deformation::insert_roi, "indices"_a,
          doc("Adds points to the region of interest (the part that deforms).",
              {"indices : array_like of int or bool\n    Point indices, or a boolean mask of all the points."}, "", true)

@@ -112,36 +112,6 @@ bool is_aligned(const py::array& array)
 /// Flags of `py::array_t<T, ...>::ensure` that copy an array whose elements are not aligned.
 constexpr int aligned_copy = py::detail::npy_api::NPY_ARRAY_ALIGNED_;
 
-/// Raises the TypeError of a call to `function` (named `name`) whose arguments matched none of its signatures: the
-/// keywords its first signature does not take, each with the nearest one it does, or else the arguments' types.
-[[noreturn]] inline void refuse_arguments(const py::object& function, const std::string& name, const py::args& args,
-                                          const py::kwargs& kwargs)
-{
-  const py::module_ re = py::module_::import("re"), difflib = py::module_::import("difflib");
-  // pybind11's docstring starts with the signatures ("1. " before each when there are several), "name: type" for
-  // each argument.
-  const std::string doc = py::str(function.attr("__doc__"));
-  const std::size_t numbered = doc.find("\n1. "), start = numbered == std::string::npos ? 0 : numbered + 4;
-  const std::string first = doc.substr(start, doc.find(')', start) - start);
-  const py::list taken = re.attr("findall")(R"(([A-Za-z_]\w*)\s*:)", first);
-  std::string unknown;
-  for(const auto& item : kwargs) {
-    const py::str keyword(item.first);
-    if(taken.contains(keyword)) continue;
-    const py::list near = difflib.attr("get_close_matches")(keyword, taken, 1);
-    unknown += std::string(unknown.empty() ? "" : "; ") + "'" + std::string(keyword) + "'" +
-               (near.empty() ? std::string() : " (did you mean '" + std::string(py::str(near[0])) + "'?)");
-  }
-  if(!unknown.empty()) throw py::type_error(name + "() takes no keyword argument " + unknown);
-  std::string given;
-  for(const auto& arg : args)
-    given += std::string(given.empty() ? "" : ", ") + std::string(py::str(py::type::of(arg).attr("__name__")));
-  for(const auto& item : kwargs)
-    given += std::string(given.empty() ? "" : ", ") + std::string(py::str(item.first)) + "=" +
-             std::string(py::str(py::type::of(item.second).attr("__name__")));
-  throw py::type_error(name + "() cannot take these arguments (" + given + "); its signature: " + first + ")");
-}
-
 /// `object` as a numpy array, or a ValueError naming `argument` and `what` it must be.
 py::array as_array(const py::handle& object, const char* argument, const std::string& what)
 {

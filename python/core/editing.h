@@ -236,25 +236,7 @@ public:
       "solve_iterations"_a = s.least_squares.iterations, "relative_residual"_a = s.least_squares.relative_residual);
   }
 
-  /// The settings under their keyword names, as the constructor takes them.
-  static py::dict settings_dict(const Settings& s)
-  {
-    return py::dict(
-      "order"_a = setting_name(s.filter.order), "lam"_a = s.filter.lambda, "mu"_a = s.filter.mu,
-      "k"_a = s.sample_neighbors, "handle_weight"_a = s.handle_weight,
-      "rotations"_a = setting_name(s.rotations), "rigid_iterations"_a = s.rigid_iterations,
-      "rigid_rotation_smoothing"_a = s.rigid_rotation_smoothing,
-      "rigid_rotation_smoothing_scale"_a = setting_name(s.rigid_rotation_smoothing_scale),
-      "rigid_edge_weights"_a = setting_name(s.rigid_edge_weights),
-      "strength_distance"_a = setting_name(s.strength_distance), "target_count"_a = s.simplification.target_count,
-      "max_cluster_size"_a = s.simplification.max_cluster_size ? py::object(py::int_(*s.simplification.max_cluster_size))
-                                                                  : py::object(py::none()),
-      "diffusion_samples"_a = s.diffusion_samples, "diffusion_origin"_a = setting_name(s.diffusion_origin),
-      "diffusion_turn"_a = setting_name(s.diffusion_turn), "detail_iterations"_a = s.detail_iterations,
-      "detail_tolerance"_a = s.detail_tolerance, "detail_anchor"_a = s.detail_anchor);
-  }
-
-  py::dict settings() const { return settings_dict(m_deformation->settings()); }
+  py::dict settings() const { return deformation_settings_dict(m_deformation->settings()); }
 
   std::size_t size() const { return m_deformation->number_of_points(); }
   std::size_t number_of_handle_groups() const { return m_deformation->number_of_handle_groups(); }

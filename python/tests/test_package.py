@@ -46,9 +46,8 @@ def public_callables():
 
 
 def init_signature():
-    """The signature of Deformation's constructor (the first of its overloads; the second only explains a bad call)."""
-    lines = cgal_ext.Deformation.__init__.__doc__.splitlines()
-    return next(line[len("1. "):] for line in lines if line.startswith("1. __init__("))
+    """The signature line of Deformation's constructor (written by the binding from its table of keywords)."""
+    return cgal_ext.Deformation.__init__.__doc__.splitlines()[0]
 
 
 def signature_parameters(signature):
@@ -82,6 +81,22 @@ def test_every_parameter_is_documented(name, function):
         assert documented or parameter.startswith("**"), "%s: parameter %s is not documented" % (name, parameter)
 
 
+def test_the_stub_declares_the_constructors_keywords():
+    """The stub's Deformation.__init__ has the keywords of the binding's table, in order, with the same types
+    (stubtest cannot check it: a compiled constructor has no signature Python can read)."""
+    import ast
+    with open(os.path.join(os.path.dirname(cgal_ext.__file__), "_core.pyi")) as stub:
+        tree = ast.parse(stub.read())
+    init = next(node for cls in tree.body if isinstance(cls, ast.ClassDef) and cls.name == "Deformation"
+                for node in cls.body if isinstance(node, ast.FunctionDef) and node.name == "__init__")
+    declared = {a.arg: ast.unparse(a.annotation) for a in init.args.args[1:] + init.args.kwonlyargs}
+    signature = init_signature()
+    shown = dict(re.findall(r"(\w+): ((?:Optional\[)?[\w.]+\]?)", signature[signature.index("points"):]))
+    assert list(declared) == list(cgal_ext._core._parameters["Deformation"]) == list(shown)
+    assert declared == shown
+    assert [a.arg for a in init.args.kwonlyargs] == list(shown)[2:]  # the settings are keyword-only
+
+
 def test_defaults_are_the_libraries():
     """The defaults help() shows come from the C++ settings: the program's own defaults give the same numbers."""
     signature = init_signature()
@@ -104,7 +119,8 @@ def test_the_exported_parameters_are_the_signatures():
     assert {"compute_geometric_details", "enhance_geometric_details", "estimate_mean_curvature",
             "estimate_oriented_normals"} <= set(exported)
     for name, parameters in exported.items():
-        shown = signature_parameters(getattr(cgal_ext, name).__doc__.splitlines()[0])
+        shown = signature_parameters(init_signature() if name == "Deformation" else
+                                     getattr(cgal_ext, name).__doc__.splitlines()[0])
         assert list(parameters) == list(shown), name
         for parameter, default in parameters.items():
             if default is inspect.Parameter.empty:
@@ -576,7 +592,11 @@ def test_a_bad_call_is_a_value_error_and_changes_nothing(sphere, deformation, ca
     (lambda p, n: cgal_ext.Deformation(p, n, strength="geodesic", strength_distance="geodesic"), ValueError, "not both"),
     (lambda p, n: cgal_ext.Deformation(p, n, rotation="arap"), TypeError,
      "takes no keyword argument 'rotation' (did you mean 'rotations'?)"),
-    (lambda p, n: cgal_ext.Deformation(p, n, k="ten"), TypeError, "cannot take these arguments (ndarray, ndarray, k=str)"),
+    (lambda p, n: cgal_ext.Deformation(p, n, k="ten"), TypeError, "k must be an int, not str"),
+    (lambda p, n: cgal_ext.Deformation(p, n, lam="0.5"), TypeError, "lam must be a float, not str"),
+    (lambda p, n: cgal_ext.Deformation(p, n, strength=2), TypeError, "strength must be a str, not int"),
+    (lambda p, n: cgal_ext.Deformation(p, n, max_cluster_size=0), ValueError, "max_cluster_size must be at least 1"),
+    (lambda p, n: cgal_ext.Deformation(p, n, "quadric"), TypeError, "settings by keyword (3 positional arguments"),
 ])
 def test_bad_settings_are_refused(sphere, make, error, needle):
     points, normals = sphere
