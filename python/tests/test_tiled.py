@@ -14,6 +14,8 @@ import pytest
 import zarr
 from scipy.spatial import cKDTree
 
+from conftest import run_program
+
 import cgal_ext
 from cgal_ext import tiled
 
@@ -491,3 +493,93 @@ def test_on_a_lattice_with_duplicates_the_tiles_equal_the_one_process_calls(clie
     estimated = cgal_ext.estimate_oriented_normals(points)
     dots = np.einsum("ij,ij->i", columns(read_output(tmp_path / "normals.ply"), ("nx", "ny", "nz")), estimated)
     assert np.abs(np.abs(dots) - 1).max() <= 1e-12
+
+
+# ---- simplification sample points ----------------------------------------------------------------------------------
+
+def surfels(path):
+    """Centroids, normals, radii and member counts of a surfel PLY (the program's or the tiled run's)."""
+    out = read_output(path)
+    return columns(out, "xyz"), columns(out, ("nx", "ny", "nz")), out["radius"], out["member_count"]
+
+
+def test_simplify_equals_the_program_when_the_subsample_is_the_scan(scan, tmp_path):
+    """A scan no larger than the subsample is clustered whole on the client: the command's surfels are the
+    program's, the centroids up to the quantum of their integer sums."""
+    command = [sys.executable, "-m", "cgal_ext.tiled", "simplify", str(scan.small), "-o", str(tmp_path / "t.ply"),
+               "--workers", "2", "--target-count", "2000"]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert "sample points from a subsample of 100000" in run.stderr
+    run_program("simplify", "-i", scan.small, "-o", tmp_path / "p.ply", "--target-count", "2000")
+    centroids, normals, radius, members = surfels(tmp_path / "t.ply")
+    program_centroids, program_normals, program_radius, program_members = surfels(tmp_path / "p.ply")
+    diagonal = np.linalg.norm(np.ptp(scan.small_points, axis=0))
+    assert np.array_equal(members, program_members) and members.sum() == len(scan.small_points)
+    assert np.abs(centroids - program_centroids).max() <= 1e-9 * diagonal
+    assert np.abs(radius - program_radius).max() <= 1e-9 * diagonal
+    assert np.einsum("ij,ij->i", normals, program_normals).min() >= 1 - 1e-9
+
+
+def test_simplify_gives_the_same_bits_whatever_the_order_and_the_row_ranges(client, tmp_path, monkeypatch):
+    """A lattice with duplicate points (some with another normal), in two orders and cut into different row
+    ranges, subsampled: the same file, byte for byte, with every point counted once."""
+    from cgal_ext.tiled import runner
+    points, normals = lattice_scan()
+    turned = np.cross(normals[::97], [0.6, 0.8, 0.0])  # at right angles to the first copy's normal
+    turned /= np.linalg.norm(turned, axis=1)[:, None]
+    points, normals = np.vstack([points, points[::97]]), np.vstack([normals, turned])
+    cgal_ext.write_ply(tmp_path / "a.ply", points, normals)
+    shuffled = np.random.default_rng(5).permutation(len(points))
+    cgal_ext.write_ply(tmp_path / "b.ply", points[shuffled], normals[shuffled])
+    subsample = len(points) // 5
+    tiled.run("simplify", tmp_path / "a.ply", tmp_path / "a_ssps.ply", client=client, subsample=subsample,
+              target_count=500)
+    monkeypatch.setattr(runner, "CHUNK_ROWS", 23_456)
+    report = tiled.run("simplify", tmp_path / "b.ply", tmp_path / "b_ssps.ply", client=client, subsample=subsample,
+                       target_count=500)
+    assert 0.9 * subsample < report["subsample"] < 1.1 * subsample
+    assert (tmp_path / "a_ssps.ply").read_bytes() == (tmp_path / "b_ssps.ply").read_bytes()
+    centroids, normals, radius, members = surfels(tmp_path / "a_ssps.ply")
+    assert members.min() >= 1 and members.sum() == len(points) and np.isfinite(np.hstack([centroids, normals])).all()
+
+
+def test_simplify_sums_every_point_once_and_covers_the_scan_as_the_program_does(scan, client, tmp_path):
+    """On the 1.2M-point scan from a subsample of a sixth of it: each point counted once, the members' centroids
+    sum to the scan's, the budget kept, the normals outward, and no point further from a sample point than a
+    quarter more than with the program's sample points."""
+    n = len(scan.points)
+    run_program("simplify", "-i", scan.ply, "-o", tmp_path / "p.ply", "--target-count", "3000")
+    program_centroids, program_normals = surfels(tmp_path / "p.ply")[:2]
+    program_cover = cKDTree(program_centroids).query(scan.points[::5])[0].max()
+    report = tiled.run("simplify", scan.ply, tmp_path / "t.ply", client=client, subsample=200_000, target_count=3000)
+    centroids, normals, radius, members = surfels(tmp_path / "t.ply")
+    assert report["sample_points"] == len(members) <= 1.5 * 3000
+    assert members.min() >= 1 and members.sum() == n
+    assert np.abs(members @ centroids - scan.points.sum(axis=0)).max() <= 1e-9 * n
+    assert np.abs(np.linalg.norm(normals, axis=1) - 1).max() <= 1e-12
+    # Outward on the bumpy sphere, but near its poles, where sin(12 phi) makes a spike: there a few clusters of
+    # either run lie across it, no more of the tiled run's than of the program's.
+    outward = np.einsum("ij,ij->i", normals, centroids / np.linalg.norm(centroids, axis=1)[:, None])
+    assert outward[np.abs(centroids[:, 2]) < 0.95].min() > 0.5
+    assert (outward < 0).sum() <= max(1, (np.einsum("ij,ij->i", program_normals, program_centroids) < 0).sum())
+    assert radius.max() <= 0.1 and (radius[members >= 2] > 0).all()
+    cover = cKDTree(centroids).query(scan.points[::5])[0].max()
+    assert cover <= 1.25 * program_cover, (cover, program_cover)
+
+
+def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
+    out = tmp_path / "ssps.ply"
+    for options, message in (({"tiles": 4}, "has no tiles"), ({"subsample": 0}, "subsample must be"),
+                             ({"max_cluster_size": 50}, "unknown option.*max_cluster_size"),
+                             ({"target_count": 0}, "target_count must be at least 1")):
+        with pytest.raises(tiled.TiledError, match=message):
+            tiled.run("simplify", scan.small, out, client=client, **options)
+    with pytest.raises(tiled.TiledError, match="has no normals.*cgal_ext.tiled normals"):
+        tiled.run("simplify", scan.bare, out, client=client)
+    points = scan.small_points.copy()
+    points[777, 2] = np.inf
+    write_zarr(tmp_path / "inf.zarr", points, scan.small_normals)
+    with pytest.raises(tiled.TiledError, match="point 777 has a non-finite coordinate"):
+        tiled.run("simplify", tmp_path / "inf.zarr", out, client=client)
+    assert not list(tmp_path.glob("ssps*")) and no_leftovers(tmp_path, "ssps.ply")

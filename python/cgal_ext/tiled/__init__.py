@@ -1,13 +1,14 @@
-"""Tiled runs on Dask distributed for scans larger than one machine's memory: details, normals, curvature and
-enhancement of a binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group, written tile by tile
-to PLY or Zarr.
+"""Tiled runs on Dask distributed for scans larger than one machine's memory: details, normals, curvature,
+enhancement and simplification sample points of a binary PLY, binary PCD or LAS file (read by row ranges) or a
+Zarr group, written tile by tile to PLY or Zarr.
 
     from cgal_ext import tiled
     report = tiled.run("details", "scan.ply", "details.zarr", order="cubic")
 
 Each tile reads its box and a halo around it and writes only its own points; the halo is checked to hold every
 point those depend on and widened where it did not, so details, normals (up to orientation) and curvature equal the
-one-process results. Enhancement is a global solve and is approximated with a margin (doc/scaling.md).
+one-process results. Enhancement is a global solve and is approximated with a margin; the sample points are those
+of a subsample, with every point's cluster and the surfels computed over the whole scan (doc/scaling.md).
 The command line: `python3 -m cgal_ext.tiled --help`.
 """
 import importlib.util
@@ -17,13 +18,13 @@ import uuid
 from pathlib import Path
 
 from .._process import tuned_environment
-from . import ops
-from .runner import Run, timed
+from . import ops, simplify
+from .runner import Passes, Run, timed
 from .store import TiledError, open_source
 
 __all__ = ["TiledError", "run", "OPERATIONS"]
 
-OPERATIONS = tuple(ops.OPERATIONS)
+OPERATIONS = (*ops.OPERATIONS, "simplify")
 
 
 def run(operation, input, output, *, scheduler=None, client=None, workers=None, memory_limit="auto", tiles=None,
@@ -32,8 +33,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
 
     Parameters
     ----------
-    operation : {"details", "normals", "curvature", "enhance"}
-        What to compute; the output holds the fields of the program's PLY for that subcommand.
+    operation : {"details", "normals", "curvature", "enhance", "simplify"}
+        What to compute; the output holds the fields of the program's PLY for that subcommand (for "simplify",
+        the surfels: position, normal, radius, member_count).
     input : path
         A binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group with 1-D arrays x, y, z (and nx,
         ny, nz).
@@ -49,9 +51,10 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         Memory limit per LocalCluster worker ("3GiB", bytes, or "auto").
     tiles : int, optional
         Number of tiles (default: about 262,000 points each, a multiple of the workers, at least two per worker).
+        Not taken by "simplify", which has no tiles.
     halo : float, optional
         The first halo width (default: from the operation's rings and the scan's spacing); a halo too small for
-        a tile is widened by that tile.
+        a tile is widened by that tile. Not taken by "simplify".
     scratch : path, optional
         A folder every worker can reach for the tiles' intermediate results (default: beside the output).
     threads_per_task : int or None
@@ -65,7 +68,8 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     **options
         The library function's options: details (`k`, `order`, `lam`, `mu`, `weights`, `color_by`), curvature
         (`k`, `fitting`), normals (`k`), enhance (`s`, `k`, `order`, `lam`, `mu`, `weights`, `margin` in
-        neighbourhood radii).
+        neighbourhood radii), simplify (`target_count`, `mode_threshold`, `k`, and `subsample`: the points the
+        client clusters, 1,000,000 by default).
 
     Returns
     -------
@@ -79,7 +83,12 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         that does not answer. Nothing is written then.
     """
     log = log or (lambda message: None)
-    op = ops.operation(operation, **options)
+    if operation == "simplify":
+        if tiles is not None or halo is not None:
+            raise TiledError("simplify: has no tiles and no halo; tiles and halo are not taken")
+        op = simplify.options(**options)
+    else:
+        op = ops.operation(operation, **options)
     source = open_source(input)
     output = Path(output)
     if output.suffix.lower() not in (".ply", ".zarr"):
@@ -95,7 +104,11 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         if client is None:
             client, cluster = _connect(scheduler, workers, memory_limit, connect_timeout, log)
         folder.mkdir(parents=True)
-        report = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
+        if operation == "simplify":
+            report = simplify.simplify(Passes(client, progress, log, {"operation": operation}), source, output, folder,
+                                       **op)
+        else:
+            report = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
         with timed(report["client_seconds"], "remove scratch"):
             shutil.rmtree(folder)
         return report

@@ -1,4 +1,5 @@
-"""python3 -m cgal_ext.tiled details|normals|curvature|enhance INPUT -o OUTPUT [options]: a tiled run on Dask."""
+"""python3 -m cgal_ext.tiled details|normals|curvature|enhance|simplify INPUT -o OUTPUT [options]: a tiled run on
+Dask."""
 import argparse
 import json
 import sys
@@ -11,7 +12,8 @@ S = argparse.SUPPRESS  # options left out are left to the library's defaults
 def parser():
     main = argparse.ArgumentParser(
         prog="python3 -m cgal_ext.tiled",
-        description="Details, normals, curvature or enhancement of a scan larger than memory, tile by tile on Dask. "
+        description="Details, normals, curvature, enhancement or sample points of a scan larger than memory, tile by "
+                    "tile on Dask. "
                     "The input is a binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group; the "
                     "output OUT.ply or OUT.zarr holds the fields of the program's PLY for the same subcommand and is "
                     "written whole or not at all.")
@@ -55,6 +57,16 @@ def parser():
     enhance.add_argument("-s", type=float, required=True, help="the enhancement: 1 keeps the points")
     filter_options(enhance)
     enhance.add_argument("--margin", type=float, default=S, help="neighbourhood radii each tile reads around it")
+    simplify = command("simplify", "simplification sample points (surfels: position, normal, radius, member_count) "
+                                   "of a subsample clustered on the client, every point's cluster and the surfels "
+                                   "computed over the whole scan (--tiles and --halo are not taken)")
+    simplify.add_argument("--target-count", "--target", dest="target_count", type=int, default=S,
+                          help="sample points the clustering aims at")
+    simplify.add_argument("--subsample", type=int, default=S,
+                          help="points clustered on the client (default 1,000,000; a smaller scan is clustered whole)")
+    simplify.add_argument("--mode-threshold", dest="mode_threshold", type=float, default=S,
+                          help="split while the members' modes spread more than this many range bandwidths")
+    simplify.add_argument("-k", type=int, default=S, help="mean-shift neighbours")
     return main
 
 
@@ -75,9 +87,11 @@ def main(argv=None):
     except (TiledError, ValueError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    seconds = sum(report["seconds"].values())
-    print(f"{report['points']} points in {report['tiles']} tiles: {seconds:.1f} s "
-          f"({report['points'] / seconds:,.0f} points/s), {report['widened_tiles']} tile(s) widened their halo; "
+    seconds = sum(report["seconds"].values()) + sum(report["client_seconds"].values())
+    done = (f"{report['sample_points']} sample points from a subsample of {report['subsample']}"
+            if arguments["operation"] == "simplify" else
+            f"{report['tiles']} tiles, {report['widened_tiles']} tile(s) widened their halo")
+    print(f"{report['points']} points: {done}; {seconds:.1f} s ({report['points'] / seconds:,.0f} points/s); "
           f"wrote {arguments['output']}", file=sys.stderr)
     if arguments["report"]:
         with open(arguments["report"], "w") as f:

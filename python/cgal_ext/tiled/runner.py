@@ -362,19 +362,14 @@ def _box_text(lo, hi):
 
 # ---- the client's side ------------------------------------------------------------------------------------------
 
-class Run:
-    """One tiled run on a Dask client; `execute()` returns its report."""
+class Passes:
+    """Maps a pass's tasks over items on a Dask client (a progress bar per pass when `progress`), timing each
+    pass in `report["seconds"]` and the client's own steps in `report["client_seconds"]`."""
 
-    def __init__(self, client, source, sink_path, operation, tiles, halo, scratch, threads_per_task, progress, log):
-        self.client, self.source, self.operation = client, source, operation
-        self.sink_path, self.tiles, self.halo = Path(sink_path), tiles, halo
-        self.threads_per_task = threads_per_task
-        self.scratch = scratch
-        self.progress, self.log = progress, log
-        self.estimate_normals = operation.estimates_normals(source.has_normals)
-        self.report = {"operation": operation.name, "points": source.count, "exact": operation.exact,
-                       "normals": "estimated" if self.estimate_normals else "given", "seconds": {},
-                       "client_seconds": {}}
+    def __init__(self, client, progress, log, report):
+        self.client, self.progress, self.log, self.report = client, progress, log, report
+        report.setdefault("seconds", {})
+        report.setdefault("client_seconds", {})
 
     def _gather(self, futures, what):
         with timed(self.report["seconds"], what):
@@ -391,23 +386,57 @@ class Run:
                     raise
                 raise TiledError(f"{what} failed: {type(error).__name__}: {error}") from None
 
-    def _map(self, function, items, *args, what, **kwargs):
+    def map(self, function, items, *args, what, **kwargs):
         futures = [self.client.submit(task, function, *item, *args, key=f"{function.__name__}-{uuid.uuid4().hex}",
                                       **kwargs) for item in items]
         return self._gather(futures, what)
+
+    def client_step(self, step):
+        return timed(self.report["client_seconds"], step)
+
+    @staticmethod
+    def row_ranges(n):
+        """The passes' row ranges [begin, end) of a scan of n points."""
+        return [(b, min(n, b + CHUNK_ROWS)) for b in range(0, n, CHUNK_ROWS)]
+
+    def write_small(self, path, fields, columns):
+        """Writes an output the client holds, whole or not at all."""
+        with self.client_step("write"):
+            sink = store.open_sink(path, len(next(iter(columns.values()))), fields, CHUNK_ROWS)
+            sink.create()
+            try:
+                sink.write(0, columns)
+                sink.commit()
+            except BaseException:
+                sink.discard()
+                raise
+
+
+class Run(Passes):
+    """One tiled run on a Dask client; `execute()` returns its report."""
+
+    def __init__(self, client, source, sink_path, operation, tiles, halo, scratch, threads_per_task, progress, log):
+        self.source, self.operation = source, operation
+        self.sink_path, self.tiles, self.halo = Path(sink_path), tiles, halo
+        self.threads_per_task = threads_per_task
+        self.scratch = scratch
+        self.estimate_normals = operation.estimates_normals(source.has_normals)
+        super().__init__(client, progress, log,
+                         {"operation": operation.name, "points": source.count, "exact": operation.exact,
+                          "normals": "estimated" if self.estimate_normals else "given"})
 
     def execute(self):
         n = self.source.count
         if n == 0:
             raise TiledError(f"{self.source.path}: the scan has no points")
-        starts = list(range(0, n, CHUNK_ROWS))
-        ranges = [(b, min(n, b + CHUNK_ROWS)) for b in starts]
+        ranges = self.row_ranges(n)
+        starts = [begin for begin, _ in ranges]
         workers = max(1, len(self.client.scheduler_info()["workers"]))
         # A multiple of the workers, so that none is left alone with the last tile.
         tile_count = self.tiles or workers * max(2, -(-n // (POINTS_PER_TILE * workers)))
         stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
 
-        scans = self._map(scan_rows, ranges, self.source, stride, what="scan")
+        scans = self.map(scan_rows, ranges, self.source, stride, what="scan")
         bad = [s["bad_row"] for s in scans if s["bad_row"] is not None]
         if bad:
             raise TiledError(f"{self.source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
@@ -426,7 +455,7 @@ class Run:
         self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})")
 
         (self.scratch / "buckets").mkdir(parents=True)
-        self._map(bucket_rows, ranges, self.source, tiling, halo, self.scratch / "buckets", what="bucket")
+        self.map(bucket_rows, ranges, self.source, tiling, halo, self.scratch / "buckets", what="bucket")
         all_tiles = list(range(tiling.count))
         summaries = self._run_tiles(tiling, halo, starts, {t: (halo, reach) for t in all_tiles})
         summaries = self._verify_reach(summaries, tiling, halo, starts)
@@ -444,7 +473,7 @@ class Run:
             bounds = np.stack([summaries[t].bounds for t in all_tiles])
             pieces = [[(t, int(bounds[t, c]), int(bounds[t, c + 1]))
                        for t in np.flatnonzero(bounds[:, c + 1] > bounds[:, c])] for c in range(len(ranges))]
-            self._map(write_rows, [(*r, p) for r, p in zip(ranges, pieces)], self.source, sink, self.operation,
+            self.map(write_rows, [(*r, p) for r, p in zip(ranges, pieces)], self.source, sink, self.operation,
                       self.estimate_normals, self.scratch, flips, color_limit=limit, what="write")
             with timed(self.report["client_seconds"], "commit output"):
                 sink.commit()
@@ -479,7 +508,7 @@ class Run:
                          chunk_starts=starts, scratch=self.scratch, diagonal=self.report["diagonal"],
                          spacing=self.report["spacing"], threads_per_task=self.threads_per_task),)
                 for t, (halo, reach) in tiles.items()]
-        return {s.tile: s for s in self._map(run_tile, jobs, what="tiles")}
+        return {s.tile: s for s in self.map(run_tile, jobs, what="tiles")}
 
     def _verify_reach(self, summaries, tiling, halo, starts):
         """Reruns the tiles whose certification assumed a k-th-neighbour distance smaller than a neighbouring
@@ -521,7 +550,7 @@ class Run:
             read_lo, read_hi = plan.read_box(lo[t], hi[t], summaries[t].halo)
             meets = plan.box_distances(read_lo, read_hi, lo[live], hi[live]) == 0
             items.append((self.scratch, t, [u for u, m in zip(live, meets) if m and u != t]))
-        votes = self._map(orientation_votes, items, what="orient")
+        votes = self.map(orientation_votes, items, what="orient")
         weight = {}
         for (_, t, _), vote in zip(items, votes):
             for u, v in vote.items():
@@ -571,7 +600,7 @@ class Run:
         n = sum(summaries[t].own for t in live)
         column = result_columns(self.operation, self.estimate_normals).index(self.operation.color_field)
         tiles = [(self.scratch, t) for t in live]
-        first = self._map(magnitude_histogram, tiles, column, largest, None, 0, 48, what="colours")
+        first = self.map(magnitude_histogram, tiles, column, largest, None, 0, 48, what="colours")
         ranked = sum(count for count, _, _ in first)
         every = 2 * ranked > n
         total = n if every else ranked
@@ -583,7 +612,7 @@ class Run:
             if shift == 48:  # the first pass counted the top digits of both
                 histograms = [both[1] if every else both[2] for both in first]
             else:
-                histograms = self._map(magnitude_histogram, tiles, column, largest, every, prefix, shift,
+                histograms = self.map(magnitude_histogram, tiles, column, largest, every, prefix, shift,
                                        what="colours")
             counts = np.zeros(1 << 16, dtype=np.int64)
             for digits, tile_counts in histograms:

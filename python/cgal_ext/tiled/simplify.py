@@ -1,0 +1,240 @@
+"""Simplification sample points (SSPs) of a scan of any size on Dask: the library's sample points of a subsample
+that one machine holds, every point of the scan given the cluster of its nearest subsample point, and each
+surfel (centroid, normal, radius, member count) summed over all its points.
+
+Three passes over the scan's rows, none with a halo: a point's cluster depends only on its own coordinates and
+normal. The subsample is chosen by a hash of the coordinates and sorted, and the surfels are sums of integers,
+so the result is the same bit for bit whatever the order of the points and however the rows are split.
+See doc/scaling.md, "Sample points".
+"""
+import os
+import uuid
+from typing import Any, Dict, Tuple
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .. import _core
+from . import ops
+from .store import TiledError
+
+SUBSAMPLE = 1_000_000  # points the client clusters; a scan this small is clustered whole, as the program does
+CANDIDATES = 8  # nearest subsample points a point chooses its cluster among
+AGREEMENT = 0.5  # the least cosine between a point's normal and its subsample point's
+POSITION_BITS = 32  # centroid offsets are summed as integers in units of diagonal / 2^POSITION_BITS
+NORMAL_BITS = 30
+
+FIELDS = [("x", "f8"), ("y", "f8"), ("z", "f8"), ("nx", "f8"), ("ny", "f8"), ("nz", "f8"), ("radius", "f8"),
+          ("member_count", "f8")]
+
+
+def _mix(x):
+    """splitmix64's finaliser: a bijection of uint64 whose output bits each depend on every input bit."""
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def coordinate_hash(points):
+    """A uint64 per point that depends only on its coordinates' values (-0.0 as 0.0)."""
+    bits = np.ascontiguousarray(points + 0.0).view(np.uint64)
+    h = np.full(len(points), 0x9E3779B97F4A7C15, dtype=np.uint64)
+    with np.errstate(over="ignore"):
+        for axis in range(3):
+            h = _mix(h ^ bits[:, axis])
+    return h
+
+
+def _read(source, begin, end):
+    try:
+        return source.points_and_normals(begin, end)
+    except Exception as error:
+        raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+
+
+def select_rows(begin, end, source, cutoff):
+    """The points and normals of rows [begin, end) whose coordinate hash is at most `cutoff` (all when None), with
+    the bounding box and the first non-finite row of the range."""
+    points, normals = _read(source, begin, end)
+    finite = np.isfinite(points).all(axis=1)
+    bad = None if finite.all() else begin + int(np.argmin(finite))
+    keep = np.ones(len(points), dtype=bool) if cutoff is None else coordinate_hash(points) <= np.uint64(cutoff)
+    return {"points": points[keep], "normals": normals[keep], "bad_row": bad,
+            "lo": points.min(axis=0), "hi": points.max(axis=0)}
+
+
+_subsamples: Dict[str, Tuple[Any, Dict[str, Any]]] = {}  # per worker process: the run's subsample and its tree
+
+
+def _subsample(key, subsample):
+    if key not in _subsamples:
+        _subsamples.clear()  # one run at a time keeps its tree
+        _subsamples[key] = (cKDTree(subsample["points"]), subsample)
+    return _subsamples[key]
+
+
+def _spread_bits(q):
+    """The bits of 10-bit integers spread three apart, for Morton codes."""
+    q = (q | (q << np.uint64(16))) & np.uint64(0x030000FF)
+    q = (q | (q << np.uint64(8))) & np.uint64(0x0300F00F)
+    q = (q | (q << np.uint64(4))) & np.uint64(0x030C30C3)
+    return (q | (q << np.uint64(2))) & np.uint64(0x09249249)
+
+
+def spatial_order(points):
+    """The points ordered along a Morton curve of 2^30 cells: neighbouring queries visit the same branches of the
+    tree, which halves a chunk's search."""
+    lo = points.min(axis=0)
+    extent = max(float((points.max(axis=0) - lo).max()), 1e-300)
+    cells = np.minimum((points - lo) * (1023.0 / extent), 1023.0).astype(np.uint64)
+    return np.argsort(_spread_bits(cells[:, 0]) | (_spread_bits(cells[:, 1]) << np.uint64(1))
+                      | (_spread_bits(cells[:, 2]) << np.uint64(2)), kind="stable")
+
+
+def assign(points, normals, tree, subsample):
+    """Each point's cluster: that of its nearest subsample point if their normals agree (cosine > AGREEMENT), else
+    of the nearest of its CANDIDATES nearest that agrees, else of the nearest."""
+    order = spatial_order(points)
+    nearest = np.empty(len(points), dtype=np.int64)
+    nearest[order] = tree.query(points[order], 1)[1]
+    disagree = np.flatnonzero(np.einsum("ij,ij->i", subsample["normals"][nearest], normals) <= AGREEMENT)
+    count = min(CANDIDATES, len(subsample["labels"]))
+    if len(disagree) and count > 1:
+        candidates = tree.query(points[disagree], count)[1]
+        agreement = np.einsum("ijk,ik->ij", subsample["normals"][candidates], normals[disagree]) > AGREEMENT
+        chosen = np.where(agreement.any(axis=1), np.argmax(agreement, axis=1), 0)
+        nearest[disagree] = candidates[np.arange(len(disagree)), chosen]
+    return subsample["labels"][nearest]
+
+
+def _labels_path(scratch, begin):
+    return scratch / f"labels_{begin}.npy"
+
+
+def sum_rows(begin, end, source, key, subsample, quantum, scratch):
+    """Per cluster, over rows [begin, end): the member count, the sum of the offsets from the subsample's centroid
+    and of the unit normals (integers: exact in any order), and the largest offset. Saves the rows' clusters in
+    `scratch` for the next pass."""
+    points, normals = _read(source, begin, end)
+    tree, subsample = _subsample(key, subsample)
+    labels = assign(points, normals, tree, subsample)
+    clusters = len(subsample["centroids"])
+    offsets = points - subsample["centroids"][labels]
+    unit = normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
+    offset_sum = np.zeros((clusters, 3), dtype=np.int64)
+    normal_sum = np.zeros((clusters, 3), dtype=np.int64)
+    np.add.at(offset_sum, labels, np.rint(offsets / quantum).astype(np.int64))
+    np.add.at(normal_sum, labels, np.rint(unit * 2.0**NORMAL_BITS).astype(np.int64))
+    largest = np.zeros(clusters)
+    np.maximum.at(largest, labels, np.linalg.norm(offsets, axis=1))
+    partial = scratch / f".labels_{begin}.{uuid.uuid4().hex[:8]}.npy"
+    np.save(partial, labels.astype(np.int32))
+    os.replace(partial, _labels_path(scratch, begin))  # a rerun of the task replaces it whole
+    return np.bincount(labels, minlength=clusters), offset_sum, normal_sum, largest
+
+
+def spread_rows(begin, end, source, scratch, centroids, units):
+    """Per cluster, over rows [begin, end) and their clusters the previous pass saved: the sum of the offsets'
+    outer products from the centroid (integers in the cluster's `units`) and the largest distance to it."""
+    points, _ = _read(source, begin, end)
+    labels = np.load(_labels_path(scratch, begin))
+    offsets = points - centroids[labels]
+    scaled = np.rint(offsets / units[labels, None]).astype(np.int64)
+    products = np.empty((len(points), 6), dtype=np.int64)
+    for column, (a, b) in enumerate(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+        products[:, column] = scaled[:, a] * scaled[:, b]
+    spread = np.zeros((len(centroids), 6), dtype=np.int64)
+    np.add.at(spread, labels, products)
+    radius = np.zeros(len(centroids))
+    np.maximum.at(radius, labels, np.linalg.norm(offsets, axis=1))
+    return spread, radius
+
+
+def surfel_normals(spread, normal_sum, count):
+    """As the library's surfels: the covariance's least axis oriented like the members' normals, or the mean
+    normal for clusters of fewer than three points."""
+    covariance = np.empty((len(spread), 3, 3))
+    for column, (a, b) in enumerate(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+        covariance[:, a, b] = covariance[:, b, a] = spread[:, column]
+    axis = np.linalg.eigh(covariance)[1][:, :, 0]
+    mean = normal_sum.astype(np.float64)
+    axis *= np.where(np.einsum("ij,ij->i", axis, mean) < 0, -1.0, 1.0)[:, None]
+    normals = np.where((count >= 3)[:, None], axis, mean)
+    return normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
+
+
+def options(subsample=SUBSAMPLE, **library):
+    """The run's options, checked: `subsample` and the keywords of compute_simplification_sample_points but
+    max_cluster_size (a size in points of the scan, which a subsample does not have)."""
+    allowed = set(ops.keywords(_core.compute_simplification_sample_points)) - {"max_cluster_size"}
+    unknown = set(library) - allowed
+    if unknown:
+        raise TiledError(f"simplify: unknown option(s) {', '.join(sorted(unknown))} (it takes subsample, "
+                         f"{', '.join(sorted(allowed))})")
+    if isinstance(subsample, bool) or not isinstance(subsample, (int, np.integer)) or subsample < 1:
+        raise TiledError(f"simplify: subsample must be a whole number of points >= 1, not {subsample!r}")
+    return {"subsample_size": int(subsample), "library": library}
+
+
+def simplify(runner, source, output, scratch, subsample_size, library):
+    """The tiled sample points of `source` written to `output` (a PLY or Zarr of surfels); `runner` maps the
+    passes over the rows (runner.Passes), which keep each point's cluster in the folder `scratch` between them;
+    `library` are compute_simplification_sample_points's options.
+    Returns the run's report."""
+    n = source.count
+    if n == 0:
+        raise TiledError(f"{source.path}: the scan has no points")
+    if not source.has_normals:
+        # Estimated on the subsample alone, a few would be flipped and make clusters of their own.
+        raise TiledError(f"{source.path}: has no normals; simplify clusters by them (run `python3 -m "
+                         f"cgal_ext.tiled normals` first: its output has them, oriented across the tiles)")
+    ranges = runner.row_ranges(n)
+    cutoff = None if subsample_size >= n else int(subsample_size / n * 2.0**64)
+    selected = runner.map(select_rows, ranges, source, cutoff, what="subsample")
+    bad = [s["bad_row"] for s in selected if s["bad_row"] is not None]
+    if bad:
+        raise TiledError(f"{source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
+    report = runner.report
+    with runner.client_step("cluster subsample"):
+        points = np.concatenate([s["points"] for s in selected])
+        normals = np.concatenate([s["normals"] for s in selected])
+        diagonal = float(np.linalg.norm(np.max([s["hi"] for s in selected], axis=0)
+                                        - np.min([s["lo"] for s in selected], axis=0)))
+        # Sorted by value: the subsample, and so its clusters, do not depend on the order of the rows.
+        order = np.lexsort((*normals.T[::-1], *points.T[::-1]))
+        points, normals = points[order], normals[order]
+        try:
+            labels = _core.compute_simplification_sample_points(points, normals, **library)
+        except ValueError as error:
+            raise TiledError(f"simplify: {error}") from None
+        clusters = int(labels.max()) + 1
+        members = np.bincount(labels, minlength=clusters)
+        centroids = np.zeros((clusters, 3))
+        np.add.at(centroids, labels, points)
+        centroids /= members[:, None]
+    report.update(points=n, subsample=len(points), diagonal=diagonal, sample_points=clusters)
+    runner.log(f"{n} points, subsample of {len(points)}: {clusters} sample points")
+    subsample = runner.client.scatter([{"points": points, "normals": normals, "labels": labels,
+                                        "centroids": centroids}], broadcast=True)[0]
+    key = uuid.uuid4().hex
+    quantum = max(diagonal, 1e-300) * 2.0**-POSITION_BITS
+    sums = runner.map(sum_rows, ranges, source, key, subsample, quantum, scratch, what="clusters")
+    count = np.sum([s[0] for s in sums], axis=0)
+    normal_sum = np.sum([s[2] for s in sums], axis=0)
+    largest = np.max([s[3] for s in sums], axis=0)
+    # A subsample point with a duplicate (other normal, other cluster) may see its points all join the duplicate's.
+    kept = count > 0
+    count = np.maximum(count, 1)
+    # |p - centroid| <= 2 largest, so in these units a product is at most 2^(2 bits) and a cluster's sum 2^62.
+    bits = np.floor((62 - np.log2(count)) / 2)
+    centroids = centroids + np.sum([s[1] for s in sums], axis=0) * quantum / count[:, None]
+    units = np.maximum(2.0 * largest, 1e-300) * 2.0**-bits
+    spreads = runner.map(spread_rows, ranges, source, scratch, centroids, units, what="surfels")
+    spread = np.sum([s[0] for s in spreads], axis=0)
+    radius = np.max([s[1] for s in spreads], axis=0)
+    normals = surfel_normals(spread, normal_sum, count)
+    surfels = np.column_stack([centroids, normals, radius, count])[kept]
+    runner.write_small(output, FIELDS, {name: surfels[:, column] for column, (name, _) in enumerate(FIELDS)})
+    report.update(sample_points=len(surfels), largest_cluster=int(count.max()),
+                  points_per_sample_point=n / len(surfels))
+    return report
