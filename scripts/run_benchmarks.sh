@@ -52,5 +52,8 @@ PYTHONPATH="$build/python" /usr/bin/python3 benchmark/studio_on_models.py "${fla
 echo "== bench_tiled.py (full run: 10M, 30M and 100M points, about 15 minutes and 15 GB of temporary files)" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_tiled.log"
+echo "== bench_tiled_simplify.py (full run: three models at 10M, the armadillo at 100M)" >&2
+PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled_simplify.py "${flags[@]}" --build "$build" --data data \
+  --out "$out" > "$build/benchmark/logs/bench_tiled_simplify.log"
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"
 echo "run_benchmarks.sh: $((SECONDS - start)) s of benchmarks" >&2

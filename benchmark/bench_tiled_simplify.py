@@ -1,0 +1,123 @@
+#!/usr/bin/python3
+"""The tiled sample points (`python3 -m cgal_ext.tiled simplify`, doc/scaling.md "Sample points") against the
+program's (`point-detail simplify`) on seeded samplings of CGAL's models with normals, both with their defaults
+(the command on a LocalCluster of one worker per core, one thread each):
+
+- wall time from the start of each command to its exit, medians over the repetitions (3 at 10M, 1 at 1M and at
+  100M, where only the tiled command runs), and the peak resident memory of the command's workers;
+- the sample points made against the program's budget (1.5 times the target count) and the largest cluster;
+- coverage: the largest distance from every 10th point of the scan to the nearest sample point, the tiled run's
+  over the program's (1 when they cover the scan equally; above 1 when the tiled sample points leave a point
+  further uncovered).
+
+The armadillo, the fandisk (a CAD part with sharp creases) and the lion head at 10M, the armadillo at 100M
+(--quick: the armadillo at 1M). Writes OUT/tiled_simplify_results.csv and .md.
+Usage: PYTHONPATH=build/python benchmark/bench_tiled_simplify.py --out DIR [--build build] [--data data] [--quick]
+"""
+import csv
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+from scipy.spatial import cKDTree
+
+import cgal_ext
+from cgal_ext._process import reexecute_tuned
+
+from bench_python import harness_arguments, median
+from bench_tiled import PeakMemory, sample
+
+BUDGET = 1.5  # the most sample points per target count, the program's rule
+
+
+def program_simplify(args, scan, output):
+    start = time.perf_counter()
+    subprocess.run([os.path.join(args.build, "src", "point-detail"), "-q", "simplify", "-i", scan, "-o", output],
+                   check=True, capture_output=True)
+    return time.perf_counter() - start
+
+
+def tiled_simplify(scan, output, report):
+    """Wall time, report and the largest worker's peak resident memory of the command as a user types it."""
+    with PeakMemory() as memory:
+        start = time.perf_counter()
+        command = subprocess.Popen([sys.executable, "-m", "cgal_ext.tiled", "simplify", scan, "-o", output,
+                                    "--report", report], stdout=subprocess.DEVNULL)
+        if command.wait():
+            raise SystemExit(f"bench_tiled_simplify: the tiled command failed on {scan} ({command.returncode})")
+        seconds = time.perf_counter() - start
+    with open(report) as f:
+        result = json.load(f)
+    return seconds, result, max(peak for pid, peak in memory.peaks.items() if pid != command.pid)
+
+
+def main():
+    reexecute_tuned([sys.executable] + sys.argv)
+    args = harness_arguments()
+    runs = ([("armadillo", 1_000_000, 1)] if args.quick else
+            [("armadillo", 10_000_000, 3), ("fandisk", 10_000_000, 3), ("lion-head", 10_000_000, 3),
+             ("armadillo", 100_000_000, 1)])
+    target = cgal_ext._core._parameters["compute_simplification_sample_points"]["target_count"]
+    workers = os.cpu_count()
+    rows = []
+    with tempfile.TemporaryDirectory(dir=os.environ.get("BENCHMARK_TMP")) as tmp:
+        for model, n, reps in runs:
+            scan = sample(args, tmp, model, n)
+            tiled_output, program_output = os.path.join(tmp, "tiled.ply"), os.path.join(tmp, "program.ply")
+            with_program = n <= 10_000_000
+            tiled_times, program_times, peaks = [], [], []
+            for _ in range(reps):
+                if with_program:
+                    program_times.append(program_simplify(args, scan, program_output))
+                seconds, report, peak = tiled_simplify(scan, tiled_output, os.path.join(tmp, "report.json"))
+                tiled_times.append(seconds)
+                peaks.append(peak)
+            tiled = cgal_ext.read_points(tiled_output)
+            members = tiled.properties["member_count"]
+            rows += [(f"{model}: tiled simplify, wall time", n, median(tiled_times), "s",
+                      f"{workers} workers x 1 thread, subsample {report['subsample']:,}"),
+                     (f"{model}: tiled simplify, sample points", n, len(members), "",
+                      f"<= {BUDGET * target:.0f}, the program's budget"),
+                     (f"{model}: tiled simplify, largest cluster", n, members.max(), "points", ""),
+                     (f"{model}: tiled simplify, peak resident memory per worker", n, max(peaks) / 2 ** 30, "GiB",
+                      "<= 3 GiB")]
+            rows += [(f"{model}: tiled simplify, pass '{stage}'", n, seconds, "s", "")
+                     for stage, seconds in report["seconds"].items()]
+            rows += [(f"{model}: tiled simplify, client step '{step}'", n, seconds, "s", "")
+                     for step, seconds in report["client_seconds"].items() if seconds >= 0.01]
+            if with_program:
+                points = cgal_ext.read_points(scan).points[::10]
+                program = cgal_ext.read_points(program_output)
+                cover = cKDTree(tiled.points).query(points)[0].max()
+                program_cover = cKDTree(program.points).query(points)[0].max()
+                rows += [(f"{model}: point-detail simplify, wall time", n, median(program_times), "s",
+                          f"{workers} threads"),
+                         (f"{model}: point-detail simplify, sample points", n, len(program.points), "", ""),
+                         (f"{model}: point-detail simplify, largest cluster", n,
+                          program.properties["member_count"].max(), "points", ""),
+                         (f"{model}: tiled simplify, coverage / the program's", n, cover / program_cover, "",
+                          "about 1"),
+                         (f"{model}: tiled simplify, wall time / the program's", n,
+                          median(tiled_times) / median(program_times), "", "")]
+            os.remove(scan)
+    with open(os.path.join(args.out, "tiled_simplify_results.csv"), "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["measure", "points", "value", "unit", "target"])
+        for row in rows:
+            writer.writerow([row[0], row[1], f"{float(row[2]):.6g}", row[3], row[4]])
+    with open(os.path.join(args.out, "tiled_simplify_results.md"), "w") as f:
+        f.write("# Tiled sample points on Dask (benchmark/bench_tiled_simplify.py)\n\n"
+                "Seeded samplings of CGAL's models with normals; `python3 -m cgal_ext.tiled simplify` and "
+                f"`point-detail simplify` with their defaults ({workers} workers of one thread; the program on "
+                f"{workers} threads). Medians over the repetitions.\n\n"
+                "| measure | points | value | unit | target |\n|---|---:|---:|---|---|\n")
+        for row in rows:
+            f.write(f"| {row[0]} | {row[1]:,} | {float(row[2]):.4g} | {row[3]} | {row[4]} |\n")
+    print(f"wrote {args.out}/tiled_simplify_results.csv and tiled_simplify_results.md")
+
+
+if __name__ == "__main__":
+    main()
