@@ -55,12 +55,15 @@
 namespace py = pybind11;
 using namespace pybind11::literals;
 
+// The module's parts, in order: each uses the ones before it.
+// clang-format off
 #include "core/arrays.h"
-#include "core/deformation_settings.h"
-#include "core/editing.h"
-#include "core/functions.h"
 #include "core/progress.h"
 #include "core/settings.h"
+#include "core/functions.h"
+#include "core/deformation_settings.h"
+#include "core/editing.h"
+// clang-format on
 
 namespace {
 
