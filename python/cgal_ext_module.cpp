@@ -343,6 +343,12 @@ void bind_io(py::module_& m)
             {"values : (n,) array_like\n    The values, e.g. each point's displacement."},
             "numpy.ndarray\n    (n, 3) uint8 colours.")
           .c_str());
+  m.def("label_colors", &label_colors, "labels"_a,
+        doc("The program's colours of clusters (point-detail simplify --clusters): a hash of each label spread over "
+            "the hue circle, so that neighbouring labels differ.",
+            {"labels : (n,) array_like of int\n    Labels >= 0, e.g. each point's sample point."},
+            "numpy.ndarray\n    (n, 3) uint8 colours.")
+          .c_str());
   m.def("diverging_colors",
         [](const Array_like& values, std::optional<double> limit) {
           if(!limit) return colors_by([](const std::vector<double>& v) { return point_detail::diverging_colors(v); }, values);

@@ -367,14 +367,31 @@ void write_ply(const Path_like& path_object, const Array_like& points, const Opt
 }
 
 Ndarray colors_by(const std::function<point_detail::Coloring(const std::vector<double>&)>& color_map,
-                  const Array_like& values)
+                  const Array_like& values, const char* argument = "values")
 {
-  const py::array array = as_array(values, "values", "a 1-D array of numbers");
-  const std::vector<double> v = values_of(array, std::size_t(array.ndim() == 1 ? array.size() : 0), "values");
+  const py::array array = as_array(values, argument, "a 1-D array of numbers");
+  const std::vector<double> v = values_of(array, std::size_t(array.ndim() == 1 ? array.size() : 0), argument);
   const point_detail::Coloring coloring = color_map(v);
   py::array_t<std::uint8_t> colors({py::ssize_t(v.size()), py::ssize_t(3)});
   std::memcpy(colors.mutable_data(), coloring.colors.data(), v.size() * 3);
   return colors;
+}
+
+/// The program's cluster colours (simplify --clusters) of integer labels.
+Ndarray label_colors(const Array_like& labels)
+{
+  return colors_by(
+    [](const std::vector<double>& v) {
+      std::vector<std::size_t> integers(v.size());
+      for(std::size_t i = 0; i < v.size(); ++i) {
+        if(!(v[i] >= 0 && v[i] <= 9007199254740992.0 && v[i] == std::floor(v[i])))
+          throw py::value_error("labels must be integers >= 0; label #" + std::to_string(i) + " is " +
+                                std::to_string(v[i]));
+        integers[i] = std::size_t(v[i]);
+      }
+      return point_detail::label_colors(integers);
+    },
+    labels, "labels");
 }
 
 py::bytes render_png(const Array_like& points, const Optional_array_like& normals, const Optional_array_like& values,

@@ -507,11 +507,18 @@ def test_simplify_equals_the_program_when_the_subsample_is_the_scan(scan, tmp_pa
     """A scan no larger than the subsample is clustered whole on the client: the command's surfels are the
     program's, the centroids up to the quantum of their integer sums."""
     command = [sys.executable, "-m", "cgal_ext.tiled", "simplify", str(scan.small), "-o", str(tmp_path / "t.ply"),
-               "--workers", "2", "--target-count", "2000"]
+               "--workers", "2", "--target-count", "2000", "--clusters", str(tmp_path / "t_clusters.ply")]
     run = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     assert "sample points from a subsample of 100000" in run.stderr
-    run_program("simplify", "-i", scan.small, "-o", tmp_path / "p.ply", "--target-count", "2000")
+    run_program("simplify", "-i", scan.small, "-o", tmp_path / "p.ply", "--target-count", "2000", "--clusters",
+                tmp_path / "p_clusters.ply")
+    # Every point with the program's sample point and colour, field for field.
+    tiled_clusters = read_output(tmp_path / "t_clusters.ply")
+    program_clusters = read_output(tmp_path / "p_clusters.ply")
+    assert list(tiled_clusters) == list(program_clusters)
+    for name in program_clusters:
+        assert np.array_equal(tiled_clusters[name], program_clusters[name]), name
     centroids, normals, radius, members = surfels(tmp_path / "t.ply")
     program_centroids, program_normals, program_radius, program_members = surfels(tmp_path / "p.ply")
     diagonal = np.linalg.norm(np.ptp(scan.small_points, axis=0))
@@ -537,9 +544,15 @@ def test_simplify_gives_the_same_bits_whatever_the_order_and_the_row_ranges(clie
               target_count=500)
     monkeypatch.setattr(runner, "CHUNK_ROWS", 23_456)
     report = tiled.run("simplify", tmp_path / "b.ply", tmp_path / "b_ssps.ply", client=client, subsample=subsample,
-                       target_count=500)
+                       target_count=500, clusters=tmp_path / "b_clusters.zarr")
     assert 0.9 * subsample < report["subsample"] < 1.1 * subsample
     assert (tmp_path / "a_ssps.ply").read_bytes() == (tmp_path / "b_ssps.ply").read_bytes()
+    # Each point keeps its sample point wherever its row went; the Zarr chunks follow the row ranges.
+    labels = read_output(tmp_path / "b_clusters.zarr")["ssp_index"]
+    assert zarr.open_group(str(tmp_path / "b_clusters.zarr"), mode="r")["ssp_index"].chunks == (23_456,)
+    tiled.run("simplify", tmp_path / "a.ply", tmp_path / "a_ssps.ply", client=client, subsample=subsample,
+              target_count=500, clusters=tmp_path / "a_clusters.ply")
+    assert np.array_equal(read_output(tmp_path / "a_clusters.ply")["ssp_index"][shuffled], labels)
     centroids, normals, radius, members = surfels(tmp_path / "a_ssps.ply")
     assert members.min() >= 1 and members.sum() == len(points) and np.isfinite(np.hstack([centroids, normals])).all()
 
@@ -572,7 +585,9 @@ def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
     out = tmp_path / "ssps.ply"
     for options, message in (({"tiles": 4}, "has no tiles"), ({"subsample": 0}, "subsample must be"),
                              ({"max_cluster_size": 50}, "unknown option.*max_cluster_size"),
-                             ({"target_count": 0}, "target_count must be at least 1")):
+                             ({"target_count": 0}, "target_count must be at least 1"),
+                             ({"clusters": scan.small}, "is the input"), ({"clusters": out}, "both the output"),
+                             ({"clusters": tmp_path / "c.txt"}, "must end in .ply or .zarr")):
         with pytest.raises(tiled.TiledError, match=message):
             tiled.run("simplify", scan.small, out, client=client, **options)
     with pytest.raises(tiled.TiledError, match="has no normals.*cgal_ext.tiled normals"):

@@ -68,8 +68,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     **options
         The library function's options: details (`k`, `order`, `lam`, `mu`, `weights`, `color_by`), curvature
         (`k`, `fitting`), normals (`k`), enhance (`s`, `k`, `order`, `lam`, `mu`, `weights`, `margin` in
-        neighbourhood radii), simplify (`target_count`, `mode_threshold`, `k`, and `subsample`: the points the
-        client clusters, 1,000,000 by default).
+        neighbourhood radii), simplify (`target_count`, `mode_threshold`, `k`; `subsample`, the points the
+        client clusters, 1,000,000 by default; `clusters`, a PLY or Zarr path for the scan with each point's
+        `ssp_index` and its cluster's colour, as `point-detail simplify --clusters` writes it).
 
     Returns
     -------
@@ -90,13 +91,11 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     else:
         op = ops.operation(operation, **options)
     source = open_source(input)
-    output = Path(output)
-    if output.suffix.lower() not in (".ply", ".zarr"):
-        raise TiledError(f"{output}: the output's name must end in .ply or .zarr")
-    if output.resolve() == Path(source.path):
-        raise TiledError(f"{output}: is the input; the tiled runs never overwrite their input")
-    if not output.parent.is_dir():
-        raise TiledError(f"{output.parent}: no such folder for the output")
+    output = _checked_output(output, source)
+    if operation == "simplify" and op["clusters_path"] is not None:
+        op["clusters_path"] = _checked_output(op["clusters_path"], source)
+        if op["clusters_path"].resolve() == output.resolve():
+            raise TiledError(f"{output}: is both the output and the clusters' file")
     scratch_root = Path(scratch) if scratch else output.parent
     folder = scratch_root / f".{output.name}.tiles-{uuid.uuid4().hex[:8]}"
     own_client, cluster = client is None, None
@@ -118,6 +117,18 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _checked_output(path, source):
+    """`path` as a Path, or a TiledError when it cannot be an output of a run on `source`."""
+    path = Path(path)
+    if path.suffix.lower() not in (".ply", ".zarr"):
+        raise TiledError(f"{path}: the output's name must end in .ply or .zarr")
+    if path.resolve() == Path(source.path):
+        raise TiledError(f"{path}: is the input; the tiled runs never overwrite their input")
+    if not path.parent.is_dir():
+        raise TiledError(f"{path.parent}: no such folder for the output")
+    return path
 
 
 def worker_environment():

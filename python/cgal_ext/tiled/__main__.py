@@ -67,6 +67,8 @@ def parser():
     simplify.add_argument("--mode-threshold", dest="mode_threshold", type=float, default=S,
                           help="split while the members' modes spread more than this many range bandwidths")
     simplify.add_argument("-k", type=int, default=S, help="mean-shift neighbours")
+    simplify.add_argument("--clusters", default=S,
+                          help="also write the scan with each point's ssp_index and cluster colour (PLY or Zarr)")
     return main
 
 

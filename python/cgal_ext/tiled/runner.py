@@ -399,10 +399,15 @@ class Passes:
         """The passes' row ranges [begin, end) of a scan of n points."""
         return [(b, min(n, b + CHUNK_ROWS)) for b in range(0, n, CHUNK_ROWS)]
 
+    @staticmethod
+    def open_sink(path, count, fields):
+        """The output at `path`, chunked as the row ranges: no two tasks write into one chunk of a Zarr array."""
+        return store.open_sink(path, count, fields, CHUNK_ROWS)
+
     def write_small(self, path, fields, columns):
         """Writes an output the client holds, whole or not at all."""
         with self.client_step("write"):
-            sink = store.open_sink(path, len(next(iter(columns.values()))), fields, CHUNK_ROWS)
+            sink = self.open_sink(path, len(next(iter(columns.values()))), fields)
             sink.create()
             try:
                 sink.write(0, columns)
@@ -467,7 +472,7 @@ class Run(Passes):
                 removed.result()
 
         with timed(self.report["client_seconds"], "create output"):
-            sink = store.open_sink(self.sink_path, n, self.operation.fields(), CHUNK_ROWS)
+            sink = self.open_sink(self.sink_path, n, self.operation.fields())
             sink.create()
         try:
             bounds = np.stack([summaries[t].bounds for t in all_tiles])

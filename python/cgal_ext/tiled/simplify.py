@@ -24,8 +24,9 @@ AGREEMENT = 0.5  # the least cosine between a point's normal and its subsample p
 POSITION_BITS = 32  # centroid offsets are summed as integers in units of diagonal / 2^POSITION_BITS
 NORMAL_BITS = 30
 
-FIELDS = [("x", "f8"), ("y", "f8"), ("z", "f8"), ("nx", "f8"), ("ny", "f8"), ("nz", "f8"), ("radius", "f8"),
-          ("member_count", "f8")]
+XYZ_NORMALS = [("x", "f8"), ("y", "f8"), ("z", "f8"), ("nx", "f8"), ("ny", "f8"), ("nz", "f8")]
+FIELDS = XYZ_NORMALS + [("radius", "f8"), ("member_count", "f8")]
+CLUSTER_FIELDS = XYZ_NORMALS + [("ssp_index", "f8"), ("red", "u1"), ("green", "u1"), ("blue", "u1")]
 
 
 def _mix(x):
@@ -150,6 +151,20 @@ def spread_rows(begin, end, source, scratch, centroids, units):
     return spread, radius
 
 
+def write_cluster_rows(begin, end, source, scratch, renumbered, sink):
+    """Rows [begin, end) of the scan with their sample point's number and colour, as point-detail simplify
+    --clusters writes them."""
+    points, normals = _read(source, begin, end)
+    labels = renumbered[np.load(_labels_path(scratch, begin))]
+    colors = _core.label_colors(labels)
+    columns = {"ssp_index": labels.astype(np.float64)}
+    for axis in range(3):
+        columns["xyz"[axis]] = points[:, axis]
+        columns[("nx", "ny", "nz")[axis]] = normals[:, axis]
+        columns[("red", "green", "blue")[axis]] = colors[:, axis]
+    sink.write(begin, columns)
+
+
 def surfel_normals(spread, normal_sum, count):
     """As the library's surfels: the covariance's least axis oriented like the members' normals, or the mean
     normal for clusters of fewer than three points."""
@@ -163,9 +178,10 @@ def surfel_normals(spread, normal_sum, count):
     return normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
 
 
-def options(subsample=SUBSAMPLE, **library):
-    """The run's options, checked: `subsample` and the keywords of compute_simplification_sample_points but
-    max_cluster_size (a size in points of the scan, which a subsample does not have)."""
+def options(subsample=SUBSAMPLE, clusters=None, **library):
+    """The run's options, checked: `subsample`, `clusters` (a path, or None) and the keywords of
+    compute_simplification_sample_points but max_cluster_size (a size in points of the scan, which a subsample
+    does not have)."""
     allowed = set(ops.keywords(_core.compute_simplification_sample_points)) - {"max_cluster_size"}
     unknown = set(library) - allowed
     if unknown:
@@ -173,13 +189,14 @@ def options(subsample=SUBSAMPLE, **library):
                          f"{', '.join(sorted(allowed))})")
     if isinstance(subsample, bool) or not isinstance(subsample, (int, np.integer)) or subsample < 1:
         raise TiledError(f"simplify: subsample must be a whole number of points >= 1, not {subsample!r}")
-    return {"subsample_size": int(subsample), "library": library}
+    return {"subsample_size": int(subsample), "clusters_path": clusters, "library": library}
 
 
-def simplify(runner, source, output, scratch, subsample_size, library):
-    """The tiled sample points of `source` written to `output` (a PLY or Zarr of surfels); `runner` maps the
-    passes over the rows (runner.Passes), which keep each point's cluster in the folder `scratch` between them;
-    `library` are compute_simplification_sample_points's options.
+def simplify(runner, source, output, scratch, subsample_size, clusters_path, library):
+    """The tiled sample points of `source` written to `output` (a PLY or Zarr of surfels), and with
+    `clusters_path`, the scan with each point's sample point there; `runner` maps the passes over the rows (runner.Passes),
+    which keep each point's cluster in the folder `scratch` between them; `library` are
+    compute_simplification_sample_points's options.
     Returns the run's report."""
     n = source.count
     if n == 0:
@@ -234,7 +251,21 @@ def simplify(runner, source, output, scratch, subsample_size, library):
     radius = np.max([s[1] for s in spreads], axis=0)
     normals = surfel_normals(spread, normal_sum, count)
     surfels = np.column_stack([centroids, normals, radius, count])[kept]
-    runner.write_small(output, FIELDS, {name: surfels[:, column] for column, (name, _) in enumerate(FIELDS)})
+    # The sample points' numbers without the empty ones: the order the library made them in.
+    renumbered = np.cumsum(kept) - 1
+    if clusters_path is None:
+        runner.write_small(output, FIELDS, {name: surfels[:, column] for column, (name, _) in enumerate(FIELDS)})
+    else:
+        sink = runner.open_sink(clusters_path, n, CLUSTER_FIELDS)
+        with runner.client_step("create clusters"):
+            sink.create()
+        try:
+            runner.map(write_cluster_rows, ranges, source, scratch, renumbered, sink, what="write clusters")
+            runner.write_small(output, FIELDS, {name: surfels[:, c] for c, (name, _) in enumerate(FIELDS)})
+            sink.commit()
+        except BaseException:
+            sink.discard()
+            raise
     report.update(sample_points=len(surfels), largest_cluster=int(count.max()),
                   points_per_sample_point=n / len(surfels))
     return report
