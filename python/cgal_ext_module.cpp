@@ -426,15 +426,26 @@ void bind_deformation(py::module_& m)
     py::options written_signature;
     written_signature.disable_function_signatures();
     deformation.def(
-      py::init([](const Array_like& points, const Optional_array_like& normals, const py::args& more,
-                  const py::kwargs& kwargs) {
-        if(!more.empty()) // else pybind11 answers with every argument printed, arrays included
-          throw py::type_error("Deformation() takes the points and the normals by position and its "
-                               "settings by keyword (" +
-                               std::to_string(more.size() + 2) + " positional arguments given)");
-        return std::make_unique<Deformation>(points, normals, deformation_settings(kwargs));
+      py::init([](const py::args& args, const py::kwargs& kwargs) {
+        // The points and the normals by position or by keyword; every other keyword is a setting.
+        if(args.size() > 2)
+          throw py::type_error("Deformation() takes the points and the normals by position and its settings by "
+                               "keyword (" +
+                               std::to_string(args.size()) + " positional arguments given)");
+        py::dict settings(kwargs);
+        const auto argument = [&](const char* name, std::size_t position) -> py::object {
+          const bool by_keyword = settings.contains(name);
+          if(by_keyword && args.size() > position)
+            throw py::type_error(std::string("Deformation() got two values for ") + name);
+          if(by_keyword) return settings.attr("pop")(name);
+          if(args.size() > position) return args[position];
+          if(position == 0) throw py::type_error("Deformation() needs the points");
+          return py::none();
+        };
+        const py::object points = argument("points", 0), normals = argument("normals", 1);
+        return std::make_unique<Deformation>(Array_like(points), Optional_array_like(normals),
+                                             deformation_settings(settings));
       }),
-      "points"_a, "normals"_a = py::none(),
       (deformation_signature() + "\n\nThe parameters are the class's (help(cgal_ext.Deformation)).").c_str());
   }
   m.attr("_parameters")["Deformation"] = deformation_defaults(); // beside the functions' (bind_functions)

@@ -16,15 +16,36 @@ using Deformation_settings = Detail_preserving_deformation_settings;
 template <typename T, typename = void>
 struct Keyword_conversion;
 
-/// `value` as T, or a TypeError naming the keyword and the type it must be.
+/// `value` as T, or a TypeError naming the keyword and the type it must be: an int is a Python integer (an
+/// object with __index__), a float any real number, a str a str; a bool is none of them.
 template <typename T>
 T keyword_cast(const py::handle& value, const char* keyword, const char* type)
 {
-  try {
-    return value.cast<T>();
-  } catch(const py::cast_error&) {
-    throw py::type_error(std::string(keyword) + " must be " + type + ", not " +
-                         std::string(py::str(py::type::of(value).attr("__name__"))));
+  const auto refuse = [&] {
+    return py::type_error(std::string(keyword) + " must be " + type + ", not " +
+                          std::string(py::str(py::type::of(value).attr("__name__"))));
+  };
+  if(PyBool_Check(value.ptr()) || py::isinstance(value, py::module_::import("numpy").attr("bool_"))) throw refuse();
+  if constexpr(std::is_same_v<T, std::string>) {
+    if(!py::isinstance<py::str>(value)) throw refuse();
+    return value.cast<std::string>();
+  } else if constexpr(std::is_integral_v<T>) {
+    PyObject* index = PyNumber_Index(value.ptr());
+    if(!index) {
+      PyErr_Clear();
+      throw refuse();
+    }
+    int overflow = 0;
+    const long long integer = PyLong_AsLongLongAndOverflow(index, &overflow);
+    Py_DECREF(index);
+    if(overflow) throw py::value_error(std::string(keyword) + " is out of range");
+    return T(integer);
+  } else {
+    try {
+      return value.cast<T>();
+    } catch(const py::cast_error&) {
+      throw refuse();
+    }
   }
 }
 
@@ -191,7 +212,7 @@ const std::vector<Deformation_keyword>& deformation_keywords()
 
 /// The settings the keywords give (the others keep their defaults), validated; a TypeError names a keyword that
 /// is none (and the one nearest to it).
-Deformation_settings deformation_settings(const py::kwargs& kwargs)
+Deformation_settings deformation_settings(const py::dict& kwargs)
 {
   const auto& rows = deformation_keywords();
   py::list names;
@@ -205,7 +226,7 @@ Deformation_settings deformation_settings(const py::kwargs& kwargs)
                (near.empty() ? std::string() : " (did you mean '" + std::string(py::str(near[0])) + "'?)");
   }
   if(!unknown.empty()) throw py::type_error("Deformation() takes no keyword argument " + unknown);
-  if(kwargs.contains("strength") && kwargs.contains("strength_distance"))
+  if(kwargs.contains("strength") && !kwargs["strength"].is_none() && kwargs.contains("strength_distance"))
     throw py::value_error("give strength_distance (strength is its older spelling), not both");
   Deformation_settings s;
   for(const Deformation_keyword& row : rows)

@@ -597,8 +597,21 @@ def test_a_bad_call_is_a_value_error_and_changes_nothing(sphere, deformation, ca
     (lambda p, n: cgal_ext.Deformation(p, n, strength=2), TypeError, "strength must be a str, not int"),
     (lambda p, n: cgal_ext.Deformation(p, n, max_cluster_size=0), ValueError, "max_cluster_size must be at least 1"),
     (lambda p, n: cgal_ext.Deformation(p, n, "quadric"), TypeError, "settings by keyword (3 positional arguments"),
+    (lambda p, n: cgal_ext.Deformation(normals=n), TypeError, "Deformation() needs the points"),
+    (lambda p, n: cgal_ext.Deformation(p, points=p), TypeError, "two values for points"),
+    (lambda p, n: cgal_ext.Deformation(p, n, k=True), TypeError, "k must be an int, not bool"),
+    (lambda p, n: cgal_ext.Deformation(p, n, k=np.float32(7.9)), TypeError, "k must be an int, not float32"),
+    (lambda p, n: cgal_ext.Deformation(p, n, order=b"cubic"), TypeError, "order must be a str, not bytes"),
 ])
 def test_bad_settings_are_refused(sphere, make, error, needle):
     points, normals = sphere
     with pytest.raises(error, match=re.escape(needle)):
         make(points, normals)
+
+
+def test_settings_are_read_by_keyword_with_numpy_scalars_and_the_older_spelling(sphere):
+    points, normals = sphere
+    settings = cgal_ext.Deformation(points=points, normals=normals, k=np.int64(7), lam=np.float32(0.5),
+                                    strength=None, strength_distance="geodesic").settings
+    assert settings["k"] == 7 and settings["lam"] == 0.5 and settings["strength_distance"] == "geodesic"
+    assert cgal_ext.Deformation(points, normals, strength="geodesic").settings["strength_distance"] == "geodesic"

@@ -592,6 +592,22 @@ def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
             tiled.run("simplify", scan.small, out, client=client, **options)
     with pytest.raises(tiled.TiledError, match="has no normals.*cgal_ext.tiled normals"):
         tiled.run("simplify", scan.bare, out, client=client)
+    for options, message in (({"threads_per_task": 2}, "threads_per_task are not taken"),
+                             ({"target_count": 4000.0}, "target_count must be a whole number"),
+                             ({"mode_threshold": "1"}, "mode_threshold must be a number")):
+        with pytest.raises(tiled.TiledError, match=message):
+            tiled.run("simplify", scan.small, out, client=client, **options)
+    normals = scan.small_normals.copy()
+    normals[4321], normals[9876] = 0.0, np.nan
+    write_zarr(tmp_path / "bad_normals.zarr", scan.small_points, normals)
+    with pytest.raises(tiled.TiledError, match="point 4321 has a normal that is zero or not finite"):
+        tiled.run("simplify", tmp_path / "bad_normals.zarr", out, client=client)
+    # Points whose hashes all lie above half the range, and a subsample of one: none is drawn.
+    from cgal_ext.tiled.simplify import coordinate_hash
+    high = coordinate_hash(scan.small_points) > np.uint64(1 << 63)
+    write_zarr(tmp_path / "high.zarr", scan.small_points[high], scan.small_normals[high])
+    with pytest.raises(tiled.TiledError, match="holds none; give a larger subsample"):
+        tiled.run("simplify", tmp_path / "high.zarr", out, client=client, subsample=1)
     points = scan.small_points.copy()
     points[777, 2] = np.inf
     write_zarr(tmp_path / "inf.zarr", points, scan.small_normals)

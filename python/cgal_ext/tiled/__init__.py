@@ -58,7 +58,8 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     scratch : path, optional
         A folder every worker can reach for the tiles' intermediate results (default: beside the output).
     threads_per_task : int or None
-        The library's threads inside each task (None: all cores).
+        The library's threads inside each task (None: all cores). Not taken by "simplify", whose tasks call no
+        library function.
     connect_timeout : float
         Seconds to wait for `scheduler` to answer.
     progress : bool
@@ -85,8 +86,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     """
     log = log or (lambda message: None)
     if operation == "simplify":
-        if tiles is not None or halo is not None:
-            raise TiledError("simplify: has no tiles and no halo; tiles and halo are not taken")
+        if tiles is not None or halo is not None or threads_per_task != 1:
+            raise TiledError("simplify: has no tiles, no halo and no library call in its tasks; tiles, halo and "
+                             "threads_per_task are not taken")
         op = simplify.options(**options)
     else:
         op = ops.operation(operation, **options)

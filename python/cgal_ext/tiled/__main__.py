@@ -59,7 +59,8 @@ def parser():
     enhance.add_argument("--margin", type=float, default=S, help="neighbourhood radii each tile reads around it")
     simplify = command("simplify", "simplification sample points (surfels: position, normal, radius, member_count) "
                                    "of a subsample clustered on the client, every point's cluster and the surfels "
-                                   "computed over the whole scan (--tiles and --halo are not taken)")
+                                   "computed over the whole scan (--tiles, --halo and --threads-per-task are not "
+                                   "taken)")
     simplify.add_argument("--target-count", "--target", dest="target_count", type=int, default=S,
                           help="sample points the clustering aims at")
     simplify.add_argument("--subsample", type=int, default=S,

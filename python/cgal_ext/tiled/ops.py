@@ -211,5 +211,5 @@ OPERATIONS = {op.name: op for op in (Details, Curvature, Normals, Enhance)}
 
 def operation(name, **options):
     if name not in OPERATIONS:
-        raise ValueError(f"unknown operation '{name}': one of {', '.join(OPERATIONS)}")
+        raise ValueError(f"unknown operation '{name}': one of {', '.join(OPERATIONS)} or simplify")
     return OPERATIONS[name](**options)

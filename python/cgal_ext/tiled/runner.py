@@ -57,25 +57,32 @@ def task(function, *args, **kwargs):
     return function(*args, **kwargs)
 
 
-def scan_rows(begin, end, source, stride):
-    """Bounding box, first non-finite row and every stride-th point of rows [begin, end)."""
+def read_rows(source, begin, end, coordinates_only=False):
+    """The points and normals of rows [begin, end) (the points alone with `coordinates_only`), or a TiledError
+    naming the rows."""
     try:
-        points = source.coordinates(begin, end)
+        return source.coordinates(begin, end) if coordinates_only else source.points_and_normals(begin, end)
     except Exception as error:
         raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
-    finite = np.isfinite(points).all(axis=1)
-    bad = None if finite.all() else begin + int(np.argmin(finite))
-    return {"lo": points.min(axis=0), "hi": points.max(axis=0), "bad_row": bad,
+
+
+def first_invalid_row(valid, begin):
+    """The number of the first row whose `valid` is False (rows counted from `begin`), or None."""
+    return None if valid.all() else begin + int(np.argmin(valid))
+
+
+def scan_rows(begin, end, source, stride):
+    """Bounding box, first non-finite row and every stride-th point of rows [begin, end)."""
+    points = read_rows(source, begin, end, coordinates_only=True)
+    return {"lo": points.min(axis=0), "hi": points.max(axis=0),
+            "bad_row": first_invalid_row(np.isfinite(points).all(axis=1), begin),
             "sample": points[(-begin) % stride::stride].copy()}
 
 
 def bucket_rows(begin, end, source, tiling, halo, folder):
     """Copies, for every tile, the rows of [begin, end) its read box holds (row number, point, normal) to
     `folder/c{begin}_t{tile}.npy`, so that the tile tasks read small files instead of the whole scan."""
-    try:
-        points, normals = source.points_and_normals(begin, end)
-    except Exception as error:
-        raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+    points, normals = read_rows(source, begin, end)
     read_sets = tiling.read_sets(points, halo)
     counts = {}
     for tile, rows in read_sets.items():
@@ -391,6 +398,16 @@ class Passes:
                                       **kwargs) for item in items]
         return self._gather(futures, what)
 
+    @staticmethod
+    def refuse_invalid_rows(source, results):
+        """A TiledError naming the first row a pass found invalid: in its results' "bad_row" (a coordinate) or
+        "bad_normal"."""
+        for key, problem in (("bad_row", "a non-finite coordinate (NaN or infinity)"),
+                             ("bad_normal", "a normal that is zero or not finite")):
+            rows = [result[key] for result in results if result.get(key) is not None]
+            if rows:
+                raise TiledError(f"{source.path}: point {min(rows)} has {problem}")
+
     def client_step(self, step):
         return timed(self.report["client_seconds"], step)
 
@@ -404,17 +421,17 @@ class Passes:
         """The output at `path`, chunked as the row ranges: no two tasks write into one chunk of a Zarr array."""
         return store.open_sink(path, count, fields, CHUNK_ROWS)
 
-    def write_small(self, path, fields, columns):
-        """Writes an output the client holds, whole or not at all."""
+    def written_small(self, path, fields, columns):
+        """An output the client holds, written under its temporary name: the caller commits or discards it."""
         with self.client_step("write"):
             sink = self.open_sink(path, len(next(iter(columns.values()))), fields)
             sink.create()
             try:
                 sink.write(0, columns)
-                sink.commit()
             except BaseException:
                 sink.discard()
                 raise
+        return sink
 
 
 class Run(Passes):
@@ -442,9 +459,7 @@ class Run(Passes):
         stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
 
         scans = self.map(scan_rows, ranges, self.source, stride, what="scan")
-        bad = [s["bad_row"] for s in scans if s["bad_row"] is not None]
-        if bad:
-            raise TiledError(f"{self.source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
+        self.refuse_invalid_rows(self.source, scans)
         with timed(self.report["client_seconds"], "plan"):
             sample = np.concatenate([s["sample"] for s in scans])
             lo = np.min([s["lo"] for s in scans], axis=0)

@@ -16,13 +16,13 @@ from scipy.spatial import cKDTree
 
 from .. import _core
 from . import ops
+from .runner import first_invalid_row, read_rows
 from .store import TiledError
 
 SUBSAMPLE = 1_000_000  # points the client clusters; a scan this small is clustered whole, as the program does
 CANDIDATES = 8  # nearest subsample points a point chooses its cluster among
 AGREEMENT = 0.5  # the least cosine between a point's normal and its subsample point's
-POSITION_BITS = 32  # centroid offsets are summed as integers in units of diagonal / 2^POSITION_BITS
-NORMAL_BITS = 30
+UPPER = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))  # the entries of a symmetric 3x3 matrix kept
 
 XYZ_NORMALS = [("x", "f8"), ("y", "f8"), ("z", "f8"), ("nx", "f8"), ("ny", "f8"), ("nz", "f8")]
 FIELDS = XYZ_NORMALS + [("radius", "f8"), ("member_count", "f8")]
@@ -46,22 +46,22 @@ def coordinate_hash(points):
     return h
 
 
-def _read(source, begin, end):
-    try:
-        return source.points_and_normals(begin, end)
-    except Exception as error:
-        raise TiledError(f"rows {begin}..{end - 1} of {source.path} cannot be read: {error}") from None
+def unit_normals(normals):
+    """The normals scaled to unit length, and whether each was finite and not zero."""
+    length = np.linalg.norm(normals, axis=1)
+    valid = np.isfinite(length) & (length > 0)
+    return normals / np.where(valid, length, 1.0)[:, None], valid
 
 
 def select_rows(begin, end, source, cutoff):
-    """The points and normals of rows [begin, end) whose coordinate hash is at most `cutoff` (all when None), with
-    the bounding box and the first non-finite row of the range."""
-    points, normals = _read(source, begin, end)
-    finite = np.isfinite(points).all(axis=1)
-    bad = None if finite.all() else begin + int(np.argmin(finite))
+    """The points and unit normals of rows [begin, end) whose coordinate hash is at most `cutoff` (all when None),
+    with the bounding box and the first row of the range with a non-finite coordinate or an invalid normal."""
+    points, normals = read_rows(source, begin, end)
+    normals, valid = unit_normals(normals)
     keep = np.ones(len(points), dtype=bool) if cutoff is None else coordinate_hash(points) <= np.uint64(cutoff)
-    return {"points": points[keep], "normals": normals[keep], "bad_row": bad,
-            "lo": points.min(axis=0), "hi": points.max(axis=0)}
+    return {"points": points[keep], "normals": normals[keep], "lo": points.min(axis=0), "hi": points.max(axis=0),
+            "bad_row": first_invalid_row(np.isfinite(points).all(axis=1), begin),
+            "bad_normal": first_invalid_row(valid, begin)}
 
 
 _subsamples: Dict[str, Tuple[Any, Dict[str, Any]]] = {}  # per worker process: the run's subsample and its tree
@@ -84,7 +84,7 @@ def _spread_bits(q):
 
 def spatial_order(points):
     """The points ordered along a Morton curve of 2^30 cells: neighbouring queries visit the same branches of the
-    tree, which halves a chunk's search."""
+    tree, so a chunk's search stays in the cache."""
     lo = points.min(axis=0)
     extent = max(float((points.max(axis=0) - lo).max()), 1e-300)
     cells = np.minimum((points - lo) * (1023.0 / extent), 1023.0).astype(np.uint64)
@@ -93,8 +93,8 @@ def spatial_order(points):
 
 
 def assign(points, normals, tree, subsample):
-    """Each point's cluster: that of its nearest subsample point if their normals agree (cosine > AGREEMENT), else
-    of the nearest of its CANDIDATES nearest that agrees, else of the nearest."""
+    """Each point's cluster: that of its nearest subsample point if their unit normals agree (cosine >
+    AGREEMENT), else of the nearest of its CANDIDATES nearest that agrees, else of the nearest."""
     order = spatial_order(points)
     nearest = np.empty(len(points), dtype=np.int64)
     nearest[order] = tree.query(points[order], 1)[1]
@@ -112,20 +112,20 @@ def _labels_path(scratch, begin):
     return scratch / f"labels_{begin}.npy"
 
 
-def sum_rows(begin, end, source, key, subsample, quantum, scratch):
+def sum_rows(begin, end, source, key, subsample, quantum, normal_quantum, scratch):
     """Per cluster, over rows [begin, end): the member count, the sum of the offsets from the subsample's centroid
     and of the unit normals (integers: exact in any order), and the largest offset. Saves the rows' clusters in
     `scratch` for the next pass."""
-    points, normals = _read(source, begin, end)
+    points, normals = read_rows(source, begin, end)
+    unit = unit_normals(normals)[0]  # the first pass refused the scan if any was invalid
     tree, subsample = _subsample(key, subsample)
-    labels = assign(points, normals, tree, subsample)
+    labels = assign(points, unit, tree, subsample)
     clusters = len(subsample["centroids"])
     offsets = points - subsample["centroids"][labels]
-    unit = normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
     offset_sum = np.zeros((clusters, 3), dtype=np.int64)
     normal_sum = np.zeros((clusters, 3), dtype=np.int64)
     np.add.at(offset_sum, labels, np.rint(offsets / quantum).astype(np.int64))
-    np.add.at(normal_sum, labels, np.rint(unit * 2.0**NORMAL_BITS).astype(np.int64))
+    np.add.at(normal_sum, labels, np.rint(unit / normal_quantum).astype(np.int64))
     largest = np.zeros(clusters)
     np.maximum.at(largest, labels, np.linalg.norm(offsets, axis=1))
     partial = scratch / f".labels_{begin}.{uuid.uuid4().hex[:8]}.npy"
@@ -137,12 +137,12 @@ def sum_rows(begin, end, source, key, subsample, quantum, scratch):
 def spread_rows(begin, end, source, scratch, centroids, units):
     """Per cluster, over rows [begin, end) and their clusters the previous pass saved: the sum of the offsets'
     outer products from the centroid (integers in the cluster's `units`) and the largest distance to it."""
-    points, _ = _read(source, begin, end)
+    points = read_rows(source, begin, end, coordinates_only=True)
     labels = np.load(_labels_path(scratch, begin))
     offsets = points - centroids[labels]
     scaled = np.rint(offsets / units[labels, None]).astype(np.int64)
     products = np.empty((len(points), 6), dtype=np.int64)
-    for column, (a, b) in enumerate(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+    for column, (a, b) in enumerate(UPPER):
         products[:, column] = scaled[:, a] * scaled[:, b]
     spread = np.zeros((len(centroids), 6), dtype=np.int64)
     np.add.at(spread, labels, products)
@@ -154,7 +154,7 @@ def spread_rows(begin, end, source, scratch, centroids, units):
 def write_cluster_rows(begin, end, source, scratch, renumbered, sink):
     """Rows [begin, end) of the scan with their sample point's number and colour, as point-detail simplify
     --clusters writes them."""
-    points, normals = _read(source, begin, end)
+    points, normals = read_rows(source, begin, end)
     labels = renumbered[np.load(_labels_path(scratch, begin))]
     colors = _core.label_colors(labels)
     columns = {"ssp_index": labels.astype(np.float64)}
@@ -165,39 +165,49 @@ def write_cluster_rows(begin, end, source, scratch, renumbered, sink):
     sink.write(begin, columns)
 
 
-def surfel_normals(spread, normal_sum, count):
+def surfel_normals(spread, normal_sum, count, fallback):
     """As the library's surfels: the covariance's least axis oriented like the members' normals, or the mean
-    normal for clusters of fewer than three points."""
+    normal for clusters of fewer than three points; `fallback` (a member's normal) where that mean is zero."""
     covariance = np.empty((len(spread), 3, 3))
-    for column, (a, b) in enumerate(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+    for column, (a, b) in enumerate(UPPER):
         covariance[:, a, b] = covariance[:, b, a] = spread[:, column]
     axis = np.linalg.eigh(covariance)[1][:, :, 0]
     mean = normal_sum.astype(np.float64)
     axis *= np.where(np.einsum("ij,ij->i", axis, mean) < 0, -1.0, 1.0)[:, None]
     normals = np.where((count >= 3)[:, None], axis, mean)
-    return normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
+    normals, valid = unit_normals(normals)
+    return np.where(valid[:, None], normals, fallback)
+
+
+def _whole(value):
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def options(subsample=SUBSAMPLE, clusters=None, **library):
-    """The run's options, checked: `subsample`, `clusters` (a path, or None) and the keywords of
+    """The run's options, checked before any pass: `subsample`, `clusters` (a path, or None) and the keywords of
     compute_simplification_sample_points but max_cluster_size (a size in points of the scan, which a subsample
     does not have)."""
     allowed = set(ops.keywords(_core.compute_simplification_sample_points)) - {"max_cluster_size"}
     unknown = set(library) - allowed
     if unknown:
-        raise TiledError(f"simplify: unknown option(s) {', '.join(sorted(unknown))} (it takes subsample, "
+        raise TiledError(f"simplify: unknown option(s) {', '.join(sorted(unknown))} (it takes subsample, clusters, "
                          f"{', '.join(sorted(allowed))})")
-    if isinstance(subsample, bool) or not isinstance(subsample, (int, np.integer)) or subsample < 1:
+    if not _whole(subsample) or subsample < 1:
         raise TiledError(f"simplify: subsample must be a whole number of points >= 1, not {subsample!r}")
+    for name in ("target_count", "k"):
+        if name in library and not _whole(library[name]):
+            raise TiledError(f"simplify: {name} must be a whole number, not {library[name]!r}")
+    threshold = library.get("mode_threshold", 1.0)
+    if isinstance(threshold, (bool, np.bool_)) or not isinstance(threshold, (int, float, np.integer, np.floating)):
+        raise TiledError(f"simplify: mode_threshold must be a number, not {threshold!r}")
     return {"subsample_size": int(subsample), "clusters_path": clusters, "library": library}
 
 
 def simplify(runner, source, output, scratch, subsample_size, clusters_path, library):
     """The tiled sample points of `source` written to `output` (a PLY or Zarr of surfels), and with
-    `clusters_path`, the scan with each point's sample point there; `runner` maps the passes over the rows (runner.Passes),
-    which keep each point's cluster in the folder `scratch` between them; `library` are
-    compute_simplification_sample_points's options.
-    Returns the run's report."""
+    `clusters_path`, the scan with each point's sample point there; `runner` maps the passes over the rows
+    (runner.Passes), which keep each point's cluster in the folder `scratch` between them; `library` are
+    compute_simplification_sample_points's options. Returns the run's report."""
     n = source.count
     if n == 0:
         raise TiledError(f"{source.path}: the scan has no points")
@@ -208,64 +218,73 @@ def simplify(runner, source, output, scratch, subsample_size, clusters_path, lib
     ranges = runner.row_ranges(n)
     cutoff = None if subsample_size >= n else int(subsample_size / n * 2.0**64)
     selected = runner.map(select_rows, ranges, source, cutoff, what="subsample")
-    bad = [s["bad_row"] for s in selected if s["bad_row"] is not None]
-    if bad:
-        raise TiledError(f"{source.path}: point {bad[0]} has a non-finite coordinate (NaN or infinity)")
+    runner.refuse_invalid_rows(source, selected)
     report = runner.report
     with runner.client_step("cluster subsample"):
-        points = np.concatenate([s["points"] for s in selected])
-        normals = np.concatenate([s["normals"] for s in selected])
+        # -0.0 as 0.0, as the hash sees them: the values sorted, and so the clusters, do not depend on the order.
+        points = np.concatenate([s["points"] for s in selected]) + 0.0
+        normals = np.concatenate([s["normals"] for s in selected]) + 0.0
+        if not len(points):
+            raise TiledError(f"simplify: the subsample of {subsample_size} of the {n} points holds none; give a "
+                             f"larger subsample")
         diagonal = float(np.linalg.norm(np.max([s["hi"] for s in selected], axis=0)
                                         - np.min([s["lo"] for s in selected], axis=0)))
-        # Sorted by value: the subsample, and so its clusters, do not depend on the order of the rows.
         order = np.lexsort((*normals.T[::-1], *points.T[::-1]))
         points, normals = points[order], normals[order]
         try:
             labels = _core.compute_simplification_sample_points(points, normals, **library)
-        except ValueError as error:
-            raise TiledError(f"simplify: {error}") from None
+        except (ValueError, TypeError) as error:
+            raise TiledError(f"simplify: {str(error).splitlines()[0]}") from None
         clusters = int(labels.max()) + 1
         members = np.bincount(labels, minlength=clusters)
         centroids = np.zeros((clusters, 3))
         np.add.at(centroids, labels, points)
         centroids /= members[:, None]
+        first_normal = normals[np.unique(labels, return_index=True)[1]]
     report.update(points=n, subsample=len(points), diagonal=diagonal, sample_points=clusters)
     runner.log(f"{n} points, subsample of {len(points)}: {clusters} sample points")
     subsample = runner.client.scatter([{"points": points, "normals": normals, "labels": labels,
                                         "centroids": centroids}], broadcast=True)[0]
     key = uuid.uuid4().hex
-    quantum = max(diagonal, 1e-300) * 2.0**-POSITION_BITS
-    sums = runner.map(sum_rows, ranges, source, key, subsample, quantum, scratch, what="clusters")
+    # Offsets in units of the diagonal over 2^bits and unit normals in units of 2^-bits, each at most 2^bits: n of
+    # them sum to at most 2^62 (and each is an integer that float64 holds exactly).
+    bits = min(50, 62 - int(np.ceil(np.log2(max(n, 2)))))
+    quantum, normal_quantum = max(diagonal, 1e-300) * 2.0**-bits, 2.0**-min(30, bits)
+    sums = runner.map(sum_rows, ranges, source, key, subsample, quantum, normal_quantum, scratch, what="clusters")
     count = np.sum([s[0] for s in sums], axis=0)
     normal_sum = np.sum([s[2] for s in sums], axis=0)
     largest = np.max([s[3] for s in sums], axis=0)
     # A subsample point with a duplicate (other normal, other cluster) may see its points all join the duplicate's.
     kept = count > 0
     count = np.maximum(count, 1)
-    # |p - centroid| <= 2 largest, so in these units a product is at most 2^(2 bits) and a cluster's sum 2^62.
-    bits = np.floor((62 - np.log2(count)) / 2)
     centroids = centroids + np.sum([s[1] for s in sums], axis=0) * quantum / count[:, None]
+    # The members' squared distances to the centroid sum to at most count (2 largest)^2 (their mean is within
+    # largest of the subsample's centroid, and the centroid rounds towards their mean): in these units at most
+    # 2^62, and so is each product's sum.
+    bits = np.floor((62 - np.log2(count)) / 2)
     units = np.maximum(2.0 * largest, 1e-300) * 2.0**-bits
     spreads = runner.map(spread_rows, ranges, source, scratch, centroids, units, what="surfels")
     spread = np.sum([s[0] for s in spreads], axis=0)
     radius = np.max([s[1] for s in spreads], axis=0)
-    normals = surfel_normals(spread, normal_sum, count)
+    normals = surfel_normals(spread, normal_sum, count, first_normal)
     surfels = np.column_stack([centroids, normals, radius, count])[kept]
+    surfel_columns = {name: surfels[:, column] for column, (name, _) in enumerate(FIELDS)}
     # The sample points' numbers without the empty ones: the order the library made them in.
     renumbered = np.cumsum(kept) - 1
-    if clusters_path is None:
-        runner.write_small(output, FIELDS, {name: surfels[:, column] for column, (name, _) in enumerate(FIELDS)})
-    else:
-        sink = runner.open_sink(clusters_path, n, CLUSTER_FIELDS)
-        with runner.client_step("create clusters"):
-            sink.create()
-        try:
-            runner.map(write_cluster_rows, ranges, source, scratch, renumbered, sink, what="write clusters")
-            runner.write_small(output, FIELDS, {name: surfels[:, c] for c, (name, _) in enumerate(FIELDS)})
-            sink.commit()
-        except BaseException:
+    written = []  # both outputs are written under temporary names, then renamed together
+    try:
+        if clusters_path is not None:
+            written.append(runner.open_sink(clusters_path, n, CLUSTER_FIELDS))
+            with runner.client_step("create clusters"):
+                written[-1].create()
+            runner.map(write_cluster_rows, ranges, source, scratch, renumbered, written[-1], what="write clusters")
+        written.append(runner.written_small(output, FIELDS, surfel_columns))
+    except BaseException:
+        for sink in written:
             sink.discard()
-            raise
+        raise
+    for sink in written:
+        sink.commit()
     report.update(sample_points=len(surfels), largest_cluster=int(count.max()),
                   points_per_sample_point=n / len(surfels))
     return report
