@@ -581,6 +581,39 @@ def test_simplify_sums_every_point_once_and_covers_the_scan_as_the_program_does(
     assert cover <= 1.25 * program_cover, (cover, program_cover)
 
 
+def test_simplify_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_path, monkeypatch):
+    """A worker process is killed (SIGKILL) once the first clusters are saved; Dask reruns its tasks on the new
+    worker (which fetches the scattered subsample from the other) and the file is the same."""
+    from cgal_ext.tiled import runner
+    monkeypatch.setattr(runner, "CHUNK_ROWS", 100_000)  # 12 tasks a pass
+    options = dict(client=client, subsample=200_000, target_count=3000)
+    tiled.run("simplify", scan.ply, tmp_path / "reference.ply", **options)
+    result = {}
+
+    def run():
+        try:
+            result["report"] = tiled.run("simplify", scan.ply, tmp_path / "killed.ply", scratch=tmp_path / "scratch",
+                                         **options)
+        except Exception as error:  # reported by the assertion below
+            result["error"] = error
+
+    (tmp_path / "scratch").mkdir()
+    pids = list(client.run(os.getpid).values())
+    worker = threading.Thread(target=run)
+    worker.start()
+    saved = str(tmp_path / "scratch" / ".*" / "labels_*.npy")
+    deadline = time.monotonic() + 120
+    while not glob.glob(saved) and time.monotonic() < deadline:
+        assert "error" not in result, result["error"]
+        time.sleep(0.02)
+    assert glob.glob(saved), f"no clusters were saved: {result}"
+    os.kill(pids[0], signal.SIGKILL)
+    worker.join(300)
+    assert "report" in result, f"the run did not complete after a worker was killed: {result}"
+    assert pids[0] not in client.run(os.getpid).values()
+    assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
+
+
 def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
     out = tmp_path / "ssps.ply"
     for options, message in (({"tiles": 4}, "has no tiles"), ({"subsample": 0}, "subsample must be"),
