@@ -212,20 +212,25 @@ def main():
     rows.extend(model_rows)
     rows.extend(late_rows)  # after the rows the manual's figures are bound to
 
-    with open(os.path.join(args.out, "tiled_results.csv"), "w", newline="") as f:
+    write_results(args.out, "tiled_results", "Tiled runs on Dask (benchmark/bench_tiled.py)",
+                  "Seeded samplings of CGAL's models with normals, quadric details; the command `python3 -m "
+                  f"cgal_ext.tiled details` with its defaults: a LocalCluster of {workers} workers, one thread each. "
+                  "Medians over the repetitions.", rows)
+
+
+def write_results(out, stem, title, introduction, rows):
+    """OUT/stem.csv and OUT/stem.md of rows (measure, points, value, unit, target)."""
+    with open(os.path.join(out, stem + ".csv"), "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["measure", "points", "value", "unit", "target"])
         for row in rows:
-            writer.writerow([row[0], row[1], f"{row[2]:.6g}", row[3], row[4]])
-    with open(os.path.join(args.out, "tiled_results.md"), "w") as f:
-        f.write("# Tiled runs on Dask (benchmark/bench_tiled.py)\n\n"
-                "Seeded samplings of CGAL's models with normals, quadric details; the command `python3 -m "
-                f"cgal_ext.tiled details` with its defaults: a LocalCluster of {workers} workers, one thread each. "
-                "Medians over the repetitions.\n\n"
+            writer.writerow([row[0], row[1], f"{float(row[2]):.6g}", row[3], row[4]])
+    with open(os.path.join(out, stem + ".md"), "w") as f:
+        f.write(f"# {title}\n\n{introduction}\n\n"
                 "| measure | points | value | unit | target |\n|---|---:|---:|---|---|\n")
         for row in rows:
-            f.write(f"| {row[0]} | {row[1]:,} | {row[2]:.4g} | {row[3]} | {row[4]} |\n")
-    print(f"wrote {args.out}/tiled_results.csv and tiled_results.md")
+            f.write(f"| {row[0]} | {row[1]:,} | {float(row[2]):.4g} | {row[3]} | {row[4]} |\n")
+    print(f"wrote {out}/{stem}.csv and {stem}.md")
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ The armadillo, the fandisk (a CAD part with sharp creases) and the lion head at 
 (--quick: the armadillo at 1M). Writes OUT/tiled_simplify_results.csv and .md.
 Usage: PYTHONPATH=build/python benchmark/bench_tiled_simplify.py --out DIR [--build build] [--data data] [--quick]
 """
-import csv
 import json
 import os
 import subprocess
@@ -28,7 +27,7 @@ import cgal_ext
 from cgal_ext._process import reexecute_tuned
 
 from bench_python import harness_arguments, median
-from bench_tiled import PeakMemory, sample
+from bench_tiled import PeakMemory, sample, write_results
 
 BUDGET = 1.5  # the most sample points per target count, the program's rule
 
@@ -110,21 +109,10 @@ def main():
                           median(tiled_times) / median(program_times), "", "")]
             os.remove(scan)
     rows += client_rows
-    with open(os.path.join(args.out, "tiled_simplify_results.csv"), "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["measure", "points", "value", "unit", "target"])
-        for row in rows:
-            writer.writerow([row[0], row[1], f"{float(row[2]):.6g}", row[3], row[4]])
-    with open(os.path.join(args.out, "tiled_simplify_results.md"), "w") as f:
-        f.write("# Tiled sample points on Dask (benchmark/bench_tiled_simplify.py)\n\n"
-                "Seeded samplings of CGAL's models with normals; `python3 -m cgal_ext.tiled simplify` and "
-                f"`point-detail simplify` with their defaults ({workers} workers of one thread; the program on "
-                f"{workers} threads). Medians over the repetitions.\n\n"
-                "| measure | points | value | unit | target |\n|---|---:|---:|---|---|\n")
-        for row in rows:
-            f.write(f"| {row[0]} | {row[1]:,} | {float(row[2]):.4g} | {row[3]} | {row[4]} |\n")
-    print(f"wrote {args.out}/tiled_simplify_results.csv and tiled_simplify_results.md")
-
+    write_results(args.out, "tiled_simplify_results", "Tiled sample points on Dask (benchmark/bench_tiled_simplify.py)",
+                  "Seeded samplings of CGAL's models with normals; `python3 -m cgal_ext.tiled simplify` and "
+                  f"`point-detail simplify` with their defaults ({workers} workers of one thread; the program on "
+                  f"{workers} threads). Medians over the repetitions.", rows)
 
 if __name__ == "__main__":
     main()

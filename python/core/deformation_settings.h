@@ -83,9 +83,7 @@ struct Keyword_conversion<std::size_t>
   static py::object to_python(std::size_t v) { return py::int_(v); }
   static std::size_t from_python(const py::handle& v, const char* keyword)
   {
-    const long long size = keyword_cast<long long>(v, keyword, "an int");
-    if(size < 1) throw py::value_error(std::string(keyword) + " must be at least 1, not " + std::to_string(size));
-    return std::size_t(size);
+    return as_size(keyword_cast<long long>(v, keyword, "an int"), keyword);
   }
 };
 

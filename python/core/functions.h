@@ -123,13 +123,9 @@ Ndarray bound_compute_simplification_sample_points(const Array_like& points, con
                                              double mode_threshold, long long k, const Optional_progress& progress)
 {
   Simplification_settings settings;
-  if(target_count < 1) throw py::value_error("target_count must be at least 1, not " + std::to_string(target_count));
-  settings.target_count = std::size_t(target_count);
-  if(!max_cluster_size.is_none()) {
-    const long long size = max_cluster_size.cast<long long>();
-    if(size < 1) throw py::value_error("max_cluster_size must be at least 1, not " + std::to_string(size));
-    settings.max_cluster_size = std::size_t(size);
-  }
+  settings.target_count = as_size(target_count, "target_count");
+  if(!max_cluster_size.is_none())
+    settings.max_cluster_size = as_size(max_cluster_size.cast<long long>(), "max_cluster_size");
   settings.mode_spread_threshold = mode_threshold;
   settings.mean_shift_neighbors = as_count(k, "k");
   settings.validate();

@@ -40,6 +40,13 @@ unsigned int as_count(long long value, const char* argument)
   return unsigned(value);
 }
 
+/// A size given from Python that must be at least 1 (target counts, cluster sizes).
+std::size_t as_size(long long value, const char* argument)
+{
+  if(value < 1) throw py::value_error(std::string(argument) + " must be at least 1, not " + std::to_string(value));
+  return std::size_t(value);
+}
+
 // ---- named results ----------------------------------------------------------------------------------------------
 
 /// The named tuples of the results, made once at import (kept for the life of the process).

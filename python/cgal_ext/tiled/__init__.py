@@ -20,7 +20,7 @@ from pathlib import Path
 from .._process import tuned_environment
 from . import ops, simplify
 from .runner import Passes, Run, timed
-from .store import TiledError, open_source
+from .store import TiledError, checked_output, open_source
 
 __all__ = ["TiledError", "run", "OPERATIONS"]
 
@@ -85,19 +85,15 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         that does not answer. Nothing is written then.
     """
     log = log or (lambda message: None)
+    source = open_source(input)
+    output = checked_output(output, source)
     if operation == "simplify":
         if tiles is not None or halo is not None or threads_per_task != 1:
             raise TiledError("simplify: has no tiles, no halo and no library call in its tasks; tiles, halo and "
                              "threads_per_task are not taken")
-        op = simplify.options(**options)
+        op = simplify.options(source, output, **options)
     else:
         op = ops.operation(operation, **options)
-    source = open_source(input)
-    output = _checked_output(output, source)
-    if operation == "simplify" and op["clusters_path"] is not None:
-        op["clusters_path"] = _checked_output(op["clusters_path"], source)
-        if op["clusters_path"].resolve() == output.resolve():
-            raise TiledError(f"{output}: is both the output and the clusters' file")
     scratch_root = Path(scratch) if scratch else output.parent
     folder = scratch_root / f".{output.name}.tiles-{uuid.uuid4().hex[:8]}"
     own_client, cluster = client is None, None
@@ -119,18 +115,6 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             client.close()
         if cluster is not None:
             cluster.close()
-
-
-def _checked_output(path, source):
-    """`path` as a Path, or a TiledError when it cannot be an output of a run on `source`."""
-    path = Path(path)
-    if path.suffix.lower() not in (".ply", ".zarr"):
-        raise TiledError(f"{path}: the output's name must end in .ply or .zarr")
-    if path.resolve() == Path(source.path):
-        raise TiledError(f"{path}: is the input; the tiled runs never overwrite their input")
-    if not path.parent.is_dir():
-        raise TiledError(f"{path.parent}: no such folder for the output")
-    return path
 
 
 def worker_environment():

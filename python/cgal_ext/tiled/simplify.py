@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from .. import _core
 from . import ops
 from .runner import first_invalid_row, read_rows
-from .store import TiledError
+from .store import TiledError, checked_output
 
 SUBSAMPLE = 1_000_000  # points the client clusters; a scan this small is clustered whole, as the program does
 CANDIDATES = 8  # nearest subsample points a point chooses its cluster among
@@ -183,10 +183,10 @@ def _whole(value):
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def options(subsample=SUBSAMPLE, clusters=None, **library):
-    """The run's options, checked before any pass: `subsample`, `clusters` (a path, or None) and the keywords of
-    compute_simplification_sample_points but max_cluster_size (a size in points of the scan, which a subsample
-    does not have)."""
+def options(source, output, subsample=SUBSAMPLE, clusters=None, **library):
+    """The options of a run on `source` writing `output`, checked before any pass: `subsample`, `clusters` (a path
+    for the scan with its clusters, or None) and the keywords of compute_simplification_sample_points but
+    max_cluster_size (a size in points of the scan, which a subsample does not have)."""
     allowed = set(ops.keywords(_core.compute_simplification_sample_points)) - {"max_cluster_size"}
     unknown = set(library) - allowed
     if unknown:
@@ -200,6 +200,10 @@ def options(subsample=SUBSAMPLE, clusters=None, **library):
     threshold = library.get("mode_threshold", 1.0)
     if isinstance(threshold, (bool, np.bool_)) or not isinstance(threshold, (int, float, np.integer, np.floating)):
         raise TiledError(f"simplify: mode_threshold must be a number, not {threshold!r}")
+    if clusters is not None:
+        clusters = checked_output(clusters, source)
+        if clusters.resolve() == output.resolve():
+            raise TiledError(f"{output}: is both the output and the clusters' file")
     return {"subsample_size": int(subsample), "clusters_path": clusters, "library": library}
 
 
@@ -241,7 +245,7 @@ def simplify(runner, source, output, scratch, subsample_size, clusters_path, lib
         np.add.at(centroids, labels, points)
         centroids /= members[:, None]
         first_normal = normals[np.unique(labels, return_index=True)[1]]
-    report.update(points=n, subsample=len(points), diagonal=diagonal, sample_points=clusters)
+    report.update(points=n, subsample=len(points), diagonal=diagonal)
     runner.log(f"{n} points, subsample of {len(points)}: {clusters} sample points")
     subsample = runner.client.scatter([{"points": points, "normals": normals, "labels": labels,
                                         "centroids": centroids}], broadcast=True)[0]

@@ -320,6 +320,18 @@ class ZarrSink:
         shutil.rmtree(self.temporary, ignore_errors=True)
 
 
+def checked_output(path, source):
+    """`path` as a Path, or a TiledError when it cannot be an output of a run on `source`."""
+    path = Path(path)
+    if path.suffix.lower() not in (".ply", ".zarr"):
+        raise TiledError(f"{path}: the output's name must end in .ply or .zarr")
+    if path.resolve() == Path(source.path):
+        raise TiledError(f"{path}: is the input; the tiled runs never overwrite their input")
+    if not path.parent.is_dir():
+        raise TiledError(f"{path.parent}: no such folder for the output")
+    return path
+
+
 def open_sink(path, count, fields, chunk_rows):
     """A PlySink for OUT.ply, otherwise a ZarrSink (`run` has checked the name)."""
     path = Path(path)
