@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets with clang (ASan + UBSan) and runs each for SECONDS (default 30), as many at a
-# time as there are cores, from the committed seed corpus in fuzz/corpus/<target>. New corpus entries go to a scratch folder; a crash, leak or
-# undefined behaviour stops with its input saved under build-sanitize/findings/ and a non-zero exit.
+# Builds the libFuzzer targets (one program, fuzz/fuzz_targets.cpp, started by each target's name) with clang
+# (ASan + UBSan) and runs each for SECONDS (default 30), as many at a time as there are cores, from the committed
+# seed corpus in fuzz/corpus/<target>. New corpus entries go to a scratch folder; a crash, leak or undefined
+# behaviour stops with its input saved under build-sanitize/findings/ and a non-zero exit.
 # Usage: scripts/run_fuzzers.sh [SECONDS] [TARGET...]   (as root on a fresh Debian 12 machine)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,7 +14,7 @@ targets=("$@")
   fuzz_neighborhoods)
 build=${SANITIZE_BUILD_DIR:-build-sanitize}
 # The targets are part of the sanitized build: after scripts/run_sanitized_tests.sh there is nothing to build.
-fuzz_build() { bash scripts/sanitized_build.sh "${targets[@]}"; }
+fuzz_build() { bash scripts/sanitized_build.sh fuzz_targets; }
 # One target for SECONDS; its summary lines go to stdout, its log and any finding under $build/findings/.
 fuzz_one() {
   local target=$1 scratch status=0
