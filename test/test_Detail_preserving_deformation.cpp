@@ -2,6 +2,7 @@
 #include "test_support.h"
 
 #include <CGAL_ext/Detail_preserving_deformation.h>
+#include <CGAL_ext/diffuse_points.h>
 #include <CGAL_ext/generated_shapes.h>
 #include <CGAL_ext/internal/detail_relaxation.h>
 
@@ -13,7 +14,9 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -351,6 +354,125 @@ TEST(DetailPreservingDeformation, ARendererRepeatsTheDiffusionFromTheSamplePoint
       EXPECT_GT(collar, 0u) << "no collar point took a step: the test checks less than it says";
     }
   }
+}
+
+TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMotions)
+{
+  // diffuse_points() with the state of the sample points (the tiled edit's workers move their tiles' points so):
+  // (1) the deformation's own points, in another order, land where diffuse() puts them, bit for bit, but for the
+  // exact handles and the collar, which the selection decides; (2) the points of a denser sampling move by the
+  // blend of their m nearest sample points' motions with the weights (1 - d / d_(m+1))^2, found here by brute
+  // force; (3) with the handle not moved, every point stays (as diffuse()'s do, to rounding).
+  const Tentacle t(12000);
+  Tentacle dense(30000);
+  dense.shuffle(7);
+  for(auto rotations : both_rotations) {
+    auto d = bend_tip_by_70_degrees(t, with_order(Detail_order::quadric, rotations));
+    d->diffuse();
+    const CGAL_ext::Diffusion_view view = d->diffusion_view();
+    const CGAL_ext::Diffusion_state state = view.state();
+    ASSERT_EQ(state.number_of_sample_points(), d->number_of_sample_points());
+
+    Tentacle own = t;
+    own.shuffle(3); // own.shape.points[i] is some t.shape.points[j]: found by position below
+    std::vector<Point> moved = own.shape.points;
+    std::vector<Kernel::Vector_3> moved_normals = own.shape.normals;
+    std::vector<std::size_t> rows = own.all();
+    CGAL_ext::diffuse_points(
+      rows, state,
+      CGAL::parameters::point_map(CGAL::make_property_map(moved)).normal_map(CGAL::make_property_map(moved_normals)));
+    std::vector<bool> decided_by_selection(t.shape.points.size());
+    for(std::size_t i = 0; i < decided_by_selection.size(); ++i)
+      decided_by_selection[i] = view.is_exact_handle_point(i);
+    view.for_each_collar_point(
+      [&](std::size_t i, const int*, const double*, std::size_t) { decided_by_selection[i] = true; });
+    std::map<std::array<double, 3>, std::size_t> index_of;
+    for(std::size_t i = 0; i < t.shape.points.size(); ++i)
+      index_of[{t.shape.points[i].x(), t.shape.points[i].y(), t.shape.points[i].z()}] = i;
+    std::size_t compared = 0, differ = 0, moving = 0;
+    for(std::size_t i = 0; i < moved.size(); ++i) {
+      const Point& p = own.shape.points[i];
+      const std::size_t j = index_of.at({p.x(), p.y(), p.z()});
+      if(decided_by_selection[j]) continue;
+      ++compared;
+      const Eigen::Vector3d q(moved[i].x(), moved[i].y(), moved[i].z());
+      const Eigen::Vector3d n(moved_normals[i].x(), moved_normals[i].y(), moved_normals[i].z());
+      differ += q != d->deformed_point(j) || n != d->deformed_normal(j);
+      moving += q != t.point(j);
+    }
+    EXPECT_EQ(differ, 0u) << "of " << compared << " points, rotations " << int(rotations);
+    EXPECT_GT(moving, compared / 4);
+
+    // (2) The denser sampling, against the blend computed here.
+    std::vector<Point> dense_moved = dense.shape.points;
+    std::vector<Kernel::Vector_3> dense_normals = dense.shape.normals;
+    std::vector<std::size_t> dense_rows = dense.all();
+    CGAL_ext::diffuse_points(dense_rows, state,
+                             CGAL::parameters::point_map(CGAL::make_property_map(dense_moved))
+                               .normal_map(CGAL::make_property_map(dense_normals)));
+    const std::size_t m = state.stencil_size, samples = state.number_of_sample_points();
+    double error = 0, normal_error = 0;
+    std::size_t dense_moving = 0;
+    for(std::size_t i = 0; i < dense_moved.size(); i += 7) {
+      const Eigen::Vector3d p = dense.point(i);
+      std::vector<std::pair<double, std::size_t>> by_distance(samples);
+      for(std::size_t s = 0; s < samples; ++s)
+        by_distance[s] = {(p - Eigen::Map<const Eigen::Vector3d>(&state.sample_positions[3 * s])).norm(), s};
+      std::partial_sort(by_distance.begin(), by_distance.begin() + std::ptrdiff_t(m + 1), by_distance.end());
+      Eigen::Matrix<double, 3, 4> blend = Eigen::Matrix<double, 3, 4>::Zero();
+      double total = 0;
+      for(std::size_t e = 0; e < m; ++e) {
+        const double w = std::pow(1 - by_distance[e].first / by_distance[m].first, 2);
+        blend += w * Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(
+                       &state.motions[12 * by_distance[e].second]);
+        total += w;
+      }
+      blend /= total;
+      const Eigen::Matrix3d map = Eigen::Matrix3d::Identity() + blend.leftCols<3>();
+      const Eigen::Vector3d expected = p + blend.leftCols<3>() * p + blend.col(3);
+      const Eigen::Vector3d expected_normal =
+        (map.determinant() * map.inverse().transpose() * dense.normal(i)).normalized();
+      const Eigen::Vector3d q(dense_moved[i].x(), dense_moved[i].y(), dense_moved[i].z());
+      const Eigen::Vector3d n(dense_normals[i].x(), dense_normals[i].y(), dense_normals[i].z());
+      error = std::max(error, (q - expected).norm());
+      normal_error = std::max(normal_error, (n - expected_normal).norm());
+      dense_moving += (q - p).norm() > 1e-3 * t.diagonal;
+    }
+    EXPECT_LT(error, 1e-6 * t.diagonal) << int(rotations); // the weights are rounded to multiples of 2^-24
+    EXPECT_LT(normal_error, 1e-6) << int(rotations);
+    EXPECT_GT(dense_moving, dense_moved.size() / 7 / 4);
+
+    // (3) Handles not moved (a new edit: as rigid as possible, each drag starts from the last).
+    d = t.edit(with_order(Detail_order::quadric, rotations));
+    ASSERT_TRUE(d->deform());
+    d->update_sample_motions();
+    std::vector<Point> still = dense.shape.points;
+    std::vector<Kernel::Vector_3> still_normals = dense.shape.normals;
+    CGAL_ext::diffuse_points(
+      dense_rows, d->diffusion_view().state(),
+      CGAL::parameters::point_map(CGAL::make_property_map(still)).normal_map(CGAL::make_property_map(still_normals)));
+    double still_moved = 0, still_turned = 0;
+    for(std::size_t i = 0; i < still.size(); ++i) {
+      still_moved = std::max(still_moved, std::sqrt(CGAL::squared_distance(still[i], dense.shape.points[i])));
+      still_turned = std::max(still_turned, std::sqrt((still_normals[i] - dense.shape.normals[i]).squared_length()));
+    }
+    EXPECT_LT(still_moved, 1e-9 * t.diagonal) << int(rotations);
+    EXPECT_LT(still_turned, 1e-9) << int(rotations);
+  }
+  CGAL_ext::Diffusion_state bad;
+  EXPECT_THROW(bad.validate(), CGAL_ext::Invalid_input);
+  auto d = bend_tip_by_70_degrees(t, Settings());
+  EXPECT_THROW(d->diffusion_view().state(), CGAL_ext::Invalid_input); // no motions yet
+  d->update_sample_motions();
+  bad = d->diffusion_view().state();
+  bad.stencil_size = bad.number_of_sample_points() + 1;
+  EXPECT_THROW(bad.validate(), CGAL_ext::Invalid_input);
+  bad.stencil_size = 6;
+  bad.motions[5] = std::nan("");
+  std::vector<Point> points = t.shape.points;
+  std::vector<std::size_t> rows = t.all();
+  EXPECT_THROW(CGAL_ext::diffuse_points(rows, bad, CGAL::parameters::point_map(CGAL::make_property_map(points))),
+               CGAL_ext::Invalid_input);
 }
 
 TEST(DetailPreservingDeformation, CoincidentPointsStayTogether)

@@ -4,16 +4,59 @@
 #define CGAL_EXT_DIFFUSION_VIEW_H
 
 #include <CGAL_ext/Detail_preserving_deformation_settings.h>
+#include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/point_diffusion.h>
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace CGAL_ext {
+
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  The sample points' side of an edit's diffusion, as of the last
+  `Detail_preserving_deformation::update_sample_motions()` (from `Diffusion_view::state()`): what
+  `diffuse_points()` needs to move points the deformation was not built on. Plain arrays, which a program can
+  send to other processes, such as the workers of a tiled edit of a scan larger than one machine.
+*/
+struct Diffusion_state
+{
+  std::vector<double> sample_positions;          ///< three numbers per sample point
+  std::vector<double> deformed_sample_positions; ///< three numbers per sample point
+  /// Twelve numbers per sample point: the top three rows of `Diffusion_view::sample_motion()`, row-major.
+  std::vector<double> motions;
+  std::size_t stencil_size = 1; ///< the sample points that carry each point
+  Diffusion_origin origin =
+    Diffusion_origin::own_sample; ///< `Detail_preserving_deformation_settings::diffusion_origin`
+  bool portable = false;          ///< `Detail_preserving_deformation_settings::portable_diffusion`
+
+  std::size_t number_of_sample_points() const { return sample_positions.size() / 3; }
+
+  /// \throws Invalid_input if the arrays' sizes disagree, a number is not finite, or `stencil_size` is 0 or
+  /// more than the sample points.
+  void validate() const
+  {
+    const std::size_t s = number_of_sample_points();
+    const auto finite = [](const std::vector<double>& values) {
+      return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+    };
+    if(s == 0 || sample_positions.size() != 3 * s || deformed_sample_positions.size() != 3 * s ||
+       motions.size() != 12 * s)
+      throw Invalid_input("diffusion state: needs 3 sample positions, 3 deformed positions and 12 motion numbers "
+                          "per sample point, at least one sample point");
+    if(!finite(sample_positions) || !finite(deformed_sample_positions) || !finite(motions))
+      throw Invalid_input("diffusion state: a sample position or motion is not finite");
+    if(stencil_size < 1 || stencil_size > s)
+      throw Invalid_input("diffusion state: stencil_size must be between 1 and the number of sample points (" +
+                          std::to_string(s) + "), not " + std::to_string(stencil_size));
+  }
+};
 
 /*!
   \ingroup PkgCGALExtAlgorithms
@@ -76,6 +119,28 @@ public:
     m_diffusion.collar.handle_step(c, m_diffusion.stencil, m_cloud.positions, m_normals, m_sample_positions,
                                    m_deformed_samples, m_settings.diffusion_origin, m_selection.transforms, step,
                                    normal_step);
+  }
+
+  /// The sample points' positions and motions, for `diffuse_points()` in this process or another.
+  /// \throws Invalid_input before the first `Detail_preserving_deformation::update_sample_motions()` (or
+  /// `diffuse()`) since `preprocess()`.
+  Diffusion_state state() const
+  {
+    Diffusion_state out;
+    const std::size_t s = std::size_t(m_sample_positions.rows());
+    if(m_diffusion.stencil.number_of_motion_records() != s)
+      throw Invalid_input("Diffusion_view::state(): the sample points have no motions yet; call "
+                          "update_sample_motions() or diffuse() first");
+    out.sample_positions.assign(m_sample_positions.data(), m_sample_positions.data() + 3 * s);
+    out.deformed_sample_positions.assign(m_deformed_samples.data(), m_deformed_samples.data() + 3 * s);
+    out.motions.resize(12 * s);
+    for(std::size_t j = 0; j < s; ++j)
+      for(int r = 0; r < 3; ++r)
+        for(int c = 0; c < 4; ++c) out.motions[12 * j + std::size_t(4 * r + c)] = sample_motion(j)(r, c);
+    out.stencil_size = stencil_size();
+    out.origin = m_settings.diffusion_origin;
+    out.portable = m_settings.portable_diffusion;
+    return out;
   }
 
   /// \cond SKIP_IN_MANUAL

@@ -316,6 +316,22 @@ public:
   /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
   /// stencil's records applied to `(p, 1)`.
   const Eigen::Matrix4d& motion_record(std::size_t j) const { return m_records[j]; }
+  /// The motion records set, none before the first set_motions().
+  std::size_t number_of_motion_records() const { return m_records.size(); }
+
+  /// Sets sample point j's motion record to the top three rows `records[12 j ...]` (row-major) of a record
+  /// another stencil's set_motions() made, for `count` sample points: another process's points then move as that
+  /// stencil's do.
+  void set_motion_records(const double* records, std::size_t count)
+  {
+    m_records.resize(count);
+    for(std::size_t j = 0; j < count; ++j) {
+      Eigen::Matrix4d& record = m_records[j];
+      for(int r = 0; r < 3; ++r)
+        for(int c = 0; c < 4; ++c) record(r, c) = records[12 * j + std::size_t(4 * r + c)];
+      record.row(3) << 0, 0, 0, 1;
+    }
+  }
 
   /// Copies row `i`'s sample points and weights.
   void copy_row(std::size_t i, int* sample_points, double* out_weights) const
@@ -438,6 +454,7 @@ template <typename ConcurrencyTag>
 void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m,
                               const std::vector<int>* sample_of_point)
 {
+  m_records.clear(); // the motions of other sample points
   const std::size_t count = std::size_t(sample_positions.rows());
   const bool bounded = count > m; // else every sample point is in every stencil, which then never changes
   const std::size_t wanted = bounded ? m + 1 : count;
