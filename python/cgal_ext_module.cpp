@@ -13,6 +13,7 @@
 #include <CGAL_ext/compute_neighbor_graph.h>
 #include <CGAL_ext/compute_simplification_sample_points.h>
 #include <CGAL_ext/detect_sparse_directions.h>
+#include <CGAL_ext/diffuse_points.h>
 #include <CGAL_ext/enhance_geometric_details.h>
 #include <CGAL_ext/estimate_mean_curvature.h>
 #include <CGAL_ext/estimate_oriented_normals.h>
@@ -535,10 +536,24 @@ void bind_deformation(py::module_& m)
          "Per drag, after deform(): one float32 array of each sample point's motion (3x4, row-major: a point p it\n"
          "carries alone moves by M (p, 1)), each handle group's transform (3x4) and each collar handle point's\n"
          "step (position, then normal; 6 numbers). O(sample points): what a renderer's shader blends per point.")
+    .def("diffusion_state", &Deformation::diffusion_state,
+         "After deform(): the sample points' side of the drag, as a dict of ``sample_positions`` and\n"
+         "``deformed_sample_positions`` (s, 3), ``motions`` (s, 3, 4: a point p carried by sample point j alone moves\n"
+         "by motions[j] @ (p, 1)), ``stencil_size``, ``origin`` and ``portable``: what diffuse_points() needs to\n"
+         "move points this deformation was not built on, in this process or another (a tiled edit's workers).")
     .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)
     .def("__repr__", &Deformation::repr);
+  m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a,
+        "Moves points a Deformation was not built on (a denser sampling of the same surface, a tile of a larger\n"
+        "scan) as its diffuse() moves its own: each by its ``stencil_size`` nearest sample points' motions, weighted\n"
+        "as diffuse() weights them. A point at one of the deformation's points moves as diffuse() moves it, bit for\n"
+        "bit, unless it is an exact handle point or in the handles' collar, which the selection decides and the\n"
+        "caller applies.\n\n"
+        "Parameters\n----------\npoints, normals : array_like\n    (n, 3) float64.\n"
+        "state : dict\n    Deformation.diffusion_state(), after deform().\n\n"
+        "Returns\n-------\nDeformed\n    (points (n, 3), normals (n, 3)), new float64 arrays.");
 }
 
 } // namespace

@@ -8,16 +8,17 @@ import contextlib
 
 from ._core import (Deformation, Deformed, Details, PointSet, Upsampled, compute_geometric_details,
                     compute_local_spacing, compute_neighbor_graph, compute_simplification_sample_points,
-                    diverging_colors, enhance_geometric_details, estimate_mean_curvature, estimate_oriented_normals,
-                    get_num_threads, label_colors, read_points, refit_normals, render_png,
+                    diffuse_points, diverging_colors, enhance_geometric_details, estimate_mean_curvature,
+                    estimate_oriented_normals, get_num_threads, label_colors, read_points, refit_normals, render_png,
                     scale_geometric_details, sequential_colors, set_num_threads, upsample_point_set, write_ply)
 from ._version import __version__
 
 __all__ = ["Deformation", "Deformed", "Details", "PointSet", "Upsampled", "__version__", "compute_geometric_details",
            "compute_local_spacing", "compute_neighbor_graph", "compute_simplification_sample_points",
-           "diverging_colors", "enhance_geometric_details", "estimate_mean_curvature", "estimate_oriented_normals",
-           "get_num_threads", "label_colors", "read_points", "refit_normals", "render_png", "scale_geometric_details",
-           "sequential_colors", "set_num_threads", "threads", "upsample_point_set", "write_ply"]
+           "diffuse_points", "diverging_colors", "enhance_geometric_details", "estimate_mean_curvature",
+           "estimate_oriented_normals", "get_num_threads", "label_colors", "read_points", "refit_normals", "render_png",
+           "scale_geometric_details", "sequential_colors", "set_num_threads", "threads", "upsample_point_set",
+           "write_ply"]
 
 _thread_limits = []  # the limits of the enclosing `threads` blocks, innermost last
 

@@ -220,6 +220,29 @@ public:
     return frame;
   }
 
+  /// After deform(): the sample points' side of the drag (Diffusion_view::state()), for diffuse_points() here or
+  /// in another process.
+  py::dict diffusion_state()
+  {
+    Detail_preserving_deformation<>& d = *m_deformation;
+    if(!d.is_preprocessed()) throw py::value_error("diffusion_state() needs deform() first");
+    Diffusion_state state;
+    without_gil([&] {
+      d.update_sample_motions();
+      state = d.diffusion_view().state();
+      return 0;
+    });
+    const py::ssize_t s = py::ssize_t(state.number_of_sample_points());
+    py::array_t<double> positions({s, py::ssize_t(3)}), deformed({s, py::ssize_t(3)}),
+      motions({s, py::ssize_t(3), py::ssize_t(4)});
+    std::copy(state.sample_positions.begin(), state.sample_positions.end(), positions.mutable_data());
+    std::copy(state.deformed_sample_positions.begin(), state.deformed_sample_positions.end(), deformed.mutable_data());
+    std::copy(state.motions.begin(), state.motions.end(), motions.mutable_data());
+    return py::dict("sample_positions"_a = positions, "deformed_sample_positions"_a = deformed, "motions"_a = motions,
+                    "stencil_size"_a = state.stencil_size, "origin"_a = setting_name(state.origin),
+                    "portable"_a = state.portable);
+  }
+
   py::dict statistics() const
   {
     const Detail_preserving_deformation_statistics& s = m_deformation->statistics();
@@ -350,6 +373,47 @@ private:
   std::unique_ptr<Detail_preserving_deformation<>> m_deformation;
   std::function<bool(double)> m_callback;
 };
+
+/// diffuse_points() with a Deformation.diffusion_state() dict: the moved points and normals, new arrays.
+Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state)
+{
+  Diffusion_state parsed;
+  const auto rows = [&](const char* key, py::ssize_t columns, py::ssize_t depth, std::vector<double>& out) {
+    if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
+    const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(state[key]);
+    const bool shaped =
+      array && array.ndim() == (depth ? 3 : 2) && array.shape(1) == columns && (!depth || array.shape(2) == depth);
+    if(!shaped)
+      throw py::value_error(std::string("the diffusion state's '") + key + "' must be a float array of shape (s, " +
+                            std::to_string(columns) + (depth ? ", " + std::to_string(depth) : std::string()) + ")");
+    out.assign(array.data(), array.data() + array.size());
+  };
+  rows("sample_positions", 3, 0, parsed.sample_positions);
+  rows("deformed_sample_positions", 3, 0, parsed.deformed_sample_positions);
+  rows("motions", 3, 4, parsed.motions);
+  for(const char* key : {"stencil_size", "origin", "portable"})
+    if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
+  parsed.stencil_size = as_count(state["stencil_size"].cast<long long>(), "stencil_size");
+  parsed.origin = parse_setting<Diffusion_origin>(state["origin"].cast<std::string>(), "origin");
+  parsed.portable = state["portable"].cast<bool>();
+  const Point_input input(points, normals);
+  const std::size_t n = input.size();
+  auto [moved, moved_rows] = new_rows3(n);
+  auto [moved_normals, moved_normal_rows] = new_rows3(n);
+  for(std::size_t i = 0; i < n; ++i)
+    for(int c = 0; c < 3; ++c) {
+      moved_rows.at(i, c) = input.point_rows.at(i, c);
+      moved_normal_rows.at(i, c) = input.normal_rows.at(i, c);
+    }
+  without_gil([&, moved_rows = moved_rows, moved_normal_rows = moved_normal_rows] {
+    Index_range all = all_points(n);
+    CGAL_ext::diffuse_points(
+      all, parsed,
+      CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows}));
+    return 0;
+  });
+  return py::reinterpret_borrow<py::object>(result_types.deformed)(moved, moved_normals);
+}
 
 } // namespace
 
