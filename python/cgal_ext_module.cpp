@@ -545,14 +545,18 @@ void bind_deformation(py::module_& m)
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)
     .def("__repr__", &Deformation::repr);
-  m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a,
+  m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a, py::kw_only(),
+        "selection"_a = py::none(),
         "Moves points a Deformation was not built on (a denser sampling of the same surface, a tile of a larger\n"
         "scan) as its diffuse() moves its own: each by its ``stencil_size`` nearest sample points' motions, weighted\n"
-        "as diffuse() weights them. A point at one of the deformation's points moves as diffuse() moves it, bit for\n"
-        "bit, unless it is an exact handle point or in the handles' collar, which the selection decides and the\n"
-        "caller applies.\n\n"
+        "as diffuse() weights them; with ``selection``, the exact handle points onto their group's transform and\n"
+        "the region's points within ``collar_reach`` of a handle by the handle's step. The deformation's own\n"
+        "points with their selection move as diffuse() moves them, bit for bit; a part of a scan moves as the whole\n"
+        "would wherever it holds the handle points within the collar's reach.\n\n"
         "Parameters\n----------\npoints, normals : array_like\n    (n, 3) float64.\n"
-        "state : dict\n    Deformation.diffusion_state(), after deform().\n\n"
+        "state : dict\n    Deformation.diffusion_state(), after deform().\n"
+        "selection : array_like of int, optional\n    Per point: -2 outside the region of interest, -1 in it, or its "
+        "handle group. Without it,\n    every point is a region point that is no handle.\n\n"
         "Returns\n-------\nDeformed\n    (points (n, 3), normals (n, 3)), new float64 arrays.");
 }
 

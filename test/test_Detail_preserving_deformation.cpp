@@ -359,49 +359,68 @@ TEST(DetailPreservingDeformation, ARendererRepeatsTheDiffusionFromTheSamplePoint
 TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMotions)
 {
   // diffuse_points() with the state of the sample points (the tiled edit's workers move their tiles' points so):
-  // (1) the deformation's own points, in another order, land where diffuse() puts them, bit for bit, but for the
-  // exact handles and the collar, which the selection decides; (2) the points of a denser sampling move by the
-  // blend of their m nearest sample points' motions with the weights (1 - d / d_(m+1))^2, found here by brute
-  // force; (3) with the handle not moved, every point stays (as diffuse()'s do, to rounding).
+  // (1) the deformation's own points, in another order and with their selection, land where diffuse() puts them,
+  // bit for bit, exact handles and collar included; (1b) so do those of a part of them (a tile) farther than the
+  // collar's reach from the part's border; (2) the points of a denser sampling move by the blend of their m
+  // nearest sample points' motions with the weights (1 - d / d_(m+1))^2, found here by brute force; (3) with the
+  // handle not moved, every point stays (as diffuse()'s do, to rounding).
+  using State = CGAL_ext::Diffusion_state;
   const Tentacle t(12000);
   Tentacle dense(30000);
   dense.shuffle(7);
+  std::map<std::array<double, 3>, std::size_t> index_of;
+  for(std::size_t i = 0; i < t.shape.points.size(); ++i)
+    index_of[{t.shape.points[i].x(), t.shape.points[i].y(), t.shape.points[i].z()}] = i;
   for(auto rotations : both_rotations) {
     auto d = bend_tip_by_70_degrees(t, with_order(Detail_order::quadric, rotations));
     d->diffuse();
     const CGAL_ext::Diffusion_view view = d->diffusion_view();
-    const CGAL_ext::Diffusion_state state = view.state();
+    const State state = view.state();
     ASSERT_EQ(state.number_of_sample_points(), d->number_of_sample_points());
+    ASSERT_EQ(state.number_of_handle_groups(), 1u);
+    ASSERT_GT(state.collar_reach, 0.0);
 
+    // (1) and (1b): all the points shuffled, then those with x < -0.3 (the tip's side) alone.
     Tentacle own = t;
-    own.shuffle(3); // own.shape.points[i] is some t.shape.points[j]: found by position below
-    std::vector<Point> moved = own.shape.points;
-    std::vector<Kernel::Vector_3> moved_normals = own.shape.normals;
-    std::vector<std::size_t> rows = own.all();
-    CGAL_ext::diffuse_points(
-      rows, state,
-      CGAL::parameters::point_map(CGAL::make_property_map(moved)).normal_map(CGAL::make_property_map(moved_normals)));
-    std::vector<bool> decided_by_selection(t.shape.points.size());
-    for(std::size_t i = 0; i < decided_by_selection.size(); ++i)
-      decided_by_selection[i] = view.is_exact_handle_point(i);
-    view.for_each_collar_point(
-      [&](std::size_t i, const int*, const double*, std::size_t) { decided_by_selection[i] = true; });
-    std::map<std::array<double, 3>, std::size_t> index_of;
-    for(std::size_t i = 0; i < t.shape.points.size(); ++i)
-      index_of[{t.shape.points[i].x(), t.shape.points[i].y(), t.shape.points[i].z()}] = i;
-    std::size_t compared = 0, differ = 0, moving = 0;
-    for(std::size_t i = 0; i < moved.size(); ++i) {
-      const Point& p = own.shape.points[i];
-      const std::size_t j = index_of.at({p.x(), p.y(), p.z()});
-      if(decided_by_selection[j]) continue;
-      ++compared;
-      const Eigen::Vector3d q(moved[i].x(), moved[i].y(), moved[i].z());
-      const Eigen::Vector3d n(moved_normals[i].x(), moved_normals[i].y(), moved_normals[i].z());
-      differ += q != d->deformed_point(j) || n != d->deformed_normal(j);
-      moving += q != t.point(j);
+    own.shuffle(3); // own.shape.points[i] is some t.shape.points[j]: found by position
+    for(const bool part : {false, true}) {
+      std::vector<Point> moved;
+      std::vector<Kernel::Vector_3> moved_normals;
+      std::vector<int> selection;
+      std::vector<std::size_t> of; // the index in t of each point moved
+      for(std::size_t i = 0; i < own.shape.points.size(); ++i) {
+        const Point& p = own.shape.points[i];
+        if(part && !(p.x() < -0.3)) continue;
+        moved.push_back(p);
+        moved_normals.push_back(own.shape.normals[i]);
+        selection.push_back(p.z() > 0.25 ? (p.x() < -0.85 ? 0 : State::region) : State::fixed); // as Tentacle's
+        of.push_back(index_of.at({p.x(), p.y(), p.z()}));
+      }
+      std::vector<std::size_t> rows(moved.size());
+      std::iota(rows.begin(), rows.end(), std::size_t(0));
+      CGAL_ext::diffuse_points(
+        rows, state,
+        CGAL_ext::parameters::selection_map(CGAL::make_property_map(selection),
+                                            CGAL::parameters::point_map(CGAL::make_property_map(moved))
+                                              .normal_map(CGAL::make_property_map(moved_normals))));
+      std::size_t compared = 0, differ = 0, moving = 0, handles = 0;
+      for(std::size_t i = 0; i < moved.size(); ++i) {
+        const std::size_t j = of[i];
+        if(part && !(t.point(j).x() < -0.3 - state.collar_reach)) continue;
+        ++compared;
+        const Eigen::Vector3d q(moved[i].x(), moved[i].y(), moved[i].z());
+        const Eigen::Vector3d n(moved_normals[i].x(), moved_normals[i].y(), moved_normals[i].z());
+        differ += q != d->deformed_point(j) || n != d->deformed_normal(j);
+        moving += q != t.point(j);
+        handles += view.is_exact_handle_point(j);
+      }
+      EXPECT_EQ(differ, 0u) << "of " << compared << " points, rotations " << int(rotations) << ", part " << part;
+      EXPECT_GT(moving, compared / 4);
+      EXPECT_GT(handles, 0u);
     }
-    EXPECT_EQ(differ, 0u) << "of " << compared << " points, rotations " << int(rotations);
-    EXPECT_GT(moving, compared / 4);
+    std::size_t collar = 0;
+    view.for_each_collar_point([&](std::size_t, const int*, const double*, std::size_t) { ++collar; });
+    EXPECT_GT(collar, 0u) << "no collar: the test checks less than it says";
 
     // (2) The denser sampling, against the blend computed here.
     std::vector<Point> dense_moved = dense.shape.points;
@@ -465,12 +484,21 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
   EXPECT_THROW(d->diffusion_view().state(), CGAL_ext::Invalid_input); // no motions yet
   d->update_sample_motions();
   bad = d->diffusion_view().state();
+  std::vector<Point> points = t.shape.points;
+  std::vector<Kernel::Vector_3> normals = t.shape.normals;
+  std::vector<std::size_t> rows = t.all();
+  const std::vector<int> no_such_group(points.size(), 1); // the state has group 0 only
+  EXPECT_THROW(
+    CGAL_ext::diffuse_points(
+      rows, bad,
+      CGAL_ext::parameters::selection_map(
+        CGAL::make_property_map(no_such_group),
+        CGAL::parameters::point_map(CGAL::make_property_map(points)).normal_map(CGAL::make_property_map(normals)))),
+    CGAL_ext::Invalid_input);
   bad.stencil_size = bad.number_of_sample_points() + 1;
   EXPECT_THROW(bad.validate(), CGAL_ext::Invalid_input);
   bad.stencil_size = 6;
   bad.motions[5] = std::nan("");
-  std::vector<Point> points = t.shape.points;
-  std::vector<std::size_t> rows = t.all();
   EXPECT_THROW(CGAL_ext::diffuse_points(rows, bad, CGAL::parameters::point_map(CGAL::make_property_map(points))),
                CGAL_ext::Invalid_input);
 }

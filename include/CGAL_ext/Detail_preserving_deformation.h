@@ -380,8 +380,8 @@ public:
   Diffusion_view diffusion_view() const
   {
     check_preprocessed("diffusion_view()");
-    return Diffusion_view(m_diffusion, m_cloud, m_row_of, m_normals, m_sample_points.positions, m_deformed_samples,
-                          m_selection, m_settings);
+    return Diffusion_view(m_diffusion, m_cloud, m_row_of, m_normals, m_sample_points.positions, m_sample_points.labels,
+                          m_deformed_samples, m_selection, m_settings);
   }
   /// @}
 

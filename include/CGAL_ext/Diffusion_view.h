@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -31,12 +32,29 @@ struct Diffusion_state
   std::vector<double> deformed_sample_positions; ///< three numbers per sample point
   /// Twelve numbers per sample point: the top three rows of `Diffusion_view::sample_motion()`, row-major.
   std::vector<double> motions;
-  std::size_t stencil_size = 1; ///< the sample points that carry each point
-  Diffusion_origin origin =
-    Diffusion_origin::own_sample; ///< `Detail_preserving_deformation_settings::diffusion_origin`
-  bool portable = false;          ///< `Detail_preserving_deformation_settings::portable_diffusion`
+  /// Per sample point, 1 if it is in the region of interest (only those move points), else 0.
+  std::vector<std::uint8_t> region_samples;
+  /// Seven numbers per handle group: its transform's rotation as a unit quaternion (w, x, y, z), then its
+  /// translation.
+  std::vector<double> handle_transforms;
+  /// The sample points that carry each point.
+  std::size_t stencil_size = 1;
+  /// `Detail_preserving_deformation_settings::diffusion_origin`.
+  Diffusion_origin origin = Diffusion_origin::own_sample;
+  /// `Detail_preserving_deformation_settings::portable_diffusion`.
+  bool portable = false;
+  /// Whether handle points follow their group's transform exactly (an infinite `handle_weight`).
+  bool exact_handles = true;
+  /// How far the collar spreads the exact handles' steps (`Detail_preserving_deformation_settings::handle_collar`),
+  /// as the deformation measured it over all its handle points; 0 without a collar.
+  double collar_reach = 0;
+
+  /// The values of `diffuse_points()`'s `selection_map` for a point outside the region of interest and for a
+  /// region point that is no handle; a handle point's value is its handle group.
+  static constexpr int fixed = -2, region = -1;
 
   std::size_t number_of_sample_points() const { return sample_positions.size() / 3; }
+  std::size_t number_of_handle_groups() const { return handle_transforms.size() / 7; }
 
   /// \throws Invalid_input if the arrays' sizes disagree, a number is not finite, or `stencil_size` is 0 or
   /// more than the sample points.
@@ -47,11 +65,18 @@ struct Diffusion_state
       return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
     };
     if(s == 0 || sample_positions.size() != 3 * s || deformed_sample_positions.size() != 3 * s ||
-       motions.size() != 12 * s)
-      throw Invalid_input("diffusion state: needs 3 sample positions, 3 deformed positions and 12 motion numbers "
-                          "per sample point, at least one sample point");
-    if(!finite(sample_positions) || !finite(deformed_sample_positions) || !finite(motions))
-      throw Invalid_input("diffusion state: a sample position or motion is not finite");
+       motions.size() != 12 * s || region_samples.size() != s)
+      throw Invalid_input("diffusion state: needs 3 sample positions, 3 deformed positions, 12 motion numbers and "
+                          "a region flag per sample point, at least one sample point");
+    if(handle_transforms.size() % 7 != 0)
+      throw Invalid_input("diffusion state: needs 7 numbers per handle group's transform");
+    if(!finite(sample_positions) || !finite(deformed_sample_positions) || !finite(motions) ||
+       !finite(handle_transforms) || !(std::isfinite(collar_reach) && collar_reach >= 0))
+      throw Invalid_input("diffusion state: a sample position, motion, transform or the collar's reach is not finite");
+    for(std::size_t g = 0; g < number_of_handle_groups(); ++g)
+      if(std::abs(Eigen::Map<const Eigen::Vector4d>(&handle_transforms[7 * g]).norm() - 1) > 1e-6)
+        throw Invalid_input("diffusion state: the rotation of handle group " + std::to_string(g) +
+                            " is not a unit quaternion");
     if(stencil_size < 1 || stencil_size > s)
       throw Invalid_input("diffusion state: stencil_size must be between 1 and the number of sample points (" +
                           std::to_string(s) + "), not " + std::to_string(stencil_size));
@@ -137,9 +162,17 @@ public:
     for(std::size_t j = 0; j < s; ++j)
       for(int r = 0; r < 3; ++r)
         for(int c = 0; c < 4; ++c) out.motions[12 * j + std::size_t(4 * r + c)] = sample_motion(j)(r, c);
+    for(int label : m_sample_labels) out.region_samples.push_back(label != internal::fixed_label ? 1 : 0);
+    for(const internal::Rigid_transform& T : m_selection.transforms) {
+      const Eigen::Quaterniond& q = T.rotation;
+      const Eigen::Vector3d& t = T.translation;
+      out.handle_transforms.insert(out.handle_transforms.end(), {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()});
+    }
     out.stencil_size = stencil_size();
     out.origin = m_settings.diffusion_origin;
     out.portable = m_settings.portable_diffusion;
+    out.exact_handles = std::isinf(m_settings.handle_weight);
+    out.collar_reach = m_diffusion.collar.reach;
     return out;
   }
 
@@ -147,11 +180,11 @@ public:
   // Built by Detail_preserving_deformation::diffusion_view() over its parts.
   Diffusion_view(const internal::Point_diffusion& diffusion, const internal::Spatial_point_cloud& cloud,
                  const std::vector<int>& row_of, const Matrix_n3& normals, const Matrix_n3& sample_positions,
-                 const Matrix_n3& deformed_samples, const internal::Edit_selection& selection,
-                 const Detail_preserving_deformation_settings& settings)
+                 const std::vector<int>& sample_labels, const Matrix_n3& deformed_samples,
+                 const internal::Edit_selection& selection, const Detail_preserving_deformation_settings& settings)
       : m_diffusion(diffusion), m_cloud(cloud), m_row_of(row_of), m_normals(normals),
-        m_sample_positions(sample_positions), m_deformed_samples(deformed_samples), m_selection(selection),
-        m_settings(settings)
+        m_sample_positions(sample_positions), m_sample_labels(sample_labels), m_deformed_samples(deformed_samples),
+        m_selection(selection), m_settings(settings)
   {}
   /// \endcond
 
@@ -166,6 +199,7 @@ private:
   const std::vector<int>& m_row_of;
   const Matrix_n3& m_normals;
   const Matrix_n3& m_sample_positions;
+  const std::vector<int>& m_sample_labels;
   const Matrix_n3& m_deformed_samples;
   const internal::Edit_selection& m_selection;
   const Detail_preserving_deformation_settings& m_settings;

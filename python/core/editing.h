@@ -238,9 +238,13 @@ public:
     std::copy(state.sample_positions.begin(), state.sample_positions.end(), positions.mutable_data());
     std::copy(state.deformed_sample_positions.begin(), state.deformed_sample_positions.end(), deformed.mutable_data());
     std::copy(state.motions.begin(), state.motions.end(), motions.mutable_data());
+    py::array_t<double> transforms({py::ssize_t(state.number_of_handle_groups()), py::ssize_t(7)});
+    std::copy(state.handle_transforms.begin(), state.handle_transforms.end(), transforms.mutable_data());
     return py::dict("sample_positions"_a = positions, "deformed_sample_positions"_a = deformed, "motions"_a = motions,
-                    "stencil_size"_a = state.stencil_size, "origin"_a = setting_name(state.origin),
-                    "portable"_a = state.portable);
+                    "region_samples"_a = py::array_t<std::uint8_t>(s, state.region_samples.data()),
+                    "handle_transforms"_a = transforms, "stencil_size"_a = state.stencil_size,
+                    "origin"_a = setting_name(state.origin), "portable"_a = state.portable,
+                    "exact_handles"_a = state.exact_handles, "collar_reach"_a = state.collar_reach);
   }
 
   py::dict statistics() const
@@ -375,29 +379,54 @@ private:
 };
 
 /// diffuse_points() with a Deformation.diffusion_state() dict: the moved points and normals, new arrays.
-Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state)
+Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state,
+                                     const Optional_array_like& selection)
 {
-  Diffusion_state parsed;
-  const auto rows = [&](const char* key, py::ssize_t columns, py::ssize_t depth, std::vector<double>& out) {
+  const auto entry = [&](const char* key) -> py::object {
     if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
-    const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(state[key]);
-    const bool shaped =
-      array && array.ndim() == (depth ? 3 : 2) && array.shape(1) == columns && (!depth || array.shape(2) == depth);
-    if(!shaped)
-      throw py::value_error(std::string("the diffusion state's '") + key + "' must be a float array of shape (s, " +
-                            std::to_string(columns) + (depth ? ", " + std::to_string(depth) : std::string()) + ")");
-    out.assign(array.data(), array.data() + array.size());
+    return state[key];
   };
-  rows("sample_positions", 3, 0, parsed.sample_positions);
-  rows("deformed_sample_positions", 3, 0, parsed.deformed_sample_positions);
-  rows("motions", 3, 4, parsed.motions);
-  for(const char* key : {"stencil_size", "origin", "portable"})
-    if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
-  parsed.stencil_size = as_count(state["stencil_size"].cast<long long>(), "stencil_size");
-  parsed.origin = parse_setting<Diffusion_origin>(state["origin"].cast<std::string>(), "origin");
-  parsed.portable = state["portable"].cast<bool>();
+  // The array `key` of shape (any, tail...), as doubles.
+  const auto values = [&](const char* key, std::vector<py::ssize_t> tail) {
+    const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(entry(key));
+    bool shaped = array && array.ndim() == py::ssize_t(1 + tail.size());
+    for(std::size_t d = 0; shaped && d < tail.size(); ++d) shaped = array.shape(py::ssize_t(1 + d)) == tail[d];
+    if(!shaped) {
+      std::string shape = "(s";
+      for(py::ssize_t d : tail) shape += ", " + std::to_string(d);
+      throw py::value_error(std::string("the diffusion state's '") + key + "' must be a float array of shape " + shape +
+                            ")");
+    }
+    return std::vector<double>(array.data(), array.data() + array.size());
+  };
+  Diffusion_state parsed;
+  parsed.sample_positions = values("sample_positions", {3});
+  parsed.deformed_sample_positions = values("deformed_sample_positions", {3});
+  parsed.motions = values("motions", {3, 4});
+  for(double flag : values("region_samples", {})) parsed.region_samples.push_back(flag != 0 ? 1 : 0);
+  parsed.handle_transforms = values("handle_transforms", {7});
+  parsed.stencil_size = as_count(entry("stencil_size").cast<long long>(), "stencil_size");
+  parsed.origin = parse_setting<Diffusion_origin>(entry("origin").cast<std::string>(), "origin");
+  parsed.portable = entry("portable").cast<bool>();
+  parsed.exact_handles = entry("exact_handles").cast<bool>();
+  parsed.collar_reach = entry("collar_reach").cast<double>();
   const Point_input input(points, normals);
   const std::size_t n = input.size();
+  std::vector<int> selected;
+  if(!selection.is_none()) {
+    const auto array = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(selection);
+    if(!array || array.ndim() != 1 || std::size_t(array.shape(0)) != n)
+      throw py::value_error("selection must be an integer array of shape (" + std::to_string(n) + ",)");
+    const long long groups = (long long)parsed.number_of_handle_groups();
+    for(py::ssize_t i = 0; i < array.shape(0); ++i) {
+      const long long value = array.data()[i];
+      if(value < Diffusion_state::fixed || value >= groups)
+        throw py::value_error("selection of point " + std::to_string(i) + " is " + std::to_string(value) +
+                              ": -2 (fixed), -1 (region) or a handle group (" + std::to_string(groups) +
+                              " in the state)");
+      selected.push_back(int(value));
+    }
+  }
   auto [moved, moved_rows] = new_rows3(n);
   auto [moved_normals, moved_normal_rows] = new_rows3(n);
   for(std::size_t i = 0; i < n; ++i)
@@ -407,9 +436,12 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
     }
   without_gil([&, moved_rows = moved_rows, moved_normal_rows = moved_normal_rows] {
     Index_range all = all_points(n);
-    CGAL_ext::diffuse_points(
-      all, parsed,
-      CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows}));
+    const auto np =
+      CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows});
+    if(selected.empty() && selection.is_none())
+      CGAL_ext::diffuse_points(all, parsed, np);
+    else
+      CGAL_ext::diffuse_points(all, parsed, CGAL_ext::parameters::selection_map(Array_map<int>{selected.data()}, np));
     return 0;
   });
   return py::reinterpret_borrow<py::object>(result_types.deformed)(moved, moved_normals);

@@ -355,34 +355,41 @@ def test_a_handle_outside_the_region_is_a_value_error(sphere):
 
 def test_points_a_deformation_was_not_built_on_move_by_its_diffusion_state(sphere):
     """diffuse_points() with diffusion_state(), as a tiled edit's worker uses them: the deformation's own points,
-    shuffled, land where diffuse() puts them, bit for bit (but the exact handles and the collar, which the
-    selection decides); the state survives pickling (Dask sends it so); a bad state is a ValueError."""
+    shuffled, with their selection, land where diffuse() puts them, bit for bit, exact handles and collar included;
+    the state survives pickling (Dask sends it so); a bad state or selection is a ValueError."""
     import pickle
     points, normals = sphere
-    deformation = cgal_ext.Deformation(points, normals)
-    deformation.insert_roi(np.flatnonzero(points[:, 2] > 0.0))
-    deformation.create_handle_group(np.flatnonzero(points[:, 2] > 0.8))
+    region, handle = points[:, 2] > 0.0, points[:, 2] > 0.8
+    deformation = cgal_ext.Deformation(points, normals, rotations="arap")
+    deformation.insert_roi(np.flatnonzero(region))
+    deformation.create_handle_group(np.flatnonzero(handle))
     turn = np.array([[np.cos(0.5), 0, np.sin(0.5)], [0, 1, 0], [-np.sin(0.5), 0, np.cos(0.5)]])
     deformation.set_handle_transform(0, turn, np.array([0.1, 0.0, 0.2]))
     deformation.deform()
     diffused = deformation.diffuse()
     state = pickle.loads(pickle.dumps(deformation.diffusion_state()))
     assert state["motions"].shape == (deformation.number_of_sample_points(), 3, 4)
-    setup = deformation.renderer_setup()
-    decided = setup["exact_handle"].astype(bool)
-    decided[setup["collar_points"]] = True
+    assert state["handle_transforms"].shape == (1, 7) and state["exact_handles"] and state["collar_reach"] > 0
+    selection = np.where(handle, 0, np.where(region, -1, -2))
     order = np.random.default_rng(5).permutation(len(points))
-    moved = cgal_ext.diffuse_points(points[order], normals[order], state)
-    free = ~decided[order]
-    assert np.array_equal(moved.points[free], diffused.points[order][free])
-    assert np.array_equal(moved.normals[free], diffused.normals[order][free])
-    assert np.count_nonzero(np.any(moved.points != points[order], axis=1)) > len(points) // 4
+    moved = cgal_ext.diffuse_points(points[order], normals[order], state, selection=selection[order])
+    assert np.array_equal(moved.points, diffused.points[order])
+    assert np.array_equal(moved.normals, diffused.normals[order])
+    collar = deformation.renderer_setup()["collar_points"]
+    assert len(collar) > 0 and np.count_nonzero(np.any(moved.points != points[order], axis=1)) > len(points) // 4
+    # Without the selection, the handles and the collar follow the blend alone.
+    blended = cgal_ext.diffuse_points(points, normals, state).points
+    assert not np.array_equal(blended[handle], diffused.points[handle])
     with pytest.raises(ValueError, match="has no 'motions'"):
         cgal_ext.diffuse_points(points, normals, {k: v for k, v in state.items() if k != "motions"})
     with pytest.raises(ValueError, match="'motions' must be a float array of shape"):
         cgal_ext.diffuse_points(points, normals, {**state, "motions": state["motions"][:, :2]})
     with pytest.raises(ValueError, match="stencil_size"):
         cgal_ext.diffuse_points(points, normals, {**state, "stencil_size": 0})
+    with pytest.raises(ValueError, match="selection of point 3 is 1"):
+        cgal_ext.diffuse_points(points, normals, state, selection=np.where(np.arange(len(points)) == 3, 1, -1))
+    with pytest.raises(ValueError, match="unit quaternion"):
+        cgal_ext.diffuse_points(points, normals, {**state, "handle_transforms": 2 * state["handle_transforms"]})
 
 
 def test_progress_is_reported_and_an_exception_from_it_cancels(sphere):

@@ -40,13 +40,15 @@ public:
   std::vector<int> stepping_handles;       ///< the distinct handles of `entries` (indices into `handle_rows`)
   std::vector<int> stepping_handle_points; ///< their input indices
   std::vector<int> slots;                  ///< per entry, its handle's place in `stepping_handles`
+  double reach = 0;                        ///< r, 0 without a collar
 
   /// `labels` per row; `moving_rows`: the rows a region sample point carries; `stencil` over `samples`, the
-  /// diffusion's. Without `exact_handles` there is neither; without `with_collar`, no collar.
+  /// diffusion's. Without `exact_handles` there is neither; without `with_collar`, no collar. `given_reach`: r
+  /// as another collar measured it over all the handle points (a part of a scan's has only some), else 0.
   template <typename ConcurrencyTag>
   void setup(const Spatial_point_cloud& cloud, const std::vector<int>& labels, std::size_t groups, bool exact_handles,
              bool with_collar, const Diffusion_stencil& stencil, const Matrix_n3& samples,
-             const std::vector<int>& moving_rows)
+             const std::vector<int>& moving_rows, double given_reach = 0)
   {
     *this = Handle_collar();
     if(exact_handles)
@@ -58,8 +60,9 @@ public:
     m_steps.resize(Eigen::Index(handle_rows.size()), 3);
     m_normal_steps.resize(Eigen::Index(handle_rows.size()), 3);
     if(handle_rows.empty() || !with_collar) return;
-    const double r = 2 * median_stencil_reach(cloud.positions, stencil, samples);
+    const double r = given_reach > 0 ? given_reach : 2 * median_stencil_reach(cloud.positions, stencil, samples);
     if(!(r > 0)) return;
+    reach = r;
     struct Entry { int row, handle; double weight; };
     std::vector<Entry> found;
     for(std::size_t g = 0; g < groups; ++g) {
