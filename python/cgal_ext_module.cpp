@@ -539,8 +539,10 @@ void bind_deformation(py::module_& m)
     .def("diffusion_state", &Deformation::diffusion_state,
          "After deform(): the sample points' side of the drag, as a dict of ``sample_positions`` and\n"
          "``deformed_sample_positions`` (s, 3), ``motions`` (s, 3, 4: a point p carried by sample point j alone moves\n"
-         "by motions[j] @ (p, 1)), ``stencil_size``, ``origin`` and ``portable``: what diffuse_points() needs to\n"
-         "move points this deformation was not built on, in this process or another (a tiled edit's workers).")
+         "by motions[j] @ (p, 1)), ``region_samples`` (s,), ``handle_transforms`` (g, 7: quaternion w, x, y, z and\n"
+         "translation), ``stencil_size``, ``origin``, ``portable``, ``exact_handles`` and ``collar_reach``: what\n"
+         "diffuse_points() needs to move points this deformation was not built on, in this process or another (a\n"
+         "tiled edit's workers).")
     .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)

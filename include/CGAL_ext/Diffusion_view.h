@@ -56,8 +56,8 @@ struct Diffusion_state
   std::size_t number_of_sample_points() const { return sample_positions.size() / 3; }
   std::size_t number_of_handle_groups() const { return handle_transforms.size() / 7; }
 
-  /// \throws Invalid_input if the arrays' sizes disagree, a number is not finite, or `stencil_size` is 0 or
-  /// more than the sample points.
+  /// \throws Invalid_input if the arrays' sizes disagree, a number is not finite, a rotation is not a unit
+  /// quaternion, or `stencil_size` is 0 or more than the sample points.
   void validate() const
   {
     const std::size_t s = number_of_sample_points();
@@ -146,7 +146,8 @@ public:
                                    normal_step);
   }
 
-  /// The sample points' positions and motions, for `diffuse_points()` in this process or another.
+  /// The sample points' positions, motions and region flags, the handle groups' transforms and the collar's
+  /// reach, for `diffuse_points()` in this process or another.
   /// \throws Invalid_input before the first `Detail_preserving_deformation::update_sample_motions()` (or
   /// `diffuse()`) since `preprocess()`.
   Diffusion_state state() const

@@ -438,7 +438,7 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
     Index_range all = all_points(n);
     const auto np =
       CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows});
-    if(selected.empty() && selection.is_none())
+    if(selection.is_none())
       CGAL_ext::diffuse_points(all, parsed, np);
     else
       CGAL_ext::diffuse_points(all, parsed, CGAL_ext::parameters::selection_map(Array_map<int>{selected.data()}, np));

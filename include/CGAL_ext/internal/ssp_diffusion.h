@@ -454,7 +454,7 @@ template <typename ConcurrencyTag>
 void Diffusion_stencil::setup(const Matrix_n3& points, const Matrix_n3& sample_positions, std::size_t m,
                               const std::vector<int>* sample_of_point)
 {
-  m_records.clear(); // the motions of other sample points
+  m_records.clear(); // those of the sample points before, which may be others
   const std::size_t count = std::size_t(sample_positions.rows());
   const bool bounded = count > m; // else every sample point is in every stencil, which then never changes
   const std::size_t wanted = bounded ? m + 1 : count;
