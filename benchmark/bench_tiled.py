@@ -79,18 +79,16 @@ def program_run(args, tmp, scan):
     return wall, time.perf_counter() - start
 
 
-def tiled_command(tmp, scan):
-    """One run of the tiled command as a user types it: its wall time, its report, the peak resident memory of
-    its largest worker and its own."""
-    output, report = os.path.join(tmp, "tiled.ply"), os.path.join(tmp, "report.json")
+def tiled_command(arguments, report):
+    """One run of `python3 -m cgal_ext.tiled ARGUMENTS --report REPORT` as a user types it: its wall time, its
+    report, the peak resident memory of its largest worker and its own."""
     with PeakMemory() as memory:
         start = time.perf_counter()
-        command = subprocess.Popen([sys.executable, "-m", "cgal_ext.tiled", "details", scan, "-o", output,
-                                    "--report", report], stdout=subprocess.DEVNULL)
+        command = subprocess.Popen([sys.executable, "-m", "cgal_ext.tiled", *arguments, "--report", report],
+                                   stdout=subprocess.DEVNULL)
         if command.wait():
-            raise SystemExit(f"bench_tiled: the tiled command failed on {scan} (status {command.returncode})")
+            raise SystemExit(f"the tiled command failed: {' '.join(arguments)} (status {command.returncode})")
         seconds = time.perf_counter() - start
-    os.remove(output)
     with open(report) as f:
         result = json.load(f)
     workers = [peak for pid, peak in memory.peaks.items() if pid != command.pid]
@@ -138,7 +136,10 @@ def main():
                 for _ in range(reps.get(n, 1)):
                     for measure, value in zip((wall, compute), program_run(args, tmp, baseline)):
                         measure.append(value)
-                    seconds, report, worker_peak, command_peak = tiled_command(tmp, scan)
+                    output = os.path.join(tmp, "tiled.ply")
+                    seconds, report, worker_peak, command_peak = tiled_command(
+                        ["details", scan, "-o", output], os.path.join(tmp, "report.json"))
+                    os.remove(output)
                     times.append(seconds)
                     worker_peaks.append(worker_peak)
                     command_peaks.append(command_peak)

@@ -14,7 +14,6 @@ The armadillo, the fandisk (a CAD part with sharp creases) and the lion head at 
 (--quick: the armadillo at 1M). Writes OUT/tiled_simplify_results.csv and .md.
 Usage: PYTHONPATH=build/python benchmark/bench_tiled_simplify.py --out DIR [--build build] [--data data] [--quick]
 """
-import json
 import os
 import subprocess
 import sys
@@ -27,7 +26,7 @@ import cgal_ext
 from cgal_ext._process import reexecute_tuned
 
 from bench_python import harness_arguments, median
-from bench_tiled import PeakMemory, sample, write_results
+from bench_tiled import sample, tiled_command, write_results
 
 BUDGET = 1.5  # the most sample points per target count, the program's rule
 
@@ -37,22 +36,6 @@ def program_simplify(args, scan, output):
     subprocess.run([os.path.join(args.build, "src", "point-detail"), "-q", "simplify", "-i", scan, "-o", output],
                    check=True, capture_output=True)
     return time.perf_counter() - start
-
-
-def tiled_simplify(scan, output, report):
-    """Wall time, report, and the peak resident memory of the largest worker and of the command itself (the
-    client, which holds the subsample) as a user types it."""
-    with PeakMemory() as memory:
-        start = time.perf_counter()
-        command = subprocess.Popen([sys.executable, "-m", "cgal_ext.tiled", "simplify", scan, "-o", output,
-                                    "--report", report], stdout=subprocess.DEVNULL)
-        if command.wait():
-            raise SystemExit(f"bench_tiled_simplify: the tiled command failed on {scan} ({command.returncode})")
-        seconds = time.perf_counter() - start
-    with open(report) as f:
-        result = json.load(f)
-    workers = [peak for pid, peak in memory.peaks.items() if pid != command.pid]
-    return seconds, result, max(workers), memory.peaks.get(command.pid, 0)
 
 
 def main():
@@ -73,8 +56,8 @@ def main():
             for _ in range(reps):
                 if with_program:
                     program_times.append(program_simplify(args, scan, program_output))
-                seconds, report, peak, client_peak = tiled_simplify(scan, tiled_output,
-                                                                    os.path.join(tmp, "report.json"))
+                seconds, report, peak, client_peak = tiled_command(["simplify", scan, "-o", tiled_output],
+                                                                   os.path.join(tmp, "report.json"))
                 tiled_times.append(seconds)
                 peaks.append(peak)
                 client_peaks.append(client_peak)

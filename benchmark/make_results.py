@@ -333,7 +333,7 @@ STAGE_FILES = [("bench_simplification", "simplification_results.csv"), ("bench_u
                ("bench_details", "details_results.csv"), ("bench_python", "python_results.csv"),
                ("bench_studio", "studio_results.csv"), ("studio_on_models", "studio_models_results.csv"),
                ("bench_tiled", "tiled_results.csv"), ("bench_drag", "drag_results.csv"),
-               ("bench_tiled_simplify", "tiled_simplify_results.csv")]
+               ("bench_tiled_simplify", "tiled_simplify_results.csv"), ("bench_tiled_edit", "tiled_edit_results.csv")]
 
 
 def long_rows(out_dir):
@@ -383,7 +383,8 @@ def main():
                "[SSPs](simplification_results.md), [curvature](curvature_results.md), [normals](normals_results.md), "
                "[detail scaling](scaling_results.md), [details](details_results.md), [memory](memory_results.md), "
                "[raw scans](raw_scan_results.md), [Python](python_results.md), [drags at scale](drag_results.md), [studio](studio_results.md) ([on CGAL's models](studio_models_results.md)), "
-               "[tiled runs on Dask](tiled_results.md) ([sample points](tiled_simplify_results.md)).\n")
+               "[tiled runs on Dask](tiled_results.md) ([sample points](tiled_simplify_results.md), "
+               "[edit](tiled_edit_results.md)).\n")
     table(out, ["machine", ""], machine_facts(build_dir, threads))
     table1_section(out, editing)
     peers_section(out, editing, simplification, upsampling, curvature,

@@ -21,9 +21,10 @@
 #include <CGAL_ext/scale_geometric_details.h>
 #include <CGAL_ext/upsample_point_set.h>
 
-#include "program_basics.h"
 #include "colors.h"
+#include "edit_spec.h"
 #include "point_io.h"
+#include "program_basics.h"
 #include "render.h"
 
 #include <CGAL/Simple_cartesian.h>
@@ -547,6 +548,10 @@ void bind_deformation(py::module_& m)
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)
     .def("__repr__", &Deformation::repr);
+  m.def("_read_edit", &read_edit, "path"_a, "points"_a,
+        "The program's reading of an edit JSON with its selections evaluated on the points: a dict of ``roi``\n"
+        "(int64 indices), ``handles`` (per group a dict of ``points``, ``rotation`` (3, 3) and ``translation``) and\n"
+        "``settings`` (Deformation's keywords). A file the program refuses is a ValueError with its message.");
   m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a, py::kw_only(),
         "selection"_a = py::none(),
         "Moves points a Deformation was not built on (a denser sampling of the same surface, a tile of a larger\n"

@@ -378,6 +378,37 @@ private:
   std::function<bool(double)> m_callback;
 };
 
+/// The program's reading of an edit JSON (`point-detail edit --edit FILE`) with its selections evaluated on
+/// `points`: the region's and each handle group's point indices, the groups' transforms and the settings under
+/// Deformation's keywords. The tiled edit reads its file so, on the subsample its client deforms.
+py::dict read_edit(const Path_like& path_object, const Array_like& points)
+{
+  const fs::path path = path_of(path_object, "path");
+  const Point_input input(points, py::none());
+  std::vector<point_detail::Point> copy;
+  copy.reserve(input.size());
+  for(std::size_t i = 0; i < input.size(); ++i)
+    copy.emplace_back(input.point_rows.at(i, 0), input.point_rows.at(i, 1), input.point_rows.at(i, 2));
+  const point_detail::Edit_description edit =
+    translating_program_errors([&] { return point_detail::read_edit_json(path, copy); });
+  const auto as_array = [](const std::vector<std::size_t>& indices) {
+    py::array_t<std::int64_t> out(py::ssize_t(indices.size()));
+    std::copy(indices.begin(), indices.end(), out.mutable_data());
+    return out;
+  };
+  py::list handles;
+  for(const point_detail::Handle_edit& h : edit.handles) {
+    py::array_t<double> rotation({py::ssize_t(3), py::ssize_t(3)}), translation(py::ssize_t(3));
+    for(int r = 0; r < 3; ++r) {
+      translation.mutable_data()[r] = h.translation(r);
+      for(int c = 0; c < 3; ++c) rotation.mutable_data()[3 * r + c] = h.rotation(r, c);
+    }
+    handles.append(py::dict("points"_a = as_array(h.points), "rotation"_a = rotation, "translation"_a = translation));
+  }
+  return py::dict("roi"_a = as_array(edit.roi), "handles"_a = handles,
+                  "settings"_a = deformation_settings_dict(edit.settings));
+}
+
 /// diffuse_points() with a Deformation.diffusion_state() dict: the moved points and normals, new arrays.
 Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state,
                                      const Optional_array_like& selection)

@@ -1,6 +1,7 @@
 # The tiled runs on Dask (cgal_ext.tiled): a 2M-point analytic shape in 8 tiles on a LocalCluster of 2 workers
 # against the one-process calls, a halo too small, a worker killed mid-run, unreadable tiles and bad inputs.
 import glob
+import json
 import os
 import signal
 import subprocess
@@ -647,3 +648,96 @@ def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
     with pytest.raises(tiled.TiledError, match="point 777 has a non-finite coordinate"):
         tiled.run("simplify", tmp_path / "inf.zarr", out, client=client)
     assert not list(tmp_path.glob("ssps*")) and no_leftovers(tmp_path, "ssps.ply")
+
+
+def edit_file(folder, roi="sphere:0,0,1,0.8", handle="sphere:0,0,1,0.25", name="edit.json", **extra):
+    """A raise-and-turn of the sphere's top: the program's edit JSON."""
+    path = folder / name
+    path.write_text(json.dumps({"roi": [roi], "handles": [{"select": [handle], "translation": [0.1, 0, 0.15],
+                                                           "rotation": {"axis": [1, 0, 0], "degrees": 20},
+                                                           "pivot": [0, 0, 1]}], **extra}))
+    return path
+
+
+def client_subsample(points, normals, size):
+    """The subsample the tiled edit's client deforms, sorted as it sorts it."""
+    keep = np.ones(len(points), dtype=bool)
+    if size < len(points):
+        keep = tiled.simplify.coordinate_hash(points) <= np.uint64(int(size / len(points) * 2.0**64))
+    p, n = points[keep] + 0.0, tiled.simplify.unit_normals(normals[keep])[0] + 0.0
+    order = np.lexsort((*n.T[::-1], *p.T[::-1]))
+    return p[order], n[order]
+
+
+def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusion(scan, client, tmp_path):
+    """The tiled edit is the library's Deformation on the client's subsample, its diffusion carried to every point
+    by diffuse_points in the tiles, handles and collar included: on the whole scan (a subsample as large) it is
+    the one-process diffuse(); on a subsample of 30,000 of the 100,000 points, diffuse_points of all of them. The
+    same result whatever the tiles and the order of the points."""
+    edit = edit_file(tmp_path)
+    points, normals = scan.small_points, scan.small_normals
+    report = tiled.run("edit", scan.small, tmp_path / "whole.ply", client=client, tiles=8, edit=edit)
+    assert report["subsample"] == len(points) and report["collar_reach"] > 0
+    sub_points, sub_normals = client_subsample(points, normals, len(points))
+    program = cgal_ext._core._read_edit(edit, sub_points)
+    deformation = cgal_ext.Deformation(sub_points, sub_normals, **program["settings"])
+    deformation.insert_roi(program["roi"])
+    handle = program["handles"][0]
+    deformation.create_handle_group(handle["points"])
+    deformation.set_handle_transform(0, handle["rotation"], handle["translation"])
+    deformation.deform()
+    expected = deformation.diffuse()
+    out = read_output(tmp_path / "whole.ply")
+    at = {tuple(p): i for i, p in enumerate(sub_points)}
+    rows = np.array([at[tuple(p)] for p in points])
+    assert np.abs(columns(out, "xyz") - expected.points[rows]).max() <= 1e-12
+    assert np.abs(columns(out, ("nx", "ny", "nz")) - expected.normals[rows]).max() <= 1e-12
+    on_handle = np.zeros(len(points), dtype=bool)
+    on_handle[np.argsort(rows)[handle["points"]]] = True  # the handle's points in the scan's order
+    assert np.abs(columns(out, "xyz")[on_handle] - (points[on_handle] @ handle["rotation"].T + handle["translation"])
+                  ).max() <= 1e-12
+    moved = np.linalg.norm(columns(out, "xyz") - points, axis=1) > 1e-6
+    assert 0 < moved.sum() < len(points) and on_handle.sum() > 0
+
+    report = tiled.run("edit", scan.small, tmp_path / "eight.ply", client=client, tiles=8, edit=edit,
+                       subsample=30_000)
+    sub_points, sub_normals = client_subsample(points, normals, 30_000)
+    assert report["subsample"] == len(sub_points) < 40_000
+    program = cgal_ext._core._read_edit(edit, sub_points)
+    deformation = cgal_ext.Deformation(sub_points, sub_normals, **program["settings"])
+    deformation.insert_roi(program["roi"])
+    deformation.create_handle_group(program["handles"][0]["points"])
+    deformation.set_handle_transform(0, program["handles"][0]["rotation"], program["handles"][0]["translation"])
+    deformation.deform()
+    selection = tiled.edit.Edit(edit=edit).selection(points)
+    expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection)
+    eight = read_output(tmp_path / "eight.ply")
+    assert np.abs(columns(eight, "xyz") - expected.points).max() <= 1e-12
+    assert np.abs(columns(eight, ("nx", "ny", "nz")) - expected.normals).max() <= 1e-12
+    # Other tiles, and the points in another order: the same bits.
+    tiled.run("edit", scan.small, tmp_path / "five.ply", client=client, tiles=5, edit=edit, subsample=30_000)
+    order = np.random.default_rng(11).permutation(len(points))
+    cgal_ext.write_ply(tmp_path / "shuffled.ply", points[order], normals[order])
+    tiled.run("edit", tmp_path / "shuffled.ply", tmp_path / "shuffled_out.ply", client=client, tiles=8, edit=edit,
+              subsample=30_000)
+    five, shuffled = read_output(tmp_path / "five.ply"), read_output(tmp_path / "shuffled_out.ply")
+    for name in ("x", "y", "z", "nx", "ny", "nz"):
+        assert np.array_equal(five[name], eight[name])
+        assert np.array_equal(shuffled[name], eight[name][order])
+
+
+def test_a_bad_edit_fails_before_any_tile_with_nothing_written(scan, client, tmp_path):
+    cases = [(edit_file(tmp_path, roi="sphere:5,5,5,0.1", name="far.json"), "roi selects none"),
+             (edit_file(tmp_path, handle="indices:handle.txt", name="indices.json"), "names points by index"),
+             (edit_file(tmp_path, handle="sphere:0,0,-1,0.2", name="outside.json"), "outside the region of interest"),
+             (edit_file(tmp_path, rotations="sideways", name="sideways.json"), "rotations must be"),
+             (tmp_path / "missing.json", "cannot read")]
+    for path, message in cases:
+        with pytest.raises(tiled.TiledError, match=message):
+            tiled.run("edit", scan.small, tmp_path / "out.ply", client=client, tiles=4, edit=path, subsample=30_000)
+        assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
+    (tmp_path / "chain.json").write_text(json.dumps({"steps": [{"type": "fill"}]}))
+    with pytest.raises(tiled.TiledError, match="not a chain of steps"):
+        tiled.run("edit", scan.small, tmp_path / "out.ply", client=client, edit=tmp_path / "chain.json")
+    with pytest.raises(tiled.TiledError, match="needs the edit JSON"):
+        tiled.run("edit", scan.small, tmp_path / "out.ply", client=client)

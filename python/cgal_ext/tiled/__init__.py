@@ -18,13 +18,13 @@ import uuid
 from pathlib import Path
 
 from .._process import tuned_environment
-from . import ops, simplify
+from . import edit, ops, simplify
 from .runner import Passes, Run, timed
 from .store import TiledError, checked_output, open_source
 
 __all__ = ["TiledError", "run", "OPERATIONS"]
 
-OPERATIONS = (*ops.OPERATIONS, "simplify")
+OPERATIONS = (*ops.OPERATIONS, "simplify", "edit")
 
 
 def run(operation, input, output, *, scheduler=None, client=None, workers=None, memory_limit="auto", tiles=None,
@@ -33,9 +33,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
 
     Parameters
     ----------
-    operation : {"details", "normals", "curvature", "enhance", "simplify"}
+    operation : {"details", "normals", "curvature", "enhance", "simplify", "edit"}
         What to compute; the output holds the fields of the program's PLY for that subcommand (for "simplify",
-        the surfels: position, normal, radius, member_count).
+        the surfels: position, normal, radius, member_count; for "edit", the moved points and normals).
     input : path
         A binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group with 1-D arrays x, y, z (and nx,
         ny, nz).
@@ -71,7 +71,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         (`k`, `fitting`), normals (`k`), enhance (`s`, `k`, `order`, `lam`, `mu`, `weights`, `margin` in
         neighbourhood radii), simplify (`target_count`, `mode_threshold`, `k`; `subsample`, the points the
         client clusters, 1,000,000 by default; `clusters`, a PLY or Zarr path for the scan with each point's
-        `ssp_index` and its cluster's colour, as `point-detail simplify --clusters` writes it).
+        `ssp_index` and its cluster's colour, as `point-detail simplify --clusters` writes it), edit (`edit`, the
+        path of an edit JSON as `point-detail edit --edit` reads it, its regions as sphere: and box: specs;
+        `subsample`, the points the client deforms, 1,000,000 by default).
 
     Returns
     -------
@@ -92,6 +94,10 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             raise TiledError("simplify: has no tiles, no halo and no library call in its tasks; tiles, halo and "
                              "threads_per_task are not taken")
         op = simplify.options(source, output, **options)
+    elif operation == "edit":
+        if "edit" not in options:
+            raise TiledError("edit: needs the edit JSON (edit=PATH, --edit PATH)")
+        op = edit.Edit(**options)
     else:
         op = ops.operation(operation, **options)
     scratch_root = Path(scratch) if scratch else output.parent
@@ -105,7 +111,10 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
             report = simplify.simplify(Passes(client, progress, log, {"operation": operation}), source, output, folder,
                                        **op)
         else:
-            report = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log).execute()
+            runner = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log)
+            if operation == "edit":
+                op.prepare(runner, source)
+            report = runner.execute()
         with timed(report["client_seconds"], "remove scratch"):
             shutil.rmtree(folder)
         return report

@@ -1,5 +1,5 @@
-"""python3 -m cgal_ext.tiled details|normals|curvature|enhance|simplify INPUT -o OUTPUT [options]: a tiled run on
-Dask."""
+"""python3 -m cgal_ext.tiled details|normals|curvature|enhance|simplify|edit INPUT -o OUTPUT [options]: a tiled
+run on Dask."""
 import argparse
 import json
 import sys
@@ -12,8 +12,8 @@ S = argparse.SUPPRESS  # options left out are left to the library's defaults
 def parser():
     main = argparse.ArgumentParser(
         prog="python3 -m cgal_ext.tiled",
-        description="Details, normals, curvature, enhancement or sample points of a scan larger than memory, tile by "
-                    "tile on Dask. "
+        description="Details, normals, curvature, enhancement, sample points or an edit of a scan larger than memory, "
+                    "tile by tile on Dask. "
                     "The input is a binary PLY, binary PCD or LAS file (read by row ranges) or a Zarr group; the "
                     "output OUT.ply or OUT.zarr holds the fields of the program's PLY for the same subcommand and is "
                     "written whole or not at all.")
@@ -70,6 +70,13 @@ def parser():
     simplify.add_argument("-k", type=int, default=S, help="mean-shift neighbours")
     simplify.add_argument("--clusters", default=S,
                           help="also write the scan with each point's ssp_index and cluster colour (PLY or Zarr)")
+    edit = command("edit", "the detail-preserving edit of an edit JSON (sphere: and box: region specs): its sample "
+                           "points, solve and motions on a subsample on the client, every point diffused tile by "
+                           "tile with its exact handles and collar (the details are not restored after the "
+                           "diffusion yet)")
+    edit.add_argument("--edit", required=True, help="the edit JSON, as point-detail edit --edit reads it")
+    edit.add_argument("--subsample", type=int, default=S,
+                      help="points the client deforms (default 1,000,000; a smaller scan is deformed whole)")
     return main
 
 

@@ -42,6 +42,7 @@ class Operation:
     symmetric = False  # on the symmetrised kNN graph: the certificate assumes a reach, verified after the tiles
     banded = True  # the certificate searches neighbours only near the read box's border (plan.banded_neighborhoods)
     measures_radius = False  # compute() can report each point's k-th-neighbour distance (plan.certify_with_radius)
+    uses_neighbors = True  # else a point's value needs only the points within required_halo(): nothing to certify
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 

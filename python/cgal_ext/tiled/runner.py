@@ -227,7 +227,10 @@ def run_tile(job):
                                    np.zeros(len(chunk_starts) + 1, dtype=np.int64), watch.seconds)
             border = plan.border_distance(points, lo - halo, hi + halo)
             neighborhoods = interior = values = None
-            if compute_first:
+            if not operation.uses_neighbors:
+                kth, tile_reach, searched = 0.0, reach, 0.0
+                certified = np.ones(len(points), dtype=bool)
+            elif compute_first:
                 radius = np.empty(len(points))
                 values = operation.compute(points, normals, radius)
                 watch.lap("compute")

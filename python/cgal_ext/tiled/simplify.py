@@ -183,6 +183,32 @@ def _whole(value):
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
+def subsample_pass(runner, source, size, why_normals):
+    """The pass that chooses about `size` points of `source` by their coordinate hash (select_rows); refuses an
+    empty scan, a scan without normals (`why_normals`: what they are needed for) and invalid rows."""
+    n = source.count
+    if n == 0:
+        raise TiledError(f"{source.path}: the scan has no points")
+    if not source.has_normals:
+        raise TiledError(f"{source.path}: has no normals; {why_normals} (run `python3 -m cgal_ext.tiled normals` "
+                         f"first: its output has them, oriented across the tiles)")
+    cutoff = None if size >= n else int(size / n * 2.0**64)
+    selected = runner.map(select_rows, runner.row_ranges(n), source, cutoff, what="subsample")
+    runner.refuse_invalid_rows(source, selected)
+    return selected
+
+
+def sorted_subsample(selected, who, size, n):
+    """The points and unit normals of the passes' `selected` (select_rows), sorted: -0.0 as 0.0, as the hash sees
+    them, so that the subsample's order, and what the client computes from it, does not depend on the scan's."""
+    points = np.concatenate([s["points"] for s in selected]) + 0.0
+    normals = np.concatenate([s["normals"] for s in selected]) + 0.0
+    if not len(points):
+        raise TiledError(f"{who}: the subsample of {size} of the {n} points holds none; give a larger subsample")
+    order = np.lexsort((*normals.T[::-1], *points.T[::-1]))
+    return points[order], normals[order]
+
+
 def options(source, output, subsample=SUBSAMPLE, clusters=None, **library):
     """The options of a run on `source` writing `output`, checked before any pass: `subsample`, `clusters` (a path
     for the scan with its clusters, or None) and the keywords of compute_simplification_sample_points but
@@ -213,28 +239,14 @@ def simplify(runner, source, output, scratch, subsample_size, clusters_path, lib
     (runner.Passes), which keep each point's cluster in the folder `scratch` between them; `library` are
     compute_simplification_sample_points's options. Returns the run's report."""
     n = source.count
-    if n == 0:
-        raise TiledError(f"{source.path}: the scan has no points")
-    if not source.has_normals:
-        # Estimated on the subsample alone, a few would be flipped and make clusters of their own.
-        raise TiledError(f"{source.path}: has no normals; simplify clusters by them (run `python3 -m "
-                         f"cgal_ext.tiled normals` first: its output has them, oriented across the tiles)")
+    # Normals estimated on the subsample alone: a few would be flipped and make clusters of their own.
+    selected = subsample_pass(runner, source, subsample_size, "simplify clusters by them")
     ranges = runner.row_ranges(n)
-    cutoff = None if subsample_size >= n else int(subsample_size / n * 2.0**64)
-    selected = runner.map(select_rows, ranges, source, cutoff, what="subsample")
-    runner.refuse_invalid_rows(source, selected)
     report = runner.report
     with runner.client_step("cluster subsample"):
-        # -0.0 as 0.0, as the hash sees them: the values sorted, and so the clusters, do not depend on the order.
-        points = np.concatenate([s["points"] for s in selected]) + 0.0
-        normals = np.concatenate([s["normals"] for s in selected]) + 0.0
-        if not len(points):
-            raise TiledError(f"simplify: the subsample of {subsample_size} of the {n} points holds none; give a "
-                             f"larger subsample")
+        points, normals = sorted_subsample(selected, "simplify", subsample_size, n)
         diagonal = float(np.linalg.norm(np.max([s["hi"] for s in selected], axis=0)
                                         - np.min([s["lo"] for s in selected], axis=0)))
-        order = np.lexsort((*normals.T[::-1], *points.T[::-1]))
-        points, normals = points[order], normals[order]
         try:
             labels = _core.compute_simplification_sample_points(points, normals, **library)
         except (ValueError, TypeError) as error:
