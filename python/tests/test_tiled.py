@@ -669,6 +669,18 @@ def client_subsample(points, normals, size):
     return p[order], n[order]
 
 
+def subsample_deformation(edit, points, normals):
+    """The Deformation the client builds and deforms on its subsample, and the program's reading of the edit."""
+    program = cgal_ext._core._read_edit(edit, points)
+    deformation = cgal_ext.Deformation(points, normals, **program["settings"])
+    deformation.insert_roi(program["roi"])
+    handle = program["handles"][0]
+    deformation.create_handle_group(handle["points"])
+    deformation.set_handle_transform(0, handle["rotation"], handle["translation"])
+    deformation.deform()
+    return deformation, handle
+
+
 def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusion(scan, client, tmp_path):
     """The tiled edit is the library's Deformation on the client's subsample, its diffusion carried to every point
     by diffuse_points in the tiles, handles and collar included: on the whole scan (a subsample as large) it is
@@ -679,13 +691,7 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
     report = tiled.run("edit", scan.small, tmp_path / "whole.ply", client=client, tiles=8, edit=edit)
     assert report["subsample"] == len(points) and report["collar_reach"] > 0
     sub_points, sub_normals = client_subsample(points, normals, len(points))
-    program = cgal_ext._core._read_edit(edit, sub_points)
-    deformation = cgal_ext.Deformation(sub_points, sub_normals, **program["settings"])
-    deformation.insert_roi(program["roi"])
-    handle = program["handles"][0]
-    deformation.create_handle_group(handle["points"])
-    deformation.set_handle_transform(0, handle["rotation"], handle["translation"])
-    deformation.deform()
+    deformation, handle = subsample_deformation(edit, sub_points, sub_normals)
     expected = deformation.diffuse()
     out = read_output(tmp_path / "whole.ply")
     at = {tuple(p): i for i, p in enumerate(sub_points)}
@@ -703,12 +709,7 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
                        subsample=30_000)
     sub_points, sub_normals = client_subsample(points, normals, 30_000)
     assert report["subsample"] == len(sub_points) < 40_000
-    program = cgal_ext._core._read_edit(edit, sub_points)
-    deformation = cgal_ext.Deformation(sub_points, sub_normals, **program["settings"])
-    deformation.insert_roi(program["roi"])
-    deformation.create_handle_group(program["handles"][0]["points"])
-    deformation.set_handle_transform(0, program["handles"][0]["rotation"], program["handles"][0]["translation"])
-    deformation.deform()
+    deformation, _ = subsample_deformation(edit, sub_points, sub_normals)
     selection = tiled.edit.Edit(edit=edit).selection(points)
     expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection)
     eight = read_output(tmp_path / "eight.ply")

@@ -55,7 +55,6 @@ class Edit(ops.Operation):
     moved positions and normals as its values."""
     name = "edit"
     uses_neighbors = False
-    symmetric = False
 
     def __init__(self, edit, subsample=SUBSAMPLE):
         if not _whole(subsample) or subsample < 1:
