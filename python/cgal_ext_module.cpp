@@ -541,7 +541,8 @@ void bind_deformation(py::module_& m)
          "After deform(): the sample points' side of the drag, as a dict of ``sample_positions`` and\n"
          "``deformed_sample_positions`` (s, 3), ``motions`` (s, 3, 4: a point p carried by sample point j alone moves\n"
          "by motions[j] @ (p, 1)), ``region_samples`` (s,), ``handle_transforms`` (g, 7: quaternion w, x, y, z and\n"
-         "translation), ``stencil_size``, ``origin``, ``portable``, ``exact_handles`` and ``collar_reach``: what\n"
+         "translation), ``stencil_size``, ``origin``, ``portable``, ``exact_handles``, ``collar_reach`` and the\n"
+         "restoration's settings ``detail_anchor``, ``detail_iterations`` and ``detail_tolerance``: what\n"
          "diffuse_points() needs to move points this deformation was not built on, in this process or another (a\n"
          "tiled edit's workers).")
     .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
@@ -553,17 +554,20 @@ void bind_deformation(py::module_& m)
         "(int64 indices), ``handles`` (per group a dict of ``points``, ``rotation`` (3, 3) and ``translation``) and\n"
         "``settings`` (Deformation's keywords). A file the program refuses is a ValueError with its message.");
   m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a, py::kw_only(),
-        "selection"_a = py::none(),
+        "selection"_a = py::none(), "restore_details"_a = false,
         "Moves points a Deformation was not built on (a denser sampling of the same surface, a tile of a larger\n"
         "scan) as its diffuse() moves its own: each by its ``stencil_size`` nearest sample points' motions, weighted\n"
         "as diffuse() weights them; with ``selection``, the exact handle points onto their group's transform and\n"
         "the region's points within ``collar_reach`` of a handle by the handle's step. The deformation's own\n"
         "points with their selection move as diffuse() moves them, bit for bit; a part of a scan moves as the whole\n"
-        "would wherever it holds the handle points within the collar's reach.\n\n"
+        "would wherever it holds the handle points within the collar's reach. With ``restore_details``, the fine\n"
+        "details the blend smooths out are then put back as Deformation.restore_details() puts them (the\n"
+        "deformation's own points: bit for bit; a part of a scan: as the whole but near its border).\n\n"
         "Parameters\n----------\npoints, normals : array_like\n    (n, 3) float64.\n"
         "state : dict\n    Deformation.diffusion_state(), after deform().\n"
         "selection : array_like of int, optional\n    Per point: -2 outside the region of interest, -1 in it, or its "
-        "handle group. Without it,\n    every point is a region point that is no handle.\n\n"
+        "handle group. Without it,\n    every point is a region point that is no handle.\n"
+        "restore_details : bool\n    Whether to put back the fine details too (the state's detail_* settings).\n\n"
         "Returns\n-------\nDeformed\n    (points (n, 3), normals (n, 3)), new float64 arrays.");
 }
 

@@ -361,7 +361,8 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
   // diffuse_points() with the state of the sample points (the tiled edit's workers move their tiles' points so):
   // (1) the deformation's own points, in another order and with their selection, land where diffuse() puts them,
   // bit for bit, exact handles and collar included; (1b) so do those of a part of them (a tile) farther than the
-  // collar's reach from the part's border; (2) the points of a denser sampling move by the blend of their m
+  // collar's reach from the part's border; (1c) with restore_details, the own points land where diffuse() and
+  // restore_details() put them, bit for bit; (2) the points of a denser sampling move by the blend of their m
   // nearest sample points' motions with the weights (1 - d / d_(m+1))^2, found here by brute force; (3) with the
   // handle not moved, every point stays (as diffuse()'s do, to rounding).
   using State = CGAL_ext::Diffusion_state;
@@ -380,10 +381,13 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
     ASSERT_EQ(state.number_of_handle_groups(), 1u);
     ASSERT_GT(state.collar_reach, 0.0);
 
-    // (1) and (1b): all the points shuffled, then those with x < -0.3 (the tip's side) alone.
+    // (1), (1b) and (1c): all the points shuffled, then those with x < -0.3 (the tip's side) alone, then all of
+    // them with the details restored.
     Tentacle own = t;
     own.shuffle(3); // own.shape.points[i] is some t.shape.points[j]: found by position
-    for(const bool part : {false, true}) {
+    for(const int pass : {0, 1, 2}) {
+      const bool part = pass == 1, restore = pass == 2;
+      if(restore) d->restore_details();
       std::vector<Point> moved;
       std::vector<Kernel::Vector_3> moved_normals;
       std::vector<int> selection;
@@ -398,11 +402,16 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
       }
       std::vector<std::size_t> rows(moved.size());
       std::iota(rows.begin(), rows.end(), std::size_t(0));
-      CGAL_ext::diffuse_points(
+      const CGAL_ext::Diffuse_points_outcome outcome = CGAL_ext::diffuse_points(
         rows, state,
-        CGAL_ext::parameters::selection_map(CGAL::make_property_map(selection),
-                                            CGAL::parameters::point_map(CGAL::make_property_map(moved))
-                                              .normal_map(CGAL::make_property_map(moved_normals))));
+        CGAL_ext::parameters::restore_details(
+          restore, CGAL_ext::parameters::selection_map(CGAL::make_property_map(selection),
+                                                       CGAL::parameters::point_map(CGAL::make_property_map(moved))
+                                                         .normal_map(CGAL::make_property_map(moved_normals)))));
+      EXPECT_EQ(outcome.restore_iterations, restore ? d->statistics().restore_iterations : 0u);
+      if(restore) {
+        EXPECT_GT(outcome.restore_iterations, 0u);
+      }
       std::size_t compared = 0, differ = 0, moving = 0, handles = 0;
       for(std::size_t i = 0; i < moved.size(); ++i) {
         const std::size_t j = of[i];
@@ -414,7 +423,7 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
         moving += q != t.point(j);
         handles += view.is_exact_handle_point(j);
       }
-      EXPECT_EQ(differ, 0u) << "of " << compared << " points, rotations " << int(rotations) << ", part " << part;
+      EXPECT_EQ(differ, 0u) << "of " << compared << " points, rotations " << int(rotations) << ", pass " << pass;
       EXPECT_GT(moving, compared / 4);
       EXPECT_GT(handles, 0u);
     }

@@ -48,6 +48,11 @@ struct Diffusion_state
   /// How far the collar spreads the exact handles' steps (`Detail_preserving_deformation_settings::handle_collar`),
   /// as the deformation measured it over all its handle points; 0 without a collar.
   double collar_reach = 0;
+  /// `Detail_preserving_deformation_settings::detail_anchor`, `detail_iterations` and `detail_tolerance`: how
+  /// `diffuse_points()` restores the details when asked to (its `restore_details` named parameter).
+  double detail_anchor = 1e-2;
+  unsigned int detail_iterations = 100;
+  double detail_tolerance = 1e-2;
 
   /// The values of `diffuse_points()`'s `selection_map` for a point outside the region of interest and for a
   /// region point that is no handle; a handle point's value is its handle group.
@@ -73,6 +78,8 @@ struct Diffusion_state
     if(!finite(sample_positions) || !finite(deformed_sample_positions) || !finite(motions) ||
        !finite(handle_transforms) || !(std::isfinite(collar_reach) && collar_reach >= 0))
       throw Invalid_input("diffusion state: a sample position, motion, transform or the collar's reach is not finite");
+    if(!(detail_anchor > 0) || std::isinf(detail_anchor) || !(detail_tolerance >= 0) || std::isinf(detail_tolerance))
+      throw Invalid_input("diffusion state: detail_anchor must be a finite number > 0 and detail_tolerance one >= 0");
     for(std::size_t g = 0; g < number_of_handle_groups(); ++g)
       if(std::abs(Eigen::Map<const Eigen::Vector4d>(&handle_transforms[7 * g]).norm() - 1) > 1e-6)
         throw Invalid_input("diffusion state: the rotation of handle group " + std::to_string(g) +
@@ -106,9 +113,10 @@ class Diffusion_view
   using Matrix_n3 = internal::Matrix_n3;
 
 public:
-  /// Sample point `s`'s motion record: `[A_s - I, c_s; 0, 1]`, so that a point it carries alone moves by
-  /// `(A_s - I) p + c_s`.
-  const Eigen::Matrix4d& sample_motion(std::size_t s) const { return m_diffusion.stencil.motion_record(s); }
+  /// Sample point `s`'s motion record: `[T_s, c_s; 0, 1]`, so that a point it carries alone moves by
+  /// `T_s p + c_s`; `T_s` is the sample point's map less the identity rounded to floats, and `c_s` its move
+  /// less `T_s` times its position.
+  Eigen::Matrix4d sample_motion(std::size_t s) const { return m_diffusion.stencil.motion_record(s); }
 
   /// The number of sample points that carry each point (the same for every point).
   std::size_t stencil_size() const { return m_diffusion.stencil.width(); }
@@ -174,6 +182,9 @@ public:
     out.portable = m_settings.portable_diffusion;
     out.exact_handles = std::isinf(m_settings.handle_weight);
     out.collar_reach = m_diffusion.collar.reach;
+    out.detail_anchor = m_settings.detail_anchor;
+    out.detail_iterations = m_settings.detail_iterations;
+    out.detail_tolerance = m_settings.detail_tolerance;
     return out;
   }
 

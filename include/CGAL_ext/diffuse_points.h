@@ -6,6 +6,7 @@
 #include <CGAL_ext/Diffusion_view.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
+#include <CGAL_ext/internal/detail_relaxation.h>
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/handle_collar.h>
 #include <CGAL_ext/internal/ssp_diffusion.h>
@@ -26,6 +27,10 @@ namespace internal_np {
 enum selection_map_t
 {
   selection_map
+};
+enum restore_details_t
+{
+  restore_details
 };
 } // namespace internal_np
 /// \endcond
@@ -48,7 +53,29 @@ selection_map(const SelectionMap& map,
   return {map, np};
 }
 
+/*!
+  \ingroup PkgCGALExtAlgorithms
+  The named parameter `restore_details` of `diffuse_points()`: whether it also puts back the fine details the blend
+  smooths out, as `Detail_preserving_deformation::restore_details()` does (`false` by default).
+*/
+template <typename T = bool, typename Tag = CGAL::internal_np::all_default_t,
+          typename Base = CGAL::internal_np::No_property>
+CGAL::Named_function_parameters<bool, internal_np::restore_details_t, CGAL::Named_function_parameters<T, Tag, Base>>
+restore_details(bool restore,
+                const CGAL::Named_function_parameters<T, Tag, Base>& np = CGAL::parameters::default_values())
+{
+  return {restore, np};
+}
+
 } // namespace parameters
+
+/// What `diffuse_points()` did to restore the details: the conjugate gradients' iterations and final residual,
+/// as `Detail_preserving_deformation::Statistics` reports them (zero without `restore_details`).
+struct Diffuse_points_outcome
+{
+  unsigned int restore_iterations = 0;
+  double restore_residual = 0;
+};
 
 /*!
   \ingroup PkgCGALExtAlgorithms
@@ -62,6 +89,13 @@ selection_map(const SelectionMap& map,
   collar's reach only, so a part of a scan moves as the whole scan would where it holds those handle points
   (doc/scaling.md, "Editing in tiles").
 
+  With `restore_details(true)`, it then puts back the fine details as `Detail_preserving_deformation::restore_details()`
+  does, with the state's `detail_anchor`, `detail_iterations` and `detail_tolerance`: the deformation's own
+  points with their selection land where `diffuse()` and `restore_details()` put them, bit for bit. The
+  conjugate gradients couple all the points, but a point's restored detail depends mostly on its surroundings
+  within a few `1 / sqrt(detail_anchor)` point spacings: a part of a scan then differs from the whole near its
+  border only, by a fraction of the details (doc/scaling.md, "Editing in tiles").
+
   Writes each point's new position through `point_map` and its new normal through `normal_map`, in place.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag` or `CGAL::Parallel_if_available_tag`.
@@ -69,14 +103,16 @@ selection_map(const SelectionMap& map,
   \param state the sample points' motions, from `Diffusion_view::state()` after
          `Detail_preserving_deformation::update_sample_motions()` (or `diffuse()`).
   \param np `point_map`, `normal_map` (required); `CGAL_ext::parameters::selection_map()` (without it, every point
-         is a region point that is no handle: neither exact handles nor a collar).
+         is a region point that is no handle: neither exact handles nor a collar);
+         `CGAL_ext::parameters::restore_details()`.
+  \returns the restoration's iterations and residual.
   \throws Invalid_input on an invalid `state`, points without normals, a non-finite point, a zero normal, or a
           selection value that is no handle group of `state`.
 */
 template <typename ConcurrencyTag = CGAL::Parallel_if_available_tag, typename PointRange,
           typename NamedParameters = CGAL::parameters::Default_named_parameters>
-void diffuse_points(PointRange& points, const Diffusion_state& state,
-                    const NamedParameters& np = CGAL::parameters::default_values())
+Diffuse_points_outcome diffuse_points(PointRange& points, const Diffusion_state& state,
+                                      const NamedParameters& np = CGAL::parameters::default_values())
 {
   using NP_helper = CGAL::Point_set_processing_3_np_helper<PointRange, NamedParameters>;
   using namespace internal;
@@ -84,7 +120,7 @@ void diffuse_points(PointRange& points, const Diffusion_state& state,
   state.validate();
   if(!has_given_normals<NamedParameters>(points))
     throw Invalid_input(std::string(who) + ": the points need normals (normal_map): they turn with the points");
-  if(std::begin(points) == std::end(points)) return;
+  if(std::begin(points) == std::end(points)) return {};
   const Spatial_point_cloud cloud =
     make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
   const Matrix_n3 normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
@@ -134,7 +170,21 @@ void diffuse_points(PointRange& points, const Diffusion_state& state,
   collar.template setup<ConcurrencyTag>(cloud, labels, groups, state.exact_handles, state.collar_reach > 0, stencil,
                                         samples, moving, state.collar_reach);
   collar.template apply<ConcurrencyTag>(cloud.positions, normals, rotations, transforms, moved, moved_normals);
+  Diffuse_points_outcome outcome;
+  // As Point_diffusion::restore_details: the moved region points relax over their 10 nearest, the rest pin them.
+  const std::size_t neighbors = std::min<std::size_t>(10, cloud.size() - 1);
+  if(CGAL::parameters::choose_parameter(CGAL::parameters::get_parameter(np, internal_np::restore_details), false) &&
+     neighbors > 0 && state.detail_iterations > 0) {
+    Detail_relaxation relaxation;
+    relaxation.template setup<ConcurrencyTag>(cloud.positions, relaxed_rows(moving, labels, collar.handle_rows),
+                                              neighbors);
+    const Detail_relaxation::Outcome restored = relaxation.template apply<ConcurrencyTag>(
+      cloud.positions, state.detail_anchor, state.detail_iterations, state.detail_tolerance, moved);
+    outcome.restore_iterations = restored.iterations;
+    outcome.restore_residual = restored.residual;
+  }
   write_points_and_normals(points, np, row_of, moved, moved_normals);
+  return outcome;
 }
 
 } // namespace CGAL_ext

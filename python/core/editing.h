@@ -196,7 +196,7 @@ public:
     without_gil([&, out = frame.mutable_data()] {
       d.update_sample_motions();
       for(std::size_t s = 0; s < samples; ++s) {
-        const Eigen::Matrix4d& record = view.sample_motion(s);
+        const Eigen::Matrix4d record = view.sample_motion(s);
         for(int r = 0; r < 3; ++r)
           for(int c = 0; c < 4; ++c) out[12 * s + 4 * r + c] = float(record(r, c));
       }
@@ -244,7 +244,9 @@ public:
                     "region_samples"_a = py::array_t<std::uint8_t>(s, state.region_samples.data()),
                     "handle_transforms"_a = transforms, "stencil_size"_a = state.stencil_size,
                     "origin"_a = setting_name(state.origin), "portable"_a = state.portable,
-                    "exact_handles"_a = state.exact_handles, "collar_reach"_a = state.collar_reach);
+                    "exact_handles"_a = state.exact_handles, "collar_reach"_a = state.collar_reach,
+                    "detail_anchor"_a = state.detail_anchor, "detail_iterations"_a = state.detail_iterations,
+                    "detail_tolerance"_a = state.detail_tolerance);
   }
 
   py::dict statistics() const
@@ -411,7 +413,7 @@ py::dict read_edit(const Path_like& path_object, const Array_like& points)
 
 /// diffuse_points() with a Deformation.diffusion_state() dict: the moved points and normals, new arrays.
 Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state,
-                                     const Optional_array_like& selection)
+                                     const Optional_array_like& selection, bool restore_details)
 {
   const auto entry = [&](const char* key) -> py::object {
     if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
@@ -441,6 +443,9 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
   parsed.portable = entry("portable").cast<bool>();
   parsed.exact_handles = entry("exact_handles").cast<bool>();
   parsed.collar_reach = entry("collar_reach").cast<double>();
+  parsed.detail_anchor = entry("detail_anchor").cast<double>();
+  parsed.detail_iterations = unsigned(as_count(entry("detail_iterations").cast<long long>(), "detail_iterations"));
+  parsed.detail_tolerance = entry("detail_tolerance").cast<double>();
   const Point_input input(points, normals);
   const std::size_t n = input.size();
   std::vector<int> selected;
@@ -467,8 +472,9 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
     }
   without_gil([&, moved_rows = moved_rows, moved_normal_rows = moved_normal_rows] {
     Index_range all = all_points(n);
-    const auto np =
-      CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows});
+    const auto np = CGAL_ext::parameters::restore_details(
+      restore_details,
+      CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows}));
     if(selection.is_none())
       CGAL_ext::diffuse_points(all, parsed, np);
     else

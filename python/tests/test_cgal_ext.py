@@ -355,8 +355,9 @@ def test_a_handle_outside_the_region_is_a_value_error(sphere):
 
 def test_points_a_deformation_was_not_built_on_move_by_its_diffusion_state(sphere):
     """diffuse_points() with diffusion_state(), as a tiled edit's worker uses them: the deformation's own points,
-    shuffled, with their selection, land where diffuse() puts them, bit for bit, exact handles and collar included;
-    the state survives pickling (Dask sends it so); a bad state or selection is a ValueError."""
+    shuffled, with their selection, land where diffuse() puts them, bit for bit, exact handles and collar included,
+    and with restore_details where restore_details() puts them; the state survives pickling (Dask sends it so); a
+    bad state or selection is a ValueError."""
     import pickle
     points, normals = sphere
     region, handle = points[:, 2] > 0.0, points[:, 2] > 0.8
@@ -377,6 +378,12 @@ def test_points_a_deformation_was_not_built_on_move_by_its_diffusion_state(spher
     assert np.array_equal(moved.normals, diffused.normals[order])
     collar = deformation.renderer_setup()["collar_points"]
     assert len(collar) > 0 and np.count_nonzero(np.any(moved.points != points[order], axis=1)) > len(points) // 4
+    restored = cgal_ext.diffuse_points(points[order], normals[order], state, selection=selection[order],
+                                       restore_details=True)
+    expected = deformation.restore_details()
+    assert np.array_equal(restored.points, expected.points[order])
+    assert np.array_equal(restored.normals, expected.normals[order])
+    assert np.abs(expected.points - diffused.points).max() > 1e-6  # the restoration moved points
     # Without the selection, the handles and the collar follow the blend alone.
     blended = cgal_ext.diffuse_points(points, normals, state).points
     assert not np.array_equal(blended[handle], diffused.points[handle])
@@ -388,6 +395,8 @@ def test_points_a_deformation_was_not_built_on_move_by_its_diffusion_state(spher
         cgal_ext.diffuse_points(points, normals, {**state, "stencil_size": 0})
     with pytest.raises(ValueError, match="selection of point 3 is 1"):
         cgal_ext.diffuse_points(points, normals, state, selection=np.where(np.arange(len(points)) == 3, 1, -1))
+    with pytest.raises(ValueError, match="detail_anchor must be"):
+        cgal_ext.diffuse_points(points, normals, {**state, "detail_anchor": 0.0}, restore_details=True)
     with pytest.raises(ValueError, match="unit quaternion"):
         cgal_ext.diffuse_points(points, normals, {**state, "handle_transforms": 2 * state["handle_transforms"]})
 

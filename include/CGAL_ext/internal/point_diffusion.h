@@ -127,7 +127,7 @@ public:
   /// a store reads before it writes them nor the collar's steps are counted.
   std::size_t moved_bytes(bool in_input_order) const
   {
-    const std::size_t row = 3 * sizeof(double), records = sizeof(Eigen::Matrix4d) * turns.maps.size();
+    const std::size_t row = 3 * sizeof(double), records = sizeof(Motion_record) * turns.maps.size();
     const std::size_t handles = collar.handle_rows.size();
     if(in_input_order && m_in_input_order.ready) {
       const Packed_diffusion_rows& packed = m_in_input_order.packed;

@@ -133,6 +133,41 @@ struct Cache_line_allocator
   }
 };
 
+/// A sample point's motion as a drag reads it, on one cache line: the displacement it gives a point `p` it carries
+/// alone is `T p + offset`, with `T = A - I` (its map less the identity) rounded to floats, column-major, and
+/// `offset = (s' - s) - T s` computed in doubles from that rounded `T`, so that the displacement is still
+/// `(s' - s) + T (p - s)` and a point far from the origin loses nothing. The turn's rounding (2^-24 of it) is the
+/// weights' own (doc/editing_at_scale.md, "A drag's memory traffic").
+struct alignas(64) Motion_record
+{
+  double offset[3];
+  float turn[9];
+  float unused = 0; // read by the 4-wide path's load of the last column, never used
+
+  Eigen::Matrix3d turn_matrix() const
+  {
+    Eigen::Matrix3d T;
+    for(int c = 0; c < 3; ++c)
+      for(int r = 0; r < 3; ++r) T(r, c) = double(turn[3 * c + r]);
+    return T;
+  }
+  Eigen::Vector3d offset_vector() const { return Eigen::Vector3d(offset[0], offset[1], offset[2]); }
+  /// Sets the record for `new_turn` (rounded to floats) and the sample point's move from `s` to `moved`.
+  void set(const Eigen::Matrix3d& new_turn, const Eigen::Vector3d& s, const Eigen::Vector3d& moved)
+  {
+    for(int c = 0; c < 3; ++c)
+      for(int r = 0; r < 3; ++r) turn[3 * c + r] = float(new_turn(r, c));
+#if defined(__GNUC__)
+    // The offset must use the turn as stored: GCC 12's vectoriser (-O2) took the floats' conversion back to
+    // doubles for the doubles they came from. The barrier makes it read them.
+    asm volatile("" : : "r"(turn) : "memory");
+#endif
+    const Eigen::Vector3d constant = (moved - s) - turn_matrix() * s;
+    for(int r = 0; r < 3; ++r) offset[r] = constant(r);
+  }
+};
+static_assert(sizeof(Motion_record) == 64, "a motion record fills one cache line");
+
 constexpr std::size_t diffusion_block = 256; // points per task of Diffusion_stencil::apply
 constexpr std::size_t diffusion_prefetch = 32; // how many points ahead a block asks for the rows it walks
 
@@ -312,25 +347,31 @@ public:
                           const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, double* out_points,
                           double* out_normals, const Block_visitor* after_block = nullptr) const;
 
-  /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `(A_j - I) p + c_j`
-  /// as the 4x4 matrix `[A_j - I, c_j; 0, 1]`; a point's displacement (origin `own_sample`) is the blend of its
-  /// stencil's records applied to `(p, 1)`.
-  const Eigen::Matrix4d& motion_record(std::size_t j) const { return m_records[j]; }
+  /// Sample point j's motion record (set by set_motions() or apply()): the point displacement `T_j p + c_j` (`T_j`
+  /// its map less the identity, rounded to floats: Motion_record) as the 4x4 matrix `[T_j, c_j; 0, 1]`; a point's
+  /// displacement (origin `own_sample`) is the blend of its stencil's records applied to `(p, 1)`.
+  Eigen::Matrix4d motion_record(std::size_t j) const
+  {
+    const Motion_record& record = m_records.at(j);
+    Eigen::Matrix4d out = Eigen::Matrix4d::Identity();
+    out.topLeftCorner<3, 3>() = record.turn_matrix();
+    out.topRightCorner<3, 1>() = record.offset_vector();
+    return out;
+  }
   /// The motion records set, none before the first set_motions().
   std::size_t number_of_motion_records() const { return m_records.size(); }
 
   /// Sets sample point j's motion record to the top three rows `records[12 j ...]` (row-major) of a record
-  /// another stencil's set_motions() made, for `count` sample points: another process's points then move as that
-  /// stencil's do.
+  /// another stencil's set_motions() made (motion_record()), for `count` sample points: another process's points
+  /// then move as that stencil's do (the turns, floats there, are kept exactly).
   void set_motion_records(const double* records, std::size_t count)
   {
     m_records.resize(count);
-    for(std::size_t j = 0; j < count; ++j) {
-      Eigen::Matrix4d& record = m_records[j];
-      for(int r = 0; r < 3; ++r)
-        for(int c = 0; c < 4; ++c) record(r, c) = records[12 * j + std::size_t(4 * r + c)];
-      record.row(3) << 0, 0, 0, 1;
-    }
+    for(std::size_t j = 0; j < count; ++j)
+      for(int r = 0; r < 3; ++r) {
+        for(int c = 0; c < 3; ++c) m_records[j].turn[3 * c + r] = float(records[12 * j + std::size_t(4 * r + c)]);
+        m_records[j].offset[r] = records[12 * j + std::size_t(4 * r + 3)];
+      }
   }
 
   /// Copies row `i`'s sample points and weights.
@@ -365,10 +406,9 @@ public:
   static bool wide_vectors_available();
 
 private:
-  // Per sample point, its displacement as an affine function of the point: the 4x4 matrix [A - I, c; 0, 1] with
-  // c = (s' - s) - (A - I) s (column-major, 128 bytes). Blending the records of a point's stencil by weight
-  // blends the maps, the constants and, in the corner, the weights' sum.
-  std::vector<Eigen::Matrix4d, Cache_line_allocator<Eigen::Matrix4d>> m_records; // each on two cache lines
+  // Per sample point, its displacement as an affine function of the point. Blending the records of a point's
+  // stencil by weight blends the maps and the offsets; the weights sum to exactly 1.
+  std::vector<Motion_record, Cache_line_allocator<Motion_record>> m_records; // each on one cache line
 
   // This stencil's rows of `points` and `normals`, picked by `active` and written to `destination` (both optional).
   Diffusion_rows rows(const Matrix_n3& points, const Matrix_n3& normals, const std::vector<int>* active,
@@ -389,18 +429,22 @@ private:
              const Matrix_n3& deformed_sample_positions, Diffusion_origin origin, Eigen::Matrix3d& turn,
              Eigen::Vector3d& displacement) const
   {
-    Eigen::Matrix4d blended = Eigen::Matrix4d::Zero();
-    for(std::size_t k = 0, kept = width(); k < kept; ++k)
-      blended.noalias() += layout.weight(a, k) * m_records[layout.sample(a, k)];
-    turn = blended.topLeftCorner<3, 3>();
+    turn.setZero();
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    for(std::size_t k = 0, kept = width(); k < kept; ++k) {
+      const double w = layout.weight(a, k);
+      const Motion_record& record = m_records[layout.sample(a, k)];
+      turn.noalias() += w * record.turn_matrix();
+      offset.noalias() += w * record.offset_vector();
+    }
     const Eigen::Vector3d p = Eigen::Map<const Eigen::Vector3d>(layout.point(a));
     if(origin == Diffusion_origin::nearest_sample) {
       // The paper's: every frame decodes p - s_0 from s'_0.
       const Eigen::Index o = Eigen::Index(layout.sample(a, 0));
-      displacement = blended(3, 3) * (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
+      displacement = (deformed_sample_positions.row(o) - sample_positions.row(o)).transpose() +
                      turn * (p - sample_positions.row(o).transpose());
     } else {
-      displacement = blended.topRightCorner<3, 1>() + turn * p;
+      displacement = offset + turn * p;
     }
   }
 
@@ -553,12 +597,8 @@ void Diffusion_stencil::set_motions(const Matrix_n3& sample_positions, const Mat
   const std::size_t count = map.size();
   m_records.resize(count);
   for_range<ConcurrencyTag>(0, count, [&](std::size_t j) {
-    const Eigen::Matrix3d turn = map[j] - Eigen::Matrix3d::Identity();
-    const Eigen::Vector3d s = sample_positions.row(Eigen::Index(j)).transpose();
-    Eigen::Matrix4d& record = m_records[j];
-    record.topLeftCorner<3, 3>() = turn;
-    record.topRightCorner<3, 1>() = (deformed_sample_positions.row(Eigen::Index(j)).transpose() - s) - turn * s;
-    record.row(3) << 0, 0, 0, 1;
+    m_records[j].set(map[j] - Eigen::Matrix3d::Identity(), sample_positions.row(Eigen::Index(j)).transpose(),
+                     deformed_sample_positions.row(Eigen::Index(j)).transpose());
   });
 }
 
@@ -613,7 +653,8 @@ __attribute__((target("avx2,fma"))) inline __m256d cross_wide(__m256d u, __m256d
 
 // apply_block() with one 4-wide register per column of the records: a stencil of 6 sample points blends in 24
 // fused multiply-adds instead of 96 multiplications and additions, and the cross products of the cofactor
-// matrix are two permutations and a multiply-subtract each.
+// matrix are two permutations and a multiply-subtract each. A turn's column is loaded as four floats, the
+// fourth the next column's first: the fourth lanes of the blended turn are never used.
 template <typename Layout>
 __attribute__((target("avx2,fma"))) void
 Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std::size_t last, std::size_t count,
@@ -625,14 +666,17 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
   alignas(32) double normal_x[diffusion_block], normal_y[diffusion_block], normal_z[diffusion_block];
   std::size_t turned_count = 0;
   const std::size_t kept = width();
-  const Eigen::Matrix4d* records = m_records.data();
+  const Motion_record* records = m_records.data();
+  const __m256i first_three = _mm256_setr_epi64x(-1, -1, -1, 0);
   for(std::size_t a = first; a < last; ++a) {
     prefetch_ahead(layout, a, count);
     __m256d column[4] = {zero, zero, zero, zero};
     for(std::size_t k = 0; k < kept; ++k) {
       const __m256d w = _mm256_set1_pd(layout.weight(a, k));
-      const double* record = records[layout.sample(a, k)].data();
-      for(int c = 0; c < 4; ++c) column[c] = _mm256_fmadd_pd(w, _mm256_loadu_pd(record + 4 * c), column[c]);
+      const Motion_record& record = records[layout.sample(a, k)];
+      for(int c = 0; c < 3; ++c)
+        column[c] = _mm256_fmadd_pd(w, _mm256_cvtps_pd(_mm_loadu_ps(record.turn + 3 * c)), column[c]);
+      column[3] = _mm256_fmadd_pd(w, _mm256_maskload_pd(record.offset, first_three), column[3]);
     }
     const double* p = layout.point(a);
     __m256d displacement;
@@ -640,8 +684,7 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
       const std::size_t o = layout.sample(a, 0);
       const double* s = sample_positions.data() + 3 * o;
       const double* moved = deformed_sample_positions.data() + 3 * o;
-      const __m256d weight_sum = _mm256_permute4x64_pd(column[3], _MM_SHUFFLE(3, 3, 3, 3));
-      displacement = _mm256_mul_pd(weight_sum, _mm256_setr_pd(moved[0] - s[0], moved[1] - s[1], moved[2] - s[2], 0));
+      displacement = _mm256_setr_pd(moved[0] - s[0], moved[1] - s[1], moved[2] - s[2], 0);
       for(int c = 0; c < 3; ++c) displacement = _mm256_fmadd_pd(_mm256_set1_pd(p[c] - s[c]), column[c], displacement);
     } else {
       displacement = column[3];
@@ -651,9 +694,9 @@ Diffusion_stencil::apply_block_wide(const Layout& layout, std::size_t first, std
     double* out_p = out_points + 3 * o;
     double* out_n = out_normals + 3 * o;
     const double* n = layout.normal(a);
-    // Still: a zero map (its fourth lanes are zero too) and a zero displacement (its fourth lane is not).
-    const __m256d any = _mm256_or_pd(_mm256_or_pd(column[0], column[1]), column[2]);
-    if((_mm256_movemask_pd(_mm256_cmp_pd(any, zero, _CMP_NEQ_UQ)) | (_mm256_movemask_pd(_mm256_cmp_pd(displacement, zero, _CMP_NEQ_UQ)) & 7)) == 0) {
+    // Still: a zero map and a zero displacement (their first three lanes).
+    const __m256d any = _mm256_or_pd(_mm256_or_pd(_mm256_or_pd(column[0], column[1]), column[2]), displacement);
+    if((_mm256_movemask_pd(_mm256_cmp_pd(any, zero, _CMP_NEQ_UQ)) & 7) == 0) {
       for(int r = 0; r < 3; ++r) out_p[r] = p[r], out_n[r] = n[r];
       continue;
     }
