@@ -683,9 +683,10 @@ def subsample_deformation(edit, points, normals):
 
 def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusion(scan, client, tmp_path):
     """The tiled edit is the library's Deformation on the client's subsample, its diffusion carried to every point
-    by diffuse_points in the tiles, handles and collar included: on the whole scan (a subsample as large) it is
-    the one-process diffuse(); on a subsample of 30,000 of the 100,000 points, diffuse_points of all of them. The
-    same result whatever the tiles and the order of the points."""
+    by diffuse_points in the tiles, handles and collar included (the tiles near the handle read a halo of the
+    collar's reach, the others none): on the whole scan (a subsample as large) it is the one-process diffuse(); on
+    a subsample of 30,000 of the 100,000 points, diffuse_points of all of them. The same result whatever the tiles
+    and the order of the points."""
     edit = edit_file(tmp_path)
     points, normals = scan.small_points, scan.small_normals
     report = tiled.run("edit", scan.small, tmp_path / "whole.ply", client=client, tiles=8, edit=edit)
@@ -709,6 +710,9 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
                        subsample=30_000)
     sub_points, sub_normals = client_subsample(points, normals, 30_000)
     assert report["subsample"] == len(sub_points) < 40_000
+    assert 0 < report["tiles_with_the_halo"] < report["tiles"]  # the tiles far from the handle read no halo
+    reads = [(s["read"], s["own"]) for s in report["tile_summaries"]]
+    assert sum(read == own for read, own in reads) == report["tiles"] - report["tiles_with_the_halo"]
     deformation, _ = subsample_deformation(edit, sub_points, sub_normals)
     selection = tiled.edit.Edit(edit=edit).selection(points)
     expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection)

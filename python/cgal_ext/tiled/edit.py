@@ -1,14 +1,14 @@
 """The detail-preserving edit of a scan of any size on Dask: the edit's sample points, their solve and their motions
 computed once on the client, with the library's Deformation on a subsample; every point of the scan then moved
-tile by tile by those motions (diffuse_points), its tile's halo holding the handle points within the collar's
-reach. Restoring the details after the diffusion is not tiled yet. See doc/scaling.md, "Editing in tiles".
+tile by tile by those motions (diffuse_points), the halo of a tile near a handle holding the handle points within
+the collar's reach (the other tiles read none). Restoring the details after the diffusion is not tiled yet. See doc/scaling.md, "Editing in tiles".
 """
 import json
 
 import numpy as np
 
 from .. import _core
-from . import ops
+from . import ops, plan
 from .runner import timed
 from .simplify import SUBSAMPLE, _whole, sorted_subsample, subsample_pass
 from .store import TiledError
@@ -51,8 +51,8 @@ def inside(points, specs):
 
 
 class Edit(ops.Operation):
-    """The tiled edit as a tiled operation: no neighbourhoods to certify, a halo of the collar's reach, and the
-    moved positions and normals as its values."""
+    """The tiled edit as a tiled operation: no neighbourhoods to certify, a halo of the collar's reach near the
+    handles and none elsewhere, and the moved positions and normals as its values."""
     name = "edit"
     uses_neighbors = False
 
@@ -138,8 +138,25 @@ class Edit(ops.Operation):
         """The collar's reach: a point's result depends on the sample points and on the handle points that near."""
         return 1.01 * float(self.state["collar_reach"])
 
-    def required_halo(self, neighborhoods, own):
-        return self.halo(0.0)
+    def near_handles(self, lo, hi):
+        """Whether each box [lo[i], hi[i]] comes within the collar's reach of a handle's spec: only there can a
+        point have handle points within the reach (a point's box is [p, p])."""
+        near = np.zeros(len(lo), dtype=bool)
+        reach = self.halo(0.0)
+        for kind, a, b in (spec for group in self.handles for spec in group):
+            near |= (plan.box_distances(a, a, lo, hi) <= b + reach if kind == "sphere" else
+                     plan.box_distances(a, b, lo, hi) <= reach)
+        return near
+
+    def tile_halos(self, lo, hi, halo):
+        """The collar's reach for the tiles near a handle, none for the others: their points move by the sample
+        points' motions alone, which every tile holds."""
+        return np.where(self.near_handles(lo, hi), float(halo), 0.0)
+
+    def required_halo(self, neighborhoods, own, points):
+        """The collar's reach where an own point is near a handle, else none."""
+        mine = points[own]
+        return self.halo(0.0) if self.near_handles(mine, mine).any() else 0.0
 
     def compute(self, points, normals):
         moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points))

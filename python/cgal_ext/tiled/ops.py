@@ -98,12 +98,18 @@ class Operation:
         """A first halo width from the typical k-th-neighbour distance of the scan."""
         return 1.5 * (self.rings() + 1) * spacing
 
+    def tile_halos(self, lo, hi, halo):
+        """Each tile's first halo, for the tiles' boxes [lo[t], hi[t]): `halo` for all of them, unless the operation
+        knows that the points of some tiles depend on nearer points only."""
+        return np.full(len(lo), float(halo))
+
     def rings(self):
         """Products with K the values need: the transfer function's degree, else one neighbourhood."""
         return RINGS[self.settings["order"]] if "order" in self.settings else 1
 
-    def required_halo(self, neighborhoods, own):
-        """The halo an approximate operation needs beyond what `certify` checks (0: none)."""
+    def required_halo(self, neighborhoods, own, points):
+        """The halo an approximate operation needs beyond what `certify` checks (0: none), for a tile's `points`
+        (`own`: its own)."""
         return 0.0
 
 
@@ -196,7 +202,7 @@ class Enhance(Operation):
     def computed_fields(self):
         return ("x", "y", "z") + self.value_fields
 
-    def required_halo(self, neighborhoods, own):
+    def required_halo(self, neighborhoods, own, points):
         radius = np.median(neighborhoods.kth_distance(self.own_neighbors())[own])
         return float(self.settings["margin"]) * radius
 

@@ -58,10 +58,19 @@ class Tiling:
         self._visit_leaves(points, 0.0, lambda tile, rows: out.__setitem__(rows, tile))
         return out
 
-    def read_sets(self, points, halo):
-        """{tile: rows of `points` inside the tile's box grown by `halo`} (rows ascending)."""
+    def read_sets(self, points, halos):
+        """{tile: rows of `points` inside the tile's box grown by its halo} (rows ascending); `halos`: one per
+        tile."""
         found = {}
-        self._visit_leaves(points, halo, lambda tile, rows: found.__setitem__(tile, rows))
+        halos = np.asarray(halos, dtype=float)
+        widest = float(halos.max())
+
+        def keep(tile, rows):
+            if halos[tile] < widest:  # the descent grew every box by the widest halo
+                rows = rows[own_mask(points[rows], self.lo[tile] - halos[tile], self.hi[tile] + halos[tile])]
+            found[tile] = rows
+
+        self._visit_leaves(points, widest, keep)
         return found
 
     def _visit_leaves(self, points, halo, visit):

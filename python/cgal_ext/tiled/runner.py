@@ -79,11 +79,12 @@ def scan_rows(begin, end, source, stride):
             "sample": points[(-begin) % stride::stride].copy()}
 
 
-def bucket_rows(begin, end, source, tiling, halo, folder):
-    """Copies, for every tile, the rows of [begin, end) its read box holds (row number, point, normal) to
-    `folder/c{begin}_t{tile}.npy`, so that the tile tasks read small files instead of the whole scan."""
+def bucket_rows(begin, end, source, tiling, halos, folder):
+    """Copies, for every tile, the rows of [begin, end) its read box (its box grown by `halos[tile]`) holds (row
+    number, point, normal) to `folder/c{begin}_t{tile}.npy`, so that the tile tasks read small files instead of the
+    whole scan."""
     points, normals = read_rows(source, begin, end)
-    read_sets = tiling.read_sets(points, halo)
+    read_sets = tiling.read_sets(points, halos)
     counts = {}
     for tile, rows in read_sets.items():
         np.save(folder / f"c{begin}_t{tile}.npy", _bucket(begin, rows, points, normals))
@@ -248,7 +249,7 @@ def run_tile(job):
                 tile_reach = max(reach, 1.25 * kth)
                 certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
                 searched = float(neighborhoods.searched.mean())
-            needed = operation.required_halo(neighborhoods, own)
+            needed = operation.required_halo(neighborhoods, own, points)
             watch.lap("neighbours")
             if (certified.all() and halo >= needed) or halo > job.diagonal:
                 break
@@ -472,16 +473,20 @@ class Run(Passes):
             k = self.operation.neighbors(self.estimate_normals)
             spacing = self._spacing(sample, stride, k)
             halo = self.halo if self.halo is not None else self.operation.halo(spacing)
+            halos = (np.full(tiling.count, float(halo)) if self.halo is not None else
+                     self.operation.tile_halos(*tiling.boxes(), halo))
             reach = 2.0 * spacing
         self.report.update(tiles=tiling.count, chunks=len(ranges), initial_halo=halo, spacing=spacing,
+                           tiles_with_the_halo=int(np.count_nonzero(halos >= halo)),
                            diagonal=float(np.linalg.norm(hi - lo)))
-        self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})")
+        self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})"
+                 + ("" if (halos >= halo).all() else f" for {np.count_nonzero(halos >= halo)} of them"))
 
         (self.scratch / "buckets").mkdir(parents=True)
-        self.map(bucket_rows, ranges, self.source, tiling, halo, self.scratch / "buckets", what="bucket")
+        self.map(bucket_rows, ranges, self.source, tiling, halos, self.scratch / "buckets", what="bucket")
         all_tiles = list(range(tiling.count))
-        summaries = self._run_tiles(tiling, halo, starts, {t: (halo, reach) for t in all_tiles})
-        summaries = self._verify_reach(summaries, tiling, halo, starts)
+        summaries = self._run_tiles(tiling, halos, starts, {t: (halos[t], reach) for t in all_tiles})
+        summaries = self._verify_reach(summaries, tiling, halos, starts)
         with ThreadPoolExecutor(1) as remover:  # tens of thousands of files: removed while the next passes run
             removed = remover.submit(shutil.rmtree, self.scratch / "buckets")
             flips = self._orient(summaries, tiling) if self.estimate_normals else {}
@@ -524,16 +529,17 @@ class Run(Passes):
         distances, _ = cKDTree(sample).query(queries, count)
         return float(np.percentile(distances[:, -1], 90)) / np.sqrt(stride)
 
-    def _run_tiles(self, tiling, bucket_halo, starts, tiles):
-        """Runs the tiles {tile: (first halo, assumed reach)}."""
-        jobs = [(TileJob(tile=t, halo=halo, bucket_halo=bucket_halo, reach=reach, source=self.source,
+    def _run_tiles(self, tiling, bucket_halos, starts, tiles):
+        """Runs the tiles {tile: (first halo, assumed reach)}; each tile's buckets were cut with its
+        `bucket_halos[tile]`."""
+        jobs = [(TileJob(tile=t, halo=float(halo), bucket_halo=float(bucket_halos[t]), reach=reach, source=self.source,
                          operation=self.operation, estimate_normals=self.estimate_normals, tiling=tiling,
                          chunk_starts=starts, scratch=self.scratch, diagonal=self.report["diagonal"],
                          spacing=self.report["spacing"], threads_per_task=self.threads_per_task),)
                 for t, (halo, reach) in tiles.items()]
         return {s.tile: s for s in self.map(run_tile, jobs, what="tiles")}
 
-    def _verify_reach(self, summaries, tiling, halo, starts):
+    def _verify_reach(self, summaries, tiling, halos, starts):
         """Reruns the tiles whose certification assumed a k-th-neighbour distance smaller than a neighbouring
         tile measured (symmetrised-graph operations only)."""
         if not self.operation.symmetric:
@@ -556,7 +562,7 @@ class Run(Passes):
             if not rerun:
                 return summaries
             self.log(f"{len(rerun)} tile(s) rerun with the k-th-neighbour distance their neighbours measured")
-            again = self._run_tiles(tiling, halo, starts, {t: (summaries[t].halo, r) for t, r in rerun.items()})
+            again = self._run_tiles(tiling, halos, starts, {t: (summaries[t].halo, r) for t, r in rerun.items()})
             for t, s in again.items():
                 s.attempts = summaries[t].attempts + [{"reach": summaries[t].reach}] + s.attempts
                 summaries[t] = s
