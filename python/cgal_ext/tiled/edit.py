@@ -1,7 +1,8 @@
 """The detail-preserving edit of a scan of any size on Dask: the edit's sample points, their solve and their motions
 computed once on the client, with the library's Deformation on a subsample; every point of the scan then moved
 tile by tile by those motions (diffuse_points), the halo of a tile near a handle holding the handle points within
-the collar's reach (the other tiles read none). Restoring the details after the diffusion is not tiled yet. See doc/scaling.md, "Editing in tiles".
+the collar's reach (the other tiles read none). Restoring the details after the diffusion is not tiled yet. See
+doc/scaling.md, "Editing in tiles".
 """
 import json
 
