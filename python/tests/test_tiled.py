@@ -731,6 +731,38 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
         assert np.array_equal(shuffled[name], eight[name][order])
 
 
+def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_path):
+    """A worker process is killed (SIGKILL) once the first tile is saved; Dask reruns its tasks (each carries the
+    edit's state) and the file is the same."""
+    edit = edit_file(tmp_path)
+    options = dict(client=client, tiles=8, edit=edit, subsample=100_000)
+    tiled.run("edit", scan.ply, tmp_path / "reference.ply", **options)
+    result = {}
+
+    def run():
+        try:
+            result["report"] = tiled.run("edit", scan.ply, tmp_path / "killed.ply", scratch=tmp_path / "scratch",
+                                         **options)
+        except Exception as error:  # reported by the assertion below
+            result["error"] = error
+
+    (tmp_path / "scratch").mkdir()
+    pids = list(client.run(os.getpid).values())
+    worker = threading.Thread(target=run)
+    worker.start()
+    saved = str(tmp_path / "scratch" / ".*" / "tile_*")
+    deadline = time.monotonic() + 120
+    while not glob.glob(saved) and time.monotonic() < deadline:
+        assert "error" not in result, result["error"]
+        time.sleep(0.02)
+    assert glob.glob(saved), f"no tile was saved: {result}"
+    os.kill(pids[0], signal.SIGKILL)
+    worker.join(300)
+    assert "report" in result, f"the run did not complete after a worker was killed: {result}"
+    assert pids[0] not in client.run(os.getpid).values()
+    assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
+
+
 def test_a_bad_edit_fails_before_any_tile_with_nothing_written(scan, client, tmp_path):
     cases = [(edit_file(tmp_path, roi="sphere:5,5,5,0.1", name="far.json"), "roi selects none"),
              (edit_file(tmp_path, handle="indices:handle.txt", name="indices.json"), "names points by index"),
