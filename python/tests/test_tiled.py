@@ -589,11 +589,19 @@ def test_simplify_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_pa
     monkeypatch.setattr(runner, "CHUNK_ROWS", 100_000)  # 12 tasks a pass
     options = dict(client=client, subsample=200_000, target_count=3000)
     tiled.run("simplify", scan.ply, tmp_path / "reference.ply", **options)
+    run_with_a_worker_killed("simplify", scan.ply, tmp_path, "labels_*.npy", options)
+    assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
+
+
+def run_with_a_worker_killed(command, source, tmp_path, saved_name, options):
+    """Runs `command` on `source` into tmp_path/killed.ply and kills (SIGKILL) a worker once a file matching
+    `saved_name` is in the run's scratch; asserts that the run completed on the new worker."""
+    client = options["client"]
     result = {}
 
     def run():
         try:
-            result["report"] = tiled.run("simplify", scan.ply, tmp_path / "killed.ply", scratch=tmp_path / "scratch",
+            result["report"] = tiled.run(command, source, tmp_path / "killed.ply", scratch=tmp_path / "scratch",
                                          **options)
         except Exception as error:  # reported by the assertion below
             result["error"] = error
@@ -602,17 +610,16 @@ def test_simplify_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_pa
     pids = list(client.run(os.getpid).values())
     worker = threading.Thread(target=run)
     worker.start()
-    saved = str(tmp_path / "scratch" / ".*" / "labels_*.npy")
+    saved = str(tmp_path / "scratch" / ".*" / saved_name)
     deadline = time.monotonic() + 120
     while not glob.glob(saved) and time.monotonic() < deadline:
         assert "error" not in result, result["error"]
         time.sleep(0.02)
-    assert glob.glob(saved), f"no clusters were saved: {result}"
+    assert glob.glob(saved), f"nothing was saved: {result}"
     os.kill(pids[0], signal.SIGKILL)
     worker.join(300)
     assert "report" in result, f"the run did not complete after a worker was killed: {result}"
     assert pids[0] not in client.run(os.getpid).values()
-    assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
 
 
 def test_simplify_refuses_bad_options_before_writing(scan, client, tmp_path):
@@ -737,29 +744,7 @@ def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, 
     edit = edit_file(tmp_path)
     options = dict(client=client, tiles=8, edit=edit, subsample=100_000)
     tiled.run("edit", scan.ply, tmp_path / "reference.ply", **options)
-    result = {}
-
-    def run():
-        try:
-            result["report"] = tiled.run("edit", scan.ply, tmp_path / "killed.ply", scratch=tmp_path / "scratch",
-                                         **options)
-        except Exception as error:  # reported by the assertion below
-            result["error"] = error
-
-    (tmp_path / "scratch").mkdir()
-    pids = list(client.run(os.getpid).values())
-    worker = threading.Thread(target=run)
-    worker.start()
-    saved = str(tmp_path / "scratch" / ".*" / "tile_*")
-    deadline = time.monotonic() + 120
-    while not glob.glob(saved) and time.monotonic() < deadline:
-        assert "error" not in result, result["error"]
-        time.sleep(0.02)
-    assert glob.glob(saved), f"no tile was saved: {result}"
-    os.kill(pids[0], signal.SIGKILL)
-    worker.join(300)
-    assert "report" in result, f"the run did not complete after a worker was killed: {result}"
-    assert pids[0] not in client.run(os.getpid).values()
+    run_with_a_worker_killed("edit", scan.ply, tmp_path, "tile_*", options)
     assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
 
 
