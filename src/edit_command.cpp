@@ -177,7 +177,7 @@ struct Edit_command
     if(rep.data().contains("restore_details") && rep.data()["restore_details"]["residual"].get<double>() >
                                                    rep.data()["restore_details"]["tolerance"].get<double>())
       std::fprintf(stderr,
-                   "point-detail: warning: putting back the fine details stopped after %u iterations at a residual "
+                   "point-detail: warning: putting back the fine details stopped after %u steps at a residual "
                    "of %.2g (tolerance %.2g); raise --detail-iterations\n",
                    rep.data()["restore_details"]["iterations"].get<unsigned>(),
                    rep.data()["restore_details"]["residual"].get<double>(),
@@ -262,7 +262,7 @@ Subcommand add_edit_command(CLI::App& app, const Common_options& common)
           "Voronoi cell in its tangent plane: nearer a mesh ARAP on large bends)",
           &Settings::rigid_edge_weights);
   setting("--detail-iterations",
-          "at most this many iterations to put back the fine details the diffusion smoothed (default 100, 0: none)",
+          "at most this many steps to put back the fine details the diffusion smoothed (default 100, 0: none)",
           &Settings::detail_iterations)
     ->check(CLI::Range(0u, 100000u));
   edit_app->add_flag("--upsample", edit.upsample, "fill what the edit stretched, from the points it moved, at each point's pre-edit local spacing (new points: inserted = 1)");

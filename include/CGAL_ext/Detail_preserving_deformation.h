@@ -283,9 +283,9 @@ public:
   /*!
     Puts back the fine details that `diffuse()` smooths out where neighbouring sample points move differently:
     over the points the last `diffuse()` moved, solves `(1 + a) x_i - mean_j x_j = R_i (p_i - mean_j p_j) + a y_i`
-    (`j` over the point's 10 nearest neighbours, symmetrised; `y_i` where `diffuse()` put it; `R_i` its
-    neighbourhood's rotation there; `a` = `settings().detail_anchor`) by conjugate gradients, up to
-    `settings().detail_iterations` or `settings().detail_tolerance`. Handle points (exact handles), points that
+    (`j` over the closed ball of the point's 10th nearest neighbour, symmetrised; `y_i` where `diffuse()` put
+    it; `R_i` its neighbourhood's rotation there; `a` = `settings().detail_anchor`) by the Chebyshev steps that
+    reduce the error by `settings().detail_tolerance`, at most `settings().detail_iterations`. Handle points (exact handles), points that
     did not move and the fixed part keep their positions bit for bit; normals keep the diffusion's. It costs many
     diffusions: call it once a drag ends (doc/editing_diffusion.md, "Restoring the details").
     \throws Invalid_input unless `diffuse()` ran since the last `preprocess()` or `reset()`.

@@ -216,15 +216,15 @@ struct Detail_preserving_deformation_settings
   /// How each region sample point's turn (and, affine, its stretch) is measured for the diffusion.
   Sample_turn diffusion_turn = Sample_turn::affine;
   /// `Detail_preserving_deformation::restore_details()`, which puts back the fine details the diffusion's blend
-  /// smooths out, solves for them by conjugate gradients (doc/editing_diffusion.md, "Restoring the details"): at most
-  /// this many iterations (0: it leaves the diffused points). It stops earlier at `detail_tolerance`, which a
-  /// few tens of iterations at most reach on every model measured, whatever the number of points.
+  /// smooths out, solves for them by a fixed number of Chebyshev steps (doc/editing_diffusion.md, "Restoring the
+  /// details"): at most this many (0: it leaves the diffused points).
   unsigned int detail_iterations = 100;
-  /// The residual, relative to the details' size, at which `restore_details()` stops (>= 0).
+  /// The factor by which `restore_details()` reduces the error at least (>= 0): it takes the fewest steps that
+  /// guarantee it for any points, `acosh(1 / detail_tolerance) / acosh(1 + detail_anchor)` (38 by default).
   double detail_tolerance = 1e-2;
   /// How firmly `restore_details()` holds the diffused shape at coarse scales (> 0): it keeps what is coarser than
   /// about `1 / sqrt(detail_anchor)` point spacings (10 by default) where the blend put it and restores what
-  /// is finer. Smaller values restore coarser details and take more iterations (doc/editing_diffusion.md, "Restoring
+  /// is finer. Smaller values restore coarser details and take more steps (doc/editing_diffusion.md, "Restoring
   /// the details").
   double detail_anchor = 1e-2;
   /// With exact handles, whether each handle point's step from its blended position to its transform also moves
@@ -315,9 +315,9 @@ struct Detail_preserving_deformation_statistics
   std::size_t diffuse_bytes = 0;
   /// Last `restore_details()`, with the search for the points' neighbours when it was the first after preprocessing.
   double restore_seconds = 0;
-  unsigned int restore_iterations = 0; ///< last `restore_details()`: conjugate-gradient iterations
-  /// Last `restore_details()`: its final residual relative to the details' size (above `detail_tolerance` when
-  /// it stopped at `detail_iterations`).
+  unsigned int restore_iterations = 0; ///< last `restore_details()`: Chebyshev steps
+  /// Last `restore_details()`: its final residual relative to the details' size (at most about `detail_tolerance`
+  /// unless `detail_iterations` cut the steps short).
   double restore_residual = 0;
 };
 

@@ -69,7 +69,7 @@ restore_details(bool restore,
 
 } // namespace parameters
 
-/// What `diffuse_points()` did to restore the details: the conjugate gradients' iterations and final residual,
+/// What `diffuse_points()` did to restore the details: the Chebyshev steps and the final residual,
 /// as `Detail_preserving_deformation::Statistics` reports them (zero without `restore_details`).
 struct Diffuse_points_outcome
 {
@@ -91,10 +91,10 @@ struct Diffuse_points_outcome
 
   With `restore_details(true)`, it then puts back the fine details as `Detail_preserving_deformation::restore_details()`
   does, with the state's `detail_anchor`, `detail_iterations` and `detail_tolerance`: the deformation's own
-  points with their selection land where `diffuse()` and `restore_details()` put them, bit for bit. The
-  conjugate gradients couple all the points, but a point's restored detail depends mostly on its surroundings
-  within a few `1 / sqrt(detail_anchor)` point spacings: a part of a scan then differs from the whole near its
-  border only, by a fraction of the details (doc/scaling.md, "Editing in tiles").
+  points with their selection land where `diffuse()` and `restore_details()` put them, bit for bit. Each of its
+  Chebyshev steps reaches one neighbourhood further, and no step sums over the points: a point's restored
+  position depends on the points within as many hops of the 10-nearest graph as steps, and three more, so a part
+  of a scan that holds them gives that point the whole scan's result (doc/scaling.md, "Editing in tiles").
 
   Writes each point's new position through `point_map` and its new normal through `normal_map`, in place.
 

@@ -194,10 +194,11 @@ const std::vector<Deformation_keyword>& deformation_keywords()
     keyword(
       "diffusion_turn", "How each sample point carries its points.", [](auto& s) -> auto& { return s.diffusion_turn; }),
     keyword(
-      "detail_iterations", "The most conjugate-gradient iterations of restore_details().",
+      "detail_iterations", "The most Chebyshev steps of restore_details().",
       [](auto& s) -> auto& { return s.detail_iterations; }),
     keyword(
-      "detail_tolerance", "Its relative residual to stop at.", [](auto& s) -> auto& { return s.detail_tolerance; }),
+      "detail_tolerance", "The error reduction its steps guarantee.",
+      [](auto& s) -> auto& { return s.detail_tolerance; }),
     keyword(
       "detail_anchor", "How strongly it keeps the diffusion's coarse shape.",
       [](auto& s) -> auto& { return s.detail_anchor; }),

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <tuple>
 #include <vector>
 
 namespace CGAL_ext {
@@ -26,18 +27,22 @@ namespace internal {
 ///     (1 + a) x_i - mean_j x_j = R_i d_i + a y_i
 ///
 /// with `j` over the row's neighbours in the symmetrised k-nearest-neighbour graph at rest (the point-set
-/// Laplacian's, uniform weights), `d_i = p_i - mean_j p_j` its detail at rest, `y_i` where the blend put it and
-/// `R_i` the rotation that best carries its neighbourhood's edges there; every other point holds still and
-/// pins the solve. The anchor `a` keeps what is coarser than about `1 / sqrt(a)` point spacings where the blend
-/// put it (the blend is right at the sample points' scale) and restores the details below. Scaled by each
-/// row's degree the system is symmetric positive definite (the anchor makes it so even for a part that no
-/// pinned point touches) with a condition number of about 2 / a, so Jacobi-preconditioned conjugate gradients
-/// reach a residual of 1 % in a few iterations whatever the number of points (doc/editing_diffusion.md, "Restoring the
-/// details"). A rigid motion (`y = R p + t`) solves it already and stays exact to rounding.
+/// Laplacian's: closed balls, uniform weights), `d_i = p_i - mean_j p_j` its detail at rest, `y_i` where the blend
+/// put it and `R_i` the rotation that best carries its neighbourhood's edges there; every other point holds still
+/// and pins the solve. The anchor `a` keeps what is coarser than about `1 / sqrt(a)` point spacings where the blend
+/// put it (the blend is right at the sample points' scale) and restores the details below.
+///
+/// Scaled by each row's degree the system is symmetric positive definite, and its Jacobi-scaled spectrum lies in
+/// `[a / (1 + a), (2 + a) / (1 + a)]` whatever the points. So a fixed number of Chebyshev steps, known before the
+/// solve (`steps()`), reduces the error by the tolerance: no step takes a sum over the rows, a row's result depends
+/// on the rows within that many hops only, and a tile of a scan that holds them reproduces the whole scan's result
+/// (doc/scaling.md, "Editing in tiles"). Each row sums its neighbours in the order of their rest positions, which
+/// the rows' numbering does not change. A rigid motion (`y = R p + t`) solves the system already and stays exact
+/// to rounding.
 class Detail_relaxation
 {
 public:
-  /// Iterations and final residual of the last `apply()`.
+  /// Steps and final residual of the last `apply()`.
   struct Outcome
   {
     unsigned int iterations = 0;
@@ -45,8 +50,18 @@ public:
     double residual = 0;
   };
 
-  /// Relaxes `rows` of `points` (rest positions), each over its `k` nearest points and those that have it
-  /// among their `k` nearest (of the relaxed rows: the graph is symmetrised within them).
+  /// The Chebyshev steps `apply()` takes: the fewest that reduce the error by `tolerance` for any spectrum in the
+  /// bounds above (`T_K(1 + a) >= 1 / tolerance`), at most `max_iterations`.
+  static unsigned int steps(double anchor, unsigned int max_iterations, double tolerance)
+  {
+    if(!(tolerance < 1)) return 0;
+    if(!(tolerance > 0)) return max_iterations;
+    const double needed = std::ceil(std::acosh(1 / tolerance) / std::acosh(1 + anchor));
+    return needed < double(max_iterations) ? unsigned(needed) : max_iterations;
+  }
+
+  /// Relaxes `rows` of `points` (rest positions), each over the closed ball of its `k`-th nearest point and the
+  /// points that have it in theirs (of the relaxed rows: the graph is symmetrised within them).
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& points, std::vector<int> rows, std::size_t k)
   {
@@ -55,45 +70,53 @@ public:
     m_free_index.assign(std::size_t(points.rows()), -1);
     std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
     for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
-    Neighbor_graph nearest = fixed_degree_graph(n, k);
+    std::vector<std::vector<int>> balls(n);
     m_twin.assign(n, -1);
     if(n > 0) {
       const Position_tree tree(points, ConcurrencyTag());
       for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
         const int row = m_rows[r];
-        int* out = nearest.indices.data() + r * k;
-        std::size_t m = 0;
+        thread_local std::vector<Ranked_row> found;
+        tree.nearest_ball(std::size_t(row), k, found);
         int pinned_twin = -1, relaxed_twin = row;
-        // k + 1 to skip the point itself (with exact duplicates it need not come first).
-        tree.nearest(tree[std::size_t(row)], k + 1, [&](int j, double) {
-          if(j != row && m < k) out[m++] = j;
-          if(j == row || points.row(j) != points.row(row)) return;
+        for(const Ranked_row& entry : found) {
+          const int j = entry.second;
+          balls[r].push_back(j);
+          if(entry.first > 0 || points.row(j) != points.row(row)) continue;
           if(relaxed_index[std::size_t(j)] < 0) pinned_twin = pinned_twin < 0 ? j : std::min(pinned_twin, j);
           else relaxed_twin = std::min(relaxed_twin, j);
-        });
+        }
         m_twin[r] = pinned_twin >= 0 ? pinned_twin : relaxed_twin != row ? relaxed_twin : -1;
       });
     }
-    // Symmetrise: j joins row i's neighbours when i is among j's nearest and j is relaxed too.
-    std::vector<int> degree(n, int(k));
-    for(std::size_t r = 0; r < n; ++r)
-      for(const int* j = nearest.begin(r); j != nearest.end(r); ++j)
-        if(relaxed_index[std::size_t(*j)] >= 0) ++degree[std::size_t(relaxed_index[std::size_t(*j)])];
+    // Symmetrise: j joins row i's neighbours when i is in j's ball and j is relaxed too.
+    std::vector<int> degree(n);
+    for(std::size_t r = 0; r < n; ++r) {
+      degree[r] += int(balls[r].size());
+      for(int j : balls[r])
+        if(relaxed_index[std::size_t(j)] >= 0) ++degree[std::size_t(relaxed_index[std::size_t(j)])];
+    }
     m_neighbors.offsets.assign(n + 1, 0);
     for(std::size_t r = 0; r < n; ++r) m_neighbors.offsets[r + 1] = m_neighbors.offsets[r] + degree[r];
     m_neighbors.indices.resize(std::size_t(m_neighbors.offsets[n]));
     std::vector<int> fill(m_neighbors.offsets.begin(), m_neighbors.offsets.end() - 1);
     for(std::size_t r = 0; r < n; ++r)
-      for(const int* j = nearest.begin(r); j != nearest.end(r); ++j) {
-        m_neighbors.indices[std::size_t(fill[r]++)] = *j;
-        if(relaxed_index[std::size_t(*j)] >= 0) m_neighbors.indices[std::size_t(fill[std::size_t(relaxed_index[std::size_t(*j)])]++)] = m_rows[r];
+      for(int j : balls[r]) {
+        m_neighbors.indices[std::size_t(fill[r]++)] = j;
+        if(relaxed_index[std::size_t(j)] >= 0)
+          m_neighbors.indices[std::size_t(fill[std::size_t(relaxed_index[std::size_t(j)])]++)] = m_rows[r];
       }
+    balls = {};
     for(int row : m_rows) relaxed_index[std::size_t(row)] = -1;
     m_details.resize(Eigen::Index(n), 3);
+    const auto by_position = [&](int i, int j) {
+      return std::make_tuple(points(i, 0), points(i, 1), points(i, 2), i) <
+             std::make_tuple(points(j, 0), points(j, 1), points(j, 2), j);
+    };
     for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
       int* first = m_neighbors.indices.data() + m_neighbors.offsets[r];
       int* last = m_neighbors.indices.data() + fill[r];
-      std::sort(first, last);
+      std::sort(first, last, by_position);
       last = std::unique(first, last);
       // The slots freed by duplicates stay unused: a row's neighbours end at m_end.
       fill[r] = int(last - m_neighbors.indices.data());
@@ -105,8 +128,8 @@ public:
   }
 
   /// Solves the system above on `positions` (every row; only the relaxed rows that moved change) with anchor
-  /// `anchor` > 0, until the residual is at most `tolerance` of the details or after `max_iterations`. A row
-  /// that is still at its `rest` position with all its neighbours keeps it bit for bit.
+  /// `anchor` > 0 by `steps(anchor, max_iterations, tolerance)` Chebyshev steps. A row that is still at its `rest`
+  /// position with all its neighbours keeps it bit for bit.
   template <typename ConcurrencyTag>
   Outcome apply(const Matrix_n3& rest, double anchor, unsigned int max_iterations, double tolerance,
                 Matrix_n3& positions)
@@ -151,7 +174,8 @@ public:
     m_direction.resize(Eigen::Index(m), 3);
     m_product.resize(Eigen::Index(m), 3);
     m_diagonal.resize(Eigen::Index(m));
-    // x starts where the blend put the points; its residual b - A x is deg_i (R_i d_i - (x_i - mean_j x_j)).
+    // x starts where the blend put the points; its residual b - A x is deg_i (R_i d_i - (x_i - mean_j x_j)). The
+    // first step, d = M^-1 r (M = diag A), is Jacobi's.
     using Row = Eigen::RowVector3d;
     const double target_norm = std::sqrt(block_sum<ConcurrencyTag, Row>(m, [&](std::size_t f) {
       const std::size_t r = std::size_t(m_free[f]);
@@ -172,40 +196,36 @@ public:
     }).sum());
     for(int r : m_free) m_free_index[std::size_t(m_rows[std::size_t(r)])] = -1;
 
-    // Jacobi-preconditioned conjugate gradients, the three coordinates side by side. The sums add fixed blocks
-    // in a fixed order: the result does not depend on the number of threads.
-    using Rows = Eigen::Matrix<double, 2, 3>;
-    Rows sums = block_sum<ConcurrencyTag, Rows>(m, [&](std::size_t f) {
-      const Row r = m_residual.row(Eigen::Index(f));
-      return Rows((Rows() << r.cwiseProduct(m_direction.row(Eigen::Index(f))), r.cwiseAbs2()).finished());
-    });
-    Outcome outcome;
-    outcome.residual = target_norm > 0 ? std::sqrt(sums.row(1).sum()) / target_norm : 0;
-    while(outcome.residual > tolerance && outcome.iterations < max_iterations) {
-      const Row curvature = block_sum<ConcurrencyTag, Row>(m, [&](std::size_t f) {
+    // Chebyshev steps (Saad, Iterative Methods for Sparse Linear Systems, 2nd ed., Algorithm 12.1) for the
+    // spectrum of M^-1 A in [theta - delta, theta + delta], theta = 1, delta = 1 / (1 + a): sigma = 1 + a.
+    const unsigned int count = steps(anchor, max_iterations, tolerance);
+    const double sigma = 1 + anchor;
+    double rho = 1 / sigma;
+    for(unsigned int step = 0; step < count; ++step) {
+      for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
         const Eigen::Index F = Eigen::Index(f);
         Row product = m_diagonal(F) * m_direction.row(F);
         for(const int* j = m_adjacency.begin(f); j != m_adjacency.end(f); ++j) product -= m_direction.row(*j);
         m_product.row(F) = product;
-        return Row(product.cwiseProduct(m_direction.row(F)));
       });
-      const Row alpha = (curvature.array() > 0).select(sums.row(0).array() / curvature.array(), 0.);
-      const Row previous = sums.row(0);
-      sums = block_sum<ConcurrencyTag, Rows>(m, [&](std::size_t f) {
-        const Eigen::Index F = Eigen::Index(f);
-        m_x.row(F) += alpha.cwiseProduct(m_direction.row(F));
-        m_residual.row(F) -= alpha.cwiseProduct(m_product.row(F));
-        const Row r = m_residual.row(F);
-        return Rows((Rows() << r.cwiseAbs2() / m_diagonal(F), r.cwiseAbs2()).finished());
-      });
-      const Row beta = (previous.array() > 0).select(sums.row(0).array() / previous.array(), 0.);
+      const double next_rho = 1 / (2 * sigma - rho);
+      const double keep = next_rho * rho, scale = 2 * next_rho * sigma;
+      rho = next_rho;
       for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
         const Eigen::Index F = Eigen::Index(f);
-        m_direction.row(F) = m_residual.row(F) / m_diagonal(F) + beta.cwiseProduct(m_direction.row(F));
+        m_x.row(F) += m_direction.row(F);
+        m_residual.row(F) -= m_product.row(F);
+        m_direction.row(F) = keep * m_direction.row(F) + scale * m_residual.row(F) / m_diagonal(F);
       });
-      ++outcome.iterations;
-      outcome.residual = std::sqrt(sums.row(1).sum()) / target_norm;
     }
+    Outcome outcome;
+    outcome.iterations = count;
+    outcome.residual =
+      target_norm > 0 ? std::sqrt(block_sum<ConcurrencyTag, Row>(
+                                    m, [&](std::size_t f) { return Row(m_residual.row(Eigen::Index(f)).cwiseAbs2()); })
+                                    .sum()) /
+                          target_norm
+                      : 0;
     for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
       positions.row(m_rows[std::size_t(m_free[f])]) = m_x.row(Eigen::Index(f));
     });
