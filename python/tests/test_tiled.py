@@ -690,17 +690,20 @@ def subsample_deformation(edit, points, normals):
 
 def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusion(scan, client, tmp_path):
     """The tiled edit is the library's Deformation on the client's subsample, its diffusion carried to every point
-    by diffuse_points in the tiles, handles and collar included (the tiles near the handle read a halo of the
-    collar's reach, the others none): on the whole scan (a subsample as large) it is the one-process diffuse(); on
-    a subsample of 30,000 of the 100,000 points, diffuse_points of all of them. The same result whatever the tiles
-    and the order of the points."""
+    by diffuse_points in the tiles, handles and collar included, and the details restored (the tiles near the
+    handle read a halo of the collar's reach and the restoration's, the others meeting the region the
+    restoration's, the rest none): on the whole scan (a subsample as large) it is the one-process diffuse() and
+    restore_details(); on a subsample of 30,000 of the 100,000 points, diffuse_points of all of them. The same
+    result whatever the tiles and the order of the points."""
     edit = edit_file(tmp_path)
     points, normals = scan.small_points, scan.small_normals
     report = tiled.run("edit", scan.small, tmp_path / "whole.ply", client=client, tiles=8, edit=edit)
     assert report["subsample"] == len(points) and report["collar_reach"] > 0
     sub_points, sub_normals = client_subsample(points, normals, len(points))
     deformation, handle = subsample_deformation(edit, sub_points, sub_normals)
-    expected = deformation.diffuse()
+    diffused = deformation.diffuse()
+    expected = deformation.restore_details()
+    assert np.abs(expected.points - diffused.points).max() > 1e-4  # the restoration moves points
     out = read_output(tmp_path / "whole.ply")
     at = {tuple(p): i for i, p in enumerate(sub_points)}
     rows = np.array([at[tuple(p)] for p in points])
@@ -717,12 +720,14 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
                        subsample=30_000)
     sub_points, sub_normals = client_subsample(points, normals, 30_000)
     assert report["subsample"] == len(sub_points) < 40_000
-    assert 0 < report["tiles_with_the_halo"] < report["tiles"]  # the tiles far from the handle read no halo
-    reads = [(s["read"], s["own"]) for s in report["tile_summaries"]]
-    assert sum(read == own for read, own in reads) == report["tiles"] - report["tiles_with_the_halo"]
+    assert 0 < report["tiles_with_the_halo"] < report["tiles"]  # the tiles far from the handle read less
+    # The tiles whose box misses the region read their own points only.
+    without = [s["read"] == s["own"] for s in report["tile_summaries"] if s["halo"] == 0]
+    assert without and all(without)
     deformation, _ = subsample_deformation(edit, sub_points, sub_normals)
     selection = tiled.edit.Edit(edit=edit).selection(points)
-    expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection)
+    expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection,
+                                       restore_details=True)
     eight = read_output(tmp_path / "eight.ply")
     assert np.abs(columns(eight, "xyz") - expected.points).max() <= 1e-12
     assert np.abs(columns(eight, ("nx", "ny", "nz")) - expected.normals).max() <= 1e-12
@@ -736,6 +741,27 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
     for name in ("x", "y", "z", "nx", "ny", "nz"):
         assert np.array_equal(five[name], eight[name])
         assert np.array_equal(shuffled[name], eight[name][order])
+
+
+def test_the_tiled_edit_restores_the_details_in_tiles_as_one_process(scan, client, tmp_path):
+    """On 1.2M points (tiles wider than the restoration's hops), the tiled edit with a subsample of 100,000 equals
+    diffuse_points with the restoration over every point in one process: the tiles reading the restoration's
+    halo read part of the scan, and their own points land where the whole scan puts them."""
+    edit = edit_file(tmp_path)
+    report = tiled.run("edit", scan.ply, tmp_path / "tiled.ply", client=client, tiles=8, edit=edit,
+                       subsample=100_000)
+    summaries = report["tile_summaries"]
+    assert any(0 < s["halo"] and s["read"] < 0.8 * len(scan.points) for s in summaries)
+    assert report["widened_tiles"] == 0
+    sub_points, sub_normals = client_subsample(scan.points, scan.normals, 100_000)
+    state = subsample_deformation(edit, sub_points, sub_normals)[0].diffusion_state()
+    selection = tiled.edit.Edit(edit=edit).selection(scan.points)
+    expected = cgal_ext.diffuse_points(scan.points, scan.normals, state, selection=selection, restore_details=True)
+    diffused = cgal_ext.diffuse_points(scan.points, scan.normals, state, selection=selection)
+    out = read_output(tmp_path / "tiled.ply")
+    assert np.abs(expected.points - diffused.points).max() > 1e-4
+    assert np.abs(columns(out, "xyz") - expected.points).max() <= 1e-12
+    assert np.abs(columns(out, ("nx", "ny", "nz")) - expected.normals).max() <= 1e-12
 
 
 def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_path):

@@ -72,8 +72,8 @@ def parser():
                           help="also write the scan with each point's ssp_index and cluster colour (PLY or Zarr)")
     edit = command("edit", "the detail-preserving edit of an edit JSON (sphere: and box: region specs): its sample "
                            "points, solve and motions on a subsample on the client, every point diffused tile by "
-                           "tile with its exact handles and collar (the details are not restored after the "
-                           "diffusion yet)")
+                           "tile with its exact handles and collar, and its details restored as point-detail edit "
+                           "restores them")
     edit.add_argument("--edit", required=True, help="the edit JSON, as point-detail edit --edit reads it")
     edit.add_argument("--subsample", type=int, default=S,
                       help="points the client deforms (default 1,000,000; a smaller scan is deformed whole)")

@@ -1,10 +1,12 @@
 """The detail-preserving edit of a scan of any size on Dask: the edit's sample points, their solve and their motions
 computed once on the client, with the library's Deformation on a subsample; every point of the scan then moved
 tile by tile by those motions (diffuse_points), the halo of a tile near a handle holding the handle points within
-the collar's reach (the other tiles read none). Restoring the details after the diffusion is not tiled yet. See
+the collar's reach, and the details restored (a fixed number of Chebyshev steps, each reaching one neighbourhood
+further) on every point the symmetric certificate finds that many hops from the read box's border. See
 doc/scaling.md, "Editing in tiles".
 """
 import json
+import math
 
 import numpy as np
 
@@ -51,11 +53,25 @@ def inside(points, specs):
     return chosen
 
 
+def restore_steps(state):
+    """The Chebyshev steps of diffuse_points' restoration for a diffusion state (internal::Detail_relaxation::steps):
+    the fewest with T_K(1 + anchor) >= 1 / tolerance, at most detail_iterations."""
+    tolerance, cap = float(state["detail_tolerance"]), int(state["detail_iterations"])
+    if not tolerance < 1:
+        return 0
+    if not tolerance > 0:
+        return cap
+    return min(cap, math.ceil(math.acosh(1 / tolerance) / math.acosh(1 + float(state["detail_anchor"]))))
+
+
 class Edit(ops.Operation):
-    """The tiled edit as a tiled operation: no neighbourhoods to certify, a halo of the collar's reach near the
-    handles and none elsewhere, and the moved positions and normals as its values."""
+    """The tiled edit as a tiled operation: the moved positions and normals as its values. Near the handles a tile
+    reads the collar's reach; where its own points relax (the region's, but exact handles), the certificate of the
+    restoration's closed balls over its steps and three hops more (the targets' rotations, which rows are
+    unknowns, the twins)."""
     name = "edit"
-    uses_neighbors = False
+    symmetric = True
+    RELAXATION_NEIGHBORS = 10  # diffuse_points' restoration: the closed ball of the 10th nearest
 
     def __init__(self, edit, subsample=SUBSAMPLE):
         if not _whole(subsample) or subsample < 1:
@@ -126,6 +142,14 @@ class Edit(ops.Operation):
         runner.log(f"{n} points, subsample of {len(points)}: {deformation.number_of_sample_points()} sample points, "
                    f"collar reach {self.state['collar_reach']:.4g}")
 
+    @property
+    def restores(self):
+        return restore_steps(self.state) > 0
+
+    @property
+    def uses_neighbors(self):
+        return self.restores
+
     def computed_fields(self):
         return ("x", "y", "z", "nx", "ny", "nz")
 
@@ -133,32 +157,72 @@ class Edit(ops.Operation):
         return False
 
     def neighbors(self, estimate_normals):
-        return 1  # for the plan's spacing only: the edit reads no neighbourhoods
+        return self.own_neighbors() if self.restores else 1  # 1: for the plan's spacing only
+
+    def own_neighbors(self):
+        return self.RELAXATION_NEIGHBORS
+
+    def rings(self):
+        return restore_steps(self.state) + 3
+
+    def collar(self):
+        return 1.01 * float(self.state["collar_reach"])
 
     def halo(self, spacing):
-        """The collar's reach: a point's result depends on the sample points and on the handle points that near."""
-        return 1.01 * float(self.state["collar_reach"])
+        """A tile's first halo near a handle: the collar's reach (a point's diffused position depends on the
+        sample points and on the handle points that near), and the restoration's hops."""
+        return self.collar() + (ops.Operation.halo(self, spacing) if self.restores else 0.0)
+
+    def relaxes(self, points):
+        """Which points the restoration may move: the region's, and the handles' unless they are exact."""
+        selection = self.selection(points)
+        return selection == REGION if self.state["exact_handles"] else selection != FIXED
+
+    def needs_certificate(self, points, own):
+        return self.restores and bool(self.relaxes(points[own]).any())
+
+    def certify(self, neighborhoods, own, reach, estimate_normals):
+        """The symmetric certificate on the points that relax; the others' results need no neighbourhood."""
+        certified = ops.Operation.certify(self, neighborhoods, own, reach, estimate_normals)
+        return certified | ~self.relaxes(neighborhoods.points[own])
+
+    def certificate_reach(self, lo, hi, reach):
+        """Near a handle, at least the collar's reach: the rows nearer the border may lack handle points."""
+        return max(reach, self.collar()) if self.near_handles(lo[None], hi[None])[0] else reach
 
     def near_handles(self, lo, hi):
         """Whether each box [lo[i], hi[i]] comes within the collar's reach of a handle's spec: only there can a
         point have handle points within the reach (a point's box is [p, p])."""
         near = np.zeros(len(lo), dtype=bool)
-        reach = self.halo(0.0)
+        reach = self.collar()
         for kind, a, b in (spec for group in self.handles for spec in group):
             near |= (plan.box_distances(a, a, lo, hi) <= b + reach if kind == "sphere" else
                      plan.box_distances(a, b, lo, hi) <= reach)
         return near
 
+    def meets_region(self, lo, hi):
+        """Whether each box [lo[i], hi[i]] meets the region's specs (all of them without specs)."""
+        if self.roi is None:
+            return np.ones(len(lo), dtype=bool)
+        meets = np.zeros(len(lo), dtype=bool)
+        for kind, a, b in self.roi:
+            meets |= (plan.box_distances(a, a, lo, hi) <= b if kind == "sphere" else
+                      plan.box_distances(a, b, lo, hi) <= 0)
+        return meets
+
     def tile_halos(self, lo, hi, halo):
-        """The collar's reach for the tiles near a handle, none for the others: their points move by the sample
-        points' motions alone, which every tile holds."""
-        return np.where(self.near_handles(lo, hi), float(halo), 0.0)
+        """`halo` for the tiles near a handle; the restoration's hops for the others whose points may relax; none
+        for the rest: their points move by the sample points' motions alone, which every tile holds."""
+        relaxing = self.restores & self.meets_region(lo, hi)
+        return np.where(self.near_handles(lo, hi), float(halo), np.where(relaxing, float(halo) - self.collar(), 0.0))
 
     def required_halo(self, neighborhoods, own, points):
-        """The collar's reach where an own point is near a handle, else none."""
+        """Without the restoration, the collar's reach where an own point is near a handle (with it, the
+        certificate's reach holds the collar)."""
         mine = points[own]
-        return self.halo(0.0) if self.near_handles(mine, mine).any() else 0.0
+        return self.collar() if not self.restores and self.near_handles(mine, mine).any() else 0.0
 
     def compute(self, points, normals):
-        moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points))
+        moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points),
+                                     restore_details=self.restores)
         return {name: column for name, column in zip(self.computed_fields(), (*moved.points.T, *moved.normals.T))}

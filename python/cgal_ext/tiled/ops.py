@@ -107,6 +107,16 @@ class Operation:
         """Products with K the values need: the transfer function's degree, else one neighbourhood."""
         return RINGS[self.settings["order"]] if "order" in self.settings else 1
 
+    def needs_certificate(self, points, own):
+        """Whether the own points of a tile (`points` read, `own` its own) need their neighbourhoods certified:
+        an operation that uses none certifies every point as it is."""
+        return self.uses_neighbors
+
+    def certificate_reach(self, lo, hi, reach):
+        """The reach the certificate of the tile [lo, hi) assumes: no point outside the read box nearer its border
+        than that may change a certified value (`reach`: the largest k-th-neighbour distance around)."""
+        return reach
+
     def required_halo(self, neighborhoods, own, points):
         """The halo an approximate operation needs beyond what `certify` checks (0: none), for a tile's `points`
         (`own`: its own)."""

@@ -209,6 +209,7 @@ def run_tile(job):
     estimate_normals, chunk_starts, scratch = job.estimate_normals, job.chunk_starts, job.scratch
     with threads(job.threads_per_task):
         lo, hi = job.tiling.lo[tile], job.tiling.hi[tile]
+        reach = operation.certificate_reach(lo, hi, reach)
         k = operation.neighbors(estimate_normals)
         compute_first = operation.measures_radius and not estimate_normals
         attempts = []
@@ -228,7 +229,7 @@ def run_tile(job):
                                    np.zeros(len(chunk_starts) + 1, dtype=np.int64), watch.seconds)
             border = plan.border_distance(points, lo - halo, hi + halo)
             neighborhoods = interior = values = None
-            if not operation.uses_neighbors:
+            if not operation.needs_certificate(points, own):
                 kth, tile_reach, searched = 0.0, reach, 0.0
                 certified = np.ones(len(points), dtype=bool)
             elif compute_first:
@@ -478,6 +479,7 @@ class Run(Passes):
             reach = 2.0 * spacing
         self.report.update(tiles=tiling.count, chunks=len(ranges), initial_halo=halo, spacing=spacing,
                            tiles_with_the_halo=int(np.count_nonzero(halos >= halo)),
+                           tiles_with_a_halo=int(np.count_nonzero(halos > 0)),
                            diagonal=float(np.linalg.norm(hi - lo)))
         self.log(f"{n} points, {tiling.count} tiles, halo {halo:.4g} (k-th neighbour distance about {spacing:.4g})"
                  + ("" if (halos >= halo).all() else f" for {np.count_nonzero(halos >= halo)} of them"))
