@@ -554,7 +554,7 @@ void bind_deformation(py::module_& m)
         "(int64 indices), ``handles`` (per group a dict of ``points``, ``rotation`` (3, 3) and ``translation``) and\n"
         "``settings`` (Deformation's keywords). A file the program refuses is a ValueError with its message.");
   m.def("diffuse_points", &bound_diffuse_points, "points"_a, "normals"_a, "state"_a, py::kw_only(),
-        "selection"_a = py::none(), "restore_details"_a = false,
+        "selection"_a = py::none(), "restore_details"_a = false, "neighbor_radius"_a = py::none(),
         "Moves points a Deformation was not built on (a denser sampling of the same surface, a tile of a larger\n"
         "scan) as its diffuse() moves its own: each by its ``stencil_size`` nearest sample points' motions, weighted\n"
         "as diffuse() weights them; with ``selection``, the exact handle points onto their group's transform and\n"
@@ -562,12 +562,15 @@ void bind_deformation(py::module_& m)
         "points with their selection move as diffuse() moves them, bit for bit; a part of a scan moves as the whole\n"
         "would wherever it holds the handle points within the collar's reach. With ``restore_details``, the fine\n"
         "details the blend smooths out are then put back as Deformation.restore_details() puts them (the\n"
-        "deformation's own points: bit for bit; a part of a scan: as the whole but near its border).\n\n"
+        "deformation's own points: bit for bit; a part of a scan: as the whole where it holds every point within\n"
+        "the restoration's steps' hops).\n\n"
         "Parameters\n----------\npoints, normals : array_like\n    (n, 3) float64.\n"
         "state : dict\n    Deformation.diffusion_state(), after deform().\n"
         "selection : array_like of int, optional\n    Per point: -2 outside the region of interest, -1 in it, or its "
         "handle group. Without it,\n    every point is a region point that is no handle.\n"
-        "restore_details : bool\n    Whether to put back the fine details too (the state's detail_* settings).\n\n"
+        "restore_details : bool\n    Whether to put back the fine details too (the state's detail_* settings).\n"
+        "neighbor_radius : numpy.ndarray, optional\n    A writable contiguous (n,) float64 array that receives each "
+        "point's distance to its 10th\n    nearest other point (the restoration's neighbourhoods).\n\n"
         "Returns\n-------\nDeformed\n    (points (n, 3), normals (n, 3)), new float64 arrays.");
 }
 

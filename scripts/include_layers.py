@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Prints which of the package's headers include which, layer by layer, and checks the rules the layering
 keeps: a header under include/CGAL_ext/internal/ includes only other internal headers and the value types
-(exceptions.h, setting_names.h, Detail_filter.h and the *_settings.h headers), never an algorithm header or a
+(exceptions.h, setting_names.h, Detail_filter.h, neighbor_radius_map.h and the *_settings.h headers), never an algorithm header or a
 view; a view (a public type an algorithm hands out over its internal parts, as Diffusion_view.h) includes no
 algorithm header; an algorithm header includes no other algorithm header (what two algorithms share lives in
 internal/); and no public header is longer than its line budget, so that an algorithm stays a thin layer over
@@ -36,7 +36,8 @@ def layer(header):
         return "internal"
     if name in VIEWS:
         return "views"
-    if name in ("exceptions.h", "setting_names.h", "Detail_filter.h") or name.endswith("_settings.h"):
+    if name in ("exceptions.h", "setting_names.h", "Detail_filter.h", "neighbor_radius_map.h") or \
+            name.endswith("_settings.h"):
         return "value types"
     return "algorithms"
 

@@ -850,11 +850,11 @@ TEST_F(Cli, EditWiringJsonAsTheLibraryDoesAndHandlesOnTheirTransform)
   settings.rigid_iterations = 2;
   const std::vector<Point> rigid_points = program_edit("arap", "--rotations arap --rigid-iterations 2", settings).first;
   EXPECT_GT(max_distance(rigid_points, std::vector<Point>(output.points().begin(), output.points().end())), 1e-3);
-  // Two iterations of the restore, and a warning that it stopped early.
+  // Two steps of the restore, and a warning that it stopped early.
   settings.detail_iterations = 2;
   const std::string capped =
     program_edit("capped", "--rotations arap --rigid-iterations 2 --detail-iterations 2", settings).second;
-  EXPECT_NE(capped.find("stopped after 2 iterations"), std::string::npos) << capped;
+  EXPECT_NE(capped.find("stopped after 2 steps"), std::string::npos) << capped;
   // SRE-ARAP's smooth-rotation term.
   settings.detail_iterations = CGAL_ext::Detail_preserving_deformation_settings().detail_iterations;
   settings.rigid_rotation_smoothing = 1;

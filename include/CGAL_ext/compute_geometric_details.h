@@ -6,9 +6,10 @@
 #include <CGAL_ext/Detail_filter.h>
 #include <CGAL_ext/exceptions.h>
 #include <CGAL_ext/internal/Point_arrays.h>
-#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/geometric_details.h>
+#include <CGAL_ext/internal/oriented_normals.h>
 #include <CGAL_ext/internal/parallel.h>
+#include <CGAL_ext/neighbor_radius_map.h>
 
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/boost/graph/named_params_helper.h>
@@ -19,36 +20,6 @@
 #include <vector>
 
 namespace CGAL_ext {
-
-/// \cond SKIP_IN_MANUAL
-namespace internal_np {
-enum neighbor_radius_map_t
-{
-  neighbor_radius_map
-};
-} // namespace internal_np
-/// \endcond
-
-namespace parameters {
-
-/*!
-  \ingroup PkgCGALExtAlgorithms
-  The named parameter `neighbor_radius_map` of `compute_geometric_details()`: a `WritablePropertyMap` with value
-  type `geom_traits::FT` that receives each point's distance to its k-th nearest neighbour. It follows other named
-  parameters, `neighbor_radius_map(radii, CGAL::parameters::normal_map(normals))`, as CGAL 5.5's parameters
-  cannot be extended by a member function.
-*/
-template <typename RadiusMap, typename T = bool, typename Tag = CGAL::internal_np::all_default_t,
-          typename Base = CGAL::internal_np::No_property>
-CGAL::Named_function_parameters<RadiusMap, internal_np::neighbor_radius_map_t,
-                                CGAL::Named_function_parameters<T, Tag, Base>>
-neighbor_radius_map(const RadiusMap& radius_map,
-                    const CGAL::Named_function_parameters<T, Tag, Base>& np = CGAL::parameters::default_values())
-{
-  return {radius_map, np};
-}
-
-} // namespace parameters
 
 namespace internal {
 

@@ -10,6 +10,7 @@
 #include <CGAL_ext/internal/edit_selection.h>
 #include <CGAL_ext/internal/handle_collar.h>
 #include <CGAL_ext/internal/ssp_diffusion.h>
+#include <CGAL_ext/neighbor_radius_map.h>
 
 #include <CGAL/Named_function_parameters.h>
 #include <CGAL/boost/graph/named_params_helper.h>
@@ -17,7 +18,9 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace CGAL_ext {
@@ -96,6 +99,10 @@ struct Diffuse_points_outcome
   position depends on the points within as many hops of the 10-nearest graph as steps, and three more, so a part
   of a scan that holds them gives that point the whole scan's result (doc/scaling.md, "Editing in tiles").
 
+  With `neighbor_radius_map`, it also writes each point's distance to its 10th nearest other point, the radius of
+  the restoration's neighbourhoods, with which a caller holding a part of a scan certifies which of its points
+  hold all the points their results depend on (the tiled edit, doc/scaling.md, "Editing in tiles").
+
   Writes each point's new position through `point_map` and its new normal through `normal_map`, in place.
 
   \tparam ConcurrencyTag `CGAL::Sequential_tag` or `CGAL::Parallel_if_available_tag`.
@@ -104,7 +111,7 @@ struct Diffuse_points_outcome
          `Detail_preserving_deformation::update_sample_motions()` (or `diffuse()`).
   \param np `point_map`, `normal_map` (required); `CGAL_ext::parameters::selection_map()` (without it, every point
          is a region point that is no handle: neither exact handles nor a collar);
-         `CGAL_ext::parameters::restore_details()`.
+         `CGAL_ext::parameters::restore_details()`; `CGAL_ext::parameters::neighbor_radius_map()`.
   \returns the restoration's iterations and residual.
   \throws Invalid_input on an invalid `state`, points without normals, a non-finite point, a zero normal, or a
           selection value that is no handle group of `state`.
@@ -171,17 +178,34 @@ Diffuse_points_outcome diffuse_points(PointRange& points, const Diffusion_state&
                                         samples, moving, state.collar_reach);
   collar.template apply<ConcurrencyTag>(cloud.positions, normals, rotations, transforms, moved, moved_normals);
   Diffuse_points_outcome outcome;
-  // As Point_diffusion::restore_details: the moved region points relax over their 10 nearest, the rest pin them.
+  // As Point_diffusion::restore_details: the moved region points relax over the closed balls of their 10th
+  // nearest, the rest pin them. The balls of every point come from one k-nearest graph, which also gives the radii.
+  using Radius_map =
+    typename CGAL::internal_np::Get_param<typename NamedParameters::base, internal_np::neighbor_radius_map_t>::type;
+  constexpr bool radius_asked = !std::is_same<Radius_map, CGAL::internal_np::Param_not_found>::value;
   const std::size_t neighbors = std::min<std::size_t>(10, cloud.size() - 1);
-  if(CGAL::parameters::choose_parameter(CGAL::parameters::get_parameter(np, internal_np::restore_details), false) &&
-     neighbors > 0 && state.detail_iterations > 0) {
-    Detail_relaxation relaxation;
-    relaxation.template setup<ConcurrencyTag>(cloud.positions, relaxed_rows(moving, labels, collar.handle_rows),
-                                              neighbors);
-    const Detail_relaxation::Outcome restored = relaxation.template apply<ConcurrencyTag>(
-      cloud.positions, state.detail_anchor, state.detail_iterations, state.detail_tolerance, moved);
-    outcome.restore_iterations = restored.iterations;
-    outcome.restore_residual = restored.residual;
+  const bool restore =
+    CGAL::parameters::choose_parameter(CGAL::parameters::get_parameter(np, internal_np::restore_details), false) &&
+    neighbors > 0 && state.detail_iterations > 0;
+  if((restore || radius_asked) && neighbors > 0) {
+    Progress progress;
+    const Neighbor_graph balls = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, neighbors, progress);
+    if(restore) {
+      Detail_relaxation relaxation;
+      relaxation.template setup<ConcurrencyTag>(cloud.positions, relaxed_rows(moving, labels, collar.handle_rows),
+                                                balls);
+      const Detail_relaxation::Outcome restored = relaxation.template apply<ConcurrencyTag>(
+        cloud.positions, state.detail_anchor, state.detail_iterations, state.detail_tolerance, moved);
+      outcome.restore_iterations = restored.iterations;
+      outcome.restore_residual = restored.residual;
+    }
+    if constexpr(radius_asked) {
+      const std::vector<double> radius = last_neighbor_distances(cloud.positions, cloud.positions, balls);
+      const auto radius_map = CGAL::parameters::get_parameter(np, internal_np::neighbor_radius_map);
+      std::size_t i = 0;
+      using FT = typename NP_helper::Geom_traits::FT;
+      for(const auto& item : points) put(radius_map, item, FT(radius[std::size_t(row_of[i++])]));
+    }
   }
   write_points_and_normals(points, np, row_of, moved, moved_normals);
   return outcome;

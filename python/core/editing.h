@@ -413,7 +413,8 @@ py::dict read_edit(const Path_like& path_object, const Array_like& points)
 
 /// diffuse_points() with a Deformation.diffusion_state() dict: the moved points and normals, new arrays.
 Deformed_result bound_diffuse_points(const Array_like& points, const Array_like& normals, const py::dict& state,
-                                     const Optional_array_like& selection, bool restore_details)
+                                     const Optional_array_like& selection, bool restore_details,
+                                     const py::object& neighbor_radius)
 {
   const auto entry = [&](const char* key) -> py::object {
     if(!state.contains(key)) throw py::value_error(std::string("the diffusion state has no '") + key + "'");
@@ -463,6 +464,7 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
       selected.push_back(int(value));
     }
   }
+  double* const radius = output_values(neighbor_radius, "neighbor_radius", n);
   auto [moved, moved_rows] = new_rows3(n);
   auto [moved_normals, moved_normal_rows] = new_rows3(n);
   for(std::size_t i = 0; i < n; ++i)
@@ -475,10 +477,18 @@ Deformed_result bound_diffuse_points(const Array_like& points, const Array_like&
     const auto np = CGAL_ext::parameters::restore_details(
       restore_details,
       CGAL::parameters::point_map(Rows3_map<Point>{moved_rows}).normal_map(Rows3_map<Vector>{moved_normal_rows}));
-    if(selection.is_none())
-      CGAL_ext::diffuse_points(all, parsed, np);
+    // The selection map and the radius map, each when given.
+    const auto with_selection = [&](const auto& with) {
+      if(selection.is_none())
+        CGAL_ext::diffuse_points(all, parsed, with);
+      else
+        CGAL_ext::diffuse_points(all, parsed,
+                                 CGAL_ext::parameters::selection_map(Array_map<int>{selected.data()}, with));
+    };
+    if(radius)
+      with_selection(CGAL_ext::parameters::neighbor_radius_map(Array_map<double>{radius}, np));
     else
-      CGAL_ext::diffuse_points(all, parsed, CGAL_ext::parameters::selection_map(Array_map<int>{selected.data()}, np));
+      with_selection(np);
     return 0;
   });
   return py::reinterpret_borrow<py::object>(result_types.deformed)(moved, moved_normals);

@@ -378,8 +378,11 @@ def test_points_a_deformation_was_not_built_on_move_by_its_diffusion_state(spher
     assert np.array_equal(moved.normals, diffused.normals[order])
     collar = deformation.renderer_setup()["collar_points"]
     assert len(collar) > 0 and np.count_nonzero(np.any(moved.points != points[order], axis=1)) > len(points) // 4
+    radius = np.empty(len(points))
     restored = cgal_ext.diffuse_points(points[order], normals[order], state, selection=selection[order],
-                                       restore_details=True)
+                                       restore_details=True, neighbor_radius=radius)
+    from scipy.spatial import cKDTree
+    assert np.abs(radius - cKDTree(points[order]).query(points[order], 11)[0][:, 10]).max() <= 1e-12
     expected = deformation.restore_details()
     assert np.array_equal(restored.points, expected.points[order])
     assert np.array_equal(restored.normals, expected.normals[order])

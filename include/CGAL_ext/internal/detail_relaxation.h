@@ -65,66 +65,38 @@ public:
   template <typename ConcurrencyTag>
   void setup(const Matrix_n3& points, std::vector<int> rows, std::size_t k)
   {
-    m_rows = std::move(rows);
-    const std::size_t n = m_rows.size();
-    m_free_index.assign(std::size_t(points.rows()), -1);
-    std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
-    for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
-    std::vector<std::vector<int>> balls(n);
-    m_twin.assign(n, -1);
-    if(n > 0) {
+    std::vector<std::vector<int>> found(rows.size());
+    if(!rows.empty()) {
       const Position_tree tree(points, ConcurrencyTag());
-      for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
-        const int row = m_rows[r];
-        thread_local std::vector<Ranked_row> found;
-        tree.nearest_ball(std::size_t(row), k, found);
-        int pinned_twin = -1, relaxed_twin = row;
-        for(const Ranked_row& entry : found) {
-          const int j = entry.second;
-          balls[r].push_back(j);
-          if(entry.first > 0 || points.row(j) != points.row(row)) continue;
-          if(relaxed_index[std::size_t(j)] < 0) pinned_twin = pinned_twin < 0 ? j : std::min(pinned_twin, j);
-          else relaxed_twin = std::min(relaxed_twin, j);
-        }
-        m_twin[r] = pinned_twin >= 0 ? pinned_twin : relaxed_twin != row ? relaxed_twin : -1;
+      for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
+        thread_local std::vector<Ranked_row> ball;
+        tree.nearest_ball(std::size_t(rows[r]), k, ball);
+        for(const Ranked_row& entry : ball) found[r].push_back(entry.second);
       });
     }
-    // Symmetrise: j joins row i's neighbours when i is in j's ball and j is relaxed too.
-    std::vector<int> degree(n);
-    for(std::size_t r = 0; r < n; ++r) {
-      degree[r] += int(balls[r].size());
-      for(int j : balls[r])
-        if(relaxed_index[std::size_t(j)] >= 0) ++degree[std::size_t(relaxed_index[std::size_t(j)])];
-    }
-    m_neighbors.offsets.assign(n + 1, 0);
-    for(std::size_t r = 0; r < n; ++r) m_neighbors.offsets[r + 1] = m_neighbors.offsets[r] + degree[r];
-    m_neighbors.indices.resize(std::size_t(m_neighbors.offsets[n]));
-    std::vector<int> fill(m_neighbors.offsets.begin(), m_neighbors.offsets.end() - 1);
-    for(std::size_t r = 0; r < n; ++r)
-      for(int j : balls[r]) {
-        m_neighbors.indices[std::size_t(fill[r]++)] = j;
-        if(relaxed_index[std::size_t(j)] >= 0)
-          m_neighbors.indices[std::size_t(fill[std::size_t(relaxed_index[std::size_t(j)])]++)] = m_rows[r];
-      }
-    balls = {};
-    for(int row : m_rows) relaxed_index[std::size_t(row)] = -1;
-    m_details.resize(Eigen::Index(n), 3);
-    const auto by_position = [&](int i, int j) {
-      return std::make_tuple(points(i, 0), points(i, 1), points(i, 2), i) <
-             std::make_tuple(points(j, 0), points(j, 1), points(j, 2), j);
-    };
-    for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
-      int* first = m_neighbors.indices.data() + m_neighbors.offsets[r];
-      int* last = m_neighbors.indices.data() + fill[r];
-      std::sort(first, last, by_position);
-      last = std::unique(first, last);
-      // The slots freed by duplicates stay unused: a row's neighbours end at m_end.
-      fill[r] = int(last - m_neighbors.indices.data());
-      Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
-      for(const int* j = first; j != last; ++j) mean += points.row(*j);
-      m_details.row(Eigen::Index(r)) = points.row(m_rows[r]) - mean / double(last - first);
+    Neighbor_graph balls;
+    balls.offsets.assign(rows.size() + 1, 0);
+    for(std::size_t r = 0; r < rows.size(); ++r) balls.offsets[r + 1] = balls.offsets[r] + int(found[r].size());
+    balls.indices.resize(std::size_t(balls.offsets.back()));
+    for(std::size_t r = 0; r < rows.size(); ++r)
+      std::copy(found[r].begin(), found[r].end(), balls.indices.begin() + balls.offsets[r]);
+    build<ConcurrencyTag>(points, std::move(rows), balls);
+  }
+
+  /// As above, with the closed balls of every point given (`k_nearest_neighbor_graph`).
+  template <typename ConcurrencyTag>
+  void setup(const Matrix_n3& points, std::vector<int> rows, const Neighbor_graph& balls_of_all)
+  {
+    Neighbor_graph balls;
+    balls.offsets.assign(rows.size() + 1, 0);
+    for(std::size_t r = 0; r < rows.size(); ++r)
+      balls.offsets[r + 1] = balls.offsets[r] + balls_of_all.degree(std::size_t(rows[r]));
+    balls.indices.resize(std::size_t(balls.offsets.back()));
+    for_range<ConcurrencyTag>(0, rows.size(), [&](std::size_t r) {
+      std::copy(balls_of_all.begin(std::size_t(rows[r])), balls_of_all.end(std::size_t(rows[r])),
+                balls.indices.begin() + balls.offsets[r]);
     });
-    m_end = std::move(fill);
+    build<ConcurrencyTag>(points, std::move(rows), balls);
   }
 
   /// Solves the system above on `positions` (every row; only the relaxed rows that moved change) with anchor
@@ -172,7 +144,7 @@ public:
     m_x.resize(Eigen::Index(m), 3);
     m_residual.resize(Eigen::Index(m), 3);
     m_direction.resize(Eigen::Index(m), 3);
-    m_product.resize(Eigen::Index(m), 3);
+    m_next_direction.resize(Eigen::Index(m), 3);
     m_diagonal.resize(Eigen::Index(m));
     // x starts where the blend put the points; its residual b - A x is deg_i (R_i d_i - (x_i - mean_j x_j)). The
     // first step, d = M^-1 r (M = diag A), is Jacobi's.
@@ -201,22 +173,21 @@ public:
     const unsigned int count = steps(anchor, max_iterations, tolerance);
     const double sigma = 1 + anchor;
     double rho = 1 / sigma;
+    // One pass per step: the next direction goes to a second array, as the neighbours still read this one.
     for(unsigned int step = 0; step < count; ++step) {
-      for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
-        const Eigen::Index F = Eigen::Index(f);
-        Row product = m_diagonal(F) * m_direction.row(F);
-        for(const int* j = m_adjacency.begin(f); j != m_adjacency.end(f); ++j) product -= m_direction.row(*j);
-        m_product.row(F) = product;
-      });
       const double next_rho = 1 / (2 * sigma - rho);
       const double keep = next_rho * rho, scale = 2 * next_rho * sigma;
       rho = next_rho;
       for_range<ConcurrencyTag>(0, m, [&](std::size_t f) {
         const Eigen::Index F = Eigen::Index(f);
-        m_x.row(F) += m_direction.row(F);
-        m_residual.row(F) -= m_product.row(F);
-        m_direction.row(F) = keep * m_direction.row(F) + scale * m_residual.row(F) / m_diagonal(F);
+        const Row direction = m_direction.row(F);
+        Row product = m_diagonal(F) * direction;
+        for(const int* j = m_adjacency.begin(f); j != m_adjacency.end(f); ++j) product -= m_direction.row(*j);
+        m_x.row(F) += direction;
+        m_residual.row(F) -= product;
+        m_next_direction.row(F) = keep * direction + scale * m_residual.row(F) / m_diagonal(F);
       });
+      m_direction.swap(m_next_direction);
     }
     Outcome outcome;
     outcome.iterations = count;
@@ -240,6 +211,67 @@ public:
 
 private:
   static constexpr std::size_t block_size = 256;
+
+  // The relaxed rows' closed balls (row r of `balls`, of point `rows[r]`) symmetrised within them, sorted by
+  // position, with each row's twin and detail at rest.
+  template <typename ConcurrencyTag>
+  void build(const Matrix_n3& points, std::vector<int> rows, const Neighbor_graph& balls)
+  {
+    m_rows = std::move(rows);
+    const std::size_t n = m_rows.size();
+    m_free_index.assign(std::size_t(points.rows()), -1);
+    std::vector<int>& relaxed_index = m_free_index; // reset to -1 below
+    for(std::size_t r = 0; r < n; ++r) relaxed_index[std::size_t(m_rows[r])] = int(r);
+    // A twin: a coincident point, pinned if there is one, else the first relaxed one (in a closed ball, with it).
+    m_twin.assign(n, -1);
+    for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
+      const int row = m_rows[r];
+      int pinned_twin = -1, relaxed_twin = row;
+      for(const int* j = balls.begin(r); j != balls.end(r); ++j) {
+        if(points.row(*j) != points.row(row)) continue;
+        if(relaxed_index[std::size_t(*j)] < 0)
+          pinned_twin = pinned_twin < 0 ? *j : std::min(pinned_twin, *j);
+        else
+          relaxed_twin = std::min(relaxed_twin, *j);
+      }
+      m_twin[r] = pinned_twin >= 0 ? pinned_twin : relaxed_twin != row ? relaxed_twin : -1;
+    });
+    // Symmetrise: j joins row i's neighbours when i is in j's ball and j is relaxed too.
+    std::vector<int> degree(n);
+    for(std::size_t r = 0; r < n; ++r) {
+      degree[r] += balls.degree(r);
+      for(const int* j = balls.begin(r); j != balls.end(r); ++j)
+        if(relaxed_index[std::size_t(*j)] >= 0) ++degree[std::size_t(relaxed_index[std::size_t(*j)])];
+    }
+    m_neighbors.offsets.assign(n + 1, 0);
+    for(std::size_t r = 0; r < n; ++r) m_neighbors.offsets[r + 1] = m_neighbors.offsets[r] + degree[r];
+    m_neighbors.indices.resize(std::size_t(m_neighbors.offsets[n]));
+    std::vector<int> fill(m_neighbors.offsets.begin(), m_neighbors.offsets.end() - 1);
+    for(std::size_t r = 0; r < n; ++r)
+      for(const int* j = balls.begin(r); j != balls.end(r); ++j) {
+        m_neighbors.indices[std::size_t(fill[r]++)] = *j;
+        if(relaxed_index[std::size_t(*j)] >= 0)
+          m_neighbors.indices[std::size_t(fill[std::size_t(relaxed_index[std::size_t(*j)])]++)] = m_rows[r];
+      }
+    for(int row : m_rows) relaxed_index[std::size_t(row)] = -1;
+    m_details.resize(Eigen::Index(n), 3);
+    const auto by_position = [&](int i, int j) {
+      return std::make_tuple(points(i, 0), points(i, 1), points(i, 2), i) <
+             std::make_tuple(points(j, 0), points(j, 1), points(j, 2), j);
+    };
+    for_range<ConcurrencyTag>(0, n, [&](std::size_t r) {
+      int* first = m_neighbors.indices.data() + m_neighbors.offsets[r];
+      int* last = m_neighbors.indices.data() + fill[r];
+      std::sort(first, last, by_position);
+      last = std::unique(first, last);
+      // The slots freed by duplicates stay unused: a row's neighbours end at m_end.
+      fill[r] = int(last - m_neighbors.indices.data());
+      Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
+      for(const int* j = first; j != last; ++j) mean += points.row(*j);
+      m_details.row(Eigen::Index(r)) = points.row(m_rows[r]) - mean / double(last - first);
+    });
+    m_end = std::move(fill);
+  }
 
   // The sum of body(f) over f in [0, m), by blocks of block_size in a fixed order.
   template <typename ConcurrencyTag, typename Value, typename Body>
@@ -265,11 +297,11 @@ private:
   std::vector<int> m_twin;     // per relaxed row, the coincident point it follows (among its k + 1 nearest), or -1
   Matrix_n3 m_details;         // per relaxed row, d_i at rest
   Matrix_n3 m_target;          // per relaxed row: R_i d_i (per call)
-  // Per call, the unknowns: their relaxed rows, their neighbours among them, the conjugate gradients' vectors.
+  // Per call, the unknowns: their relaxed rows, their neighbours among them, the Chebyshev steps' vectors.
   std::vector<int> m_free;
   std::vector<int> m_free_index; // per point, its unknown or -1 (all -1 between calls)
   Neighbor_graph m_adjacency;
-  Matrix_n3 m_x, m_residual, m_direction, m_product;
+  Matrix_n3 m_x, m_residual, m_direction, m_next_direction;
   Eigen::VectorXd m_diagonal;
 };
 
