@@ -55,7 +55,7 @@ PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled.py "${flags[@]
 echo "== bench_tiled_simplify.py (full run: three models at 10M, the armadillo at 100M)" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled_simplify.py "${flags[@]}" --build "$build" --data data \
   --out "$out" > "$build/benchmark/logs/bench_tiled_simplify.log"
-echo "== bench_tiled_edit.py (full run: the armadillo at 1M, three models at 10M, the armadillo at 100M)" >&2
+echo "== bench_tiled_edit.py (full run: the armadillo at 1M, three models at 10M and at 3M, the armadillo at 100M)" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled_edit.py "${flags[@]}" --build "$build" --data data \
   --out "$out" > "$build/benchmark/logs/bench_tiled_edit.log"
 BENCHMARK_QUICK=$quick BENCHMARK_THREADS=$(nproc) /usr/bin/python3 benchmark/make_results.py "$out" "$build"

@@ -71,6 +71,7 @@ class Edit(ops.Operation):
     unknowns, the twins)."""
     name = "edit"
     symmetric = True
+    measures_radius = True  # diffuse_points reports each point's 10th-neighbour distance
     RELAXATION_NEIGHBORS = 10  # diffuse_points' restoration: the closed ball of the 10th nearest
 
     def __init__(self, edit, subsample=SUBSAMPLE):
@@ -179,16 +180,17 @@ class Edit(ops.Operation):
         return selection == REGION if self.state["exact_handles"] else selection != FIXED
 
     def needs_certificate(self, points, own):
-        return self.restores and bool(self.relaxes(points[own]).any())
+        """The own points that relax, when the edit restores the details."""
+        return self.relaxes(points[own]) & self.restores
 
-    def certify(self, neighborhoods, own, reach, estimate_normals):
-        """The symmetric certificate on the points that relax; the others' results need no neighbourhood."""
-        certified = ops.Operation.certify(self, neighborhoods, own, reach, estimate_normals)
-        return certified | ~self.relaxes(neighborhoods.points[own])
-
-    def certificate_reach(self, lo, hi, reach):
-        """Near a handle, at least the collar's reach: the rows nearer the border may lack handle points."""
-        return max(reach, self.collar()) if self.near_handles(lo[None], hi[None])[0] else reach
+    def narrowed(self, points, lo, hi, halo):
+        """Near a handle, when restoring: every point within the restoration's halo (`halo` less the collar's
+        reach), and beyond it the handle points alone, which the collar needs and the other points do not. Every
+        point within that halo then has the handle points within the reach."""
+        if not self.restores or not self.near_handles(lo[None], hi[None])[0]:
+            return None, halo
+        inner = max(halo - self.collar(), 0.0)
+        return plan.own_mask(points, lo - inner, hi + inner) | (self.selection(points) >= 0), inner
 
     def near_handles(self, lo, hi):
         """Whether each box [lo[i], hi[i]] comes within the collar's reach of a handle's spec: only there can a
@@ -222,7 +224,8 @@ class Edit(ops.Operation):
         mine = points[own]
         return self.collar() if not self.restores and self.near_handles(mine, mine).any() else 0.0
 
-    def compute(self, points, normals):
+    def compute(self, points, normals, radius=None):
+        """The moved points and normals; `radius`, an (n,) array, receives each point's 10th-neighbour distance."""
         moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points),
-                                     restore_details=self.restores)
+                                     restore_details=self.restores, neighbor_radius=radius)
         return {name: column for name, column in zip(self.computed_fields(), (*moved.points.T, *moved.normals.T))}

@@ -108,14 +108,14 @@ class Operation:
         return RINGS[self.settings["order"]] if "order" in self.settings else 1
 
     def needs_certificate(self, points, own):
-        """Whether the own points of a tile (`points` read, `own` its own) need their neighbourhoods certified:
-        an operation that uses none certifies every point as it is."""
-        return self.uses_neighbors
+        """Which own points of a tile (`points` read, `own` its own) need their neighbourhoods certified (the
+        others' values need no neighbourhood): all of them, or none for an operation that uses none."""
+        return np.full(int(np.count_nonzero(own)), self.uses_neighbors)
 
-    def certificate_reach(self, lo, hi, reach):
-        """The reach the certificate of the tile [lo, hi) assumes: no point outside the read box nearer its border
-        than that may change a certified value (`reach`: the largest k-th-neighbour distance around)."""
-        return reach
+    def narrowed(self, points, lo, hi, halo):
+        """The points a tile [lo, hi) keeps of those it read within `halo` (a mask, None: all of them), and the halo
+        within which it kept every point, which bounds its certificate."""
+        return None, halo
 
     def required_halo(self, neighborhoods, own, points):
         """The halo an approximate operation needs beyond what `certify` checks (0: none), for a tile's `points`

@@ -209,7 +209,6 @@ def run_tile(job):
     estimate_normals, chunk_starts, scratch = job.estimate_normals, job.chunk_starts, job.scratch
     with threads(job.threads_per_task):
         lo, hi = job.tiling.lo[tile], job.tiling.hi[tile]
-        reach = operation.certificate_reach(lo, hi, reach)
         k = operation.neighbors(estimate_normals)
         compute_first = operation.measures_radius and not estimate_normals
         attempts = []
@@ -222,16 +221,21 @@ def run_tile(job):
             except Exception as error:
                 raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
                                  f"{error}") from None
+            keep, exact_halo = operation.narrowed(points, lo, hi, halo)
+            if keep is not None:
+                rows, points = rows[keep], points[keep]
+                normals = None if normals is None else normals[keep]
             own = plan.own_mask(points, lo, hi)
             if not own.any():
                 watch.lap("neighbours")
                 return TileSummary(tile, 0, len(rows), halo, attempts, 0.0, reach, 0.0,
                                    np.zeros(len(chunk_starts) + 1, dtype=np.int64), watch.seconds)
-            border = plan.border_distance(points, lo - halo, hi + halo)
+            border = plan.border_distance(points, lo - exact_halo, hi + exact_halo)
             neighborhoods = interior = values = None
-            if not operation.needs_certificate(points, own):
+            needs_certificate = operation.needs_certificate(points, own)
+            if not needs_certificate.any():
                 kth, tile_reach, searched = 0.0, reach, 0.0
-                certified = np.ones(len(points), dtype=bool)
+                certified = np.ones(len(needs_certificate), dtype=bool)
             elif compute_first:
                 radius = np.empty(len(points))
                 values = operation.compute(points, normals, radius)
@@ -250,6 +254,7 @@ def run_tile(job):
                 tile_reach = max(reach, 1.25 * kth)
                 certified = operation.certify(neighborhoods, own, tile_reach, estimate_normals)
                 searched = float(neighborhoods.searched.mean())
+            certified |= ~needs_certificate
             needed = operation.required_halo(neighborhoods, own, points)
             watch.lap("neighbours")
             if (certified.all() and halo >= needed) or halo > job.diagonal:
