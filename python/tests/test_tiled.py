@@ -764,6 +764,32 @@ def test_the_tiled_edit_restores_the_details_in_tiles_as_one_process(scan, clien
     assert np.abs(columns(out, ("nx", "ny", "nz")) - expected.normals).max() <= 1e-12
 
 
+def test_a_tile_near_a_handle_keeps_every_handle_point_the_collar_needs(tmp_path):
+    """Edit.narrowed: a tile near the handle keeps the points within the restoration's halo (the read halo less
+    the collar's reach) and, beyond it, the handle points alone; every point it keeps within that halo has each
+    handle point of the scan within the collar's reach among those it keeps."""
+    from cgal_ext.tiled import plan
+    edit = tiled.edit.Edit(edit=edit_file(tmp_path))
+    edit.state = {"collar_reach": 0.3, "exact_handles": True, "detail_anchor": 0.01, "detail_iterations": 100,
+                  "detail_tolerance": 0.01}
+    points, _ = bumpy_sphere(200_000, seed=5)
+    lo, hi, halo = np.array([0.3, -0.2, 0.6]), np.array([0.6, 0.2, 0.9]), 0.5  # beside the handle, not on it
+    read = points[plan.own_mask(points, lo - halo, hi + halo)]
+    keep, inner = edit.narrowed(read, lo, hi, halo)
+    assert inner == pytest.approx(halo - edit.collar()) and 0 < keep.sum() < len(read)
+    kept = read[keep]
+    within = kept[plan.own_mask(kept, lo - inner, hi + inner)]
+    handles = points[edit.selection(points) >= 0]
+    needed = handles[np.isfinite(cKDTree(within).query(handles, distance_upper_bound=edit.collar())[0])]
+    outside = ~plan.own_mask(needed, lo - inner, hi + inner)
+    assert outside.sum() > 100  # the collar reaches handle points beyond the restoration's halo
+    assert {tuple(p) for p in needed} <= {tuple(p) for p in kept}
+    # Far from every handle, or without the restoration, a tile keeps all it read.
+    assert edit.narrowed(read, lo + 10, hi + 10, halo)[0] is None
+    edit.state = {**edit.state, "detail_iterations": 0}
+    assert edit.narrowed(read, lo, hi, halo)[0] is None
+
+
 def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_path):
     """A worker process is killed (SIGKILL) once the first tile is saved; Dask reruns its tasks (each carries the
     edit's state) and the file is the same."""
