@@ -120,8 +120,17 @@ def test_edit(shapes, rotations):
         group = edit.create_handle_group(h)
         edit.set_handle_transform(group, np.eye(3), [0.02, 0.01, 0.08])
         edit.deform()
-        results.append((edit.diffuse(), edit.sample_point_of(np.arange(len(p)))))
-    (a, a_samples), (b, b_samples) = results
+        diffused = edit.diffuse()
+        selection = np.where(h, 0, np.where(r, -1, -2))
+        # The restoration, by the deformation and by diffuse_points over the same points (closed balls, sums
+        # in the order of the positions).
+        restored = edit.restore_details()
+        moved = cgal_ext.diffuse_points(p, n, edit.diffusion_state(), selection=selection, restore_details=True)
+        results.append((diffused, edit.sample_point_of(np.arange(len(p))), restored, moved))
+    (a, a_samples, a_restored, a_moved), (b, b_samples, b_restored, b_moved) = results
     same(a.points, b.points, order)
     same(a.normals, b.normals, order)
     assert np.array_equal(partition(a_samples), partition(b_samples[inverse]))
+    assert np.abs(a_restored.points - a.points).max() > 1e-6
+    same(a_restored.points, b_restored.points, order)
+    same(a_moved.points, b_moved.points, order)
