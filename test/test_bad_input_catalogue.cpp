@@ -605,9 +605,9 @@ const std::vector<Row>& catalogue()
          const Program_run free_run = run(command + " -o " + unlimited);
          ASSERT_EQ(free_run.exit_code, 0) << command << "\n" << free_run.output;
          int failures = 0, successes = 0;
-         // Steps of 75 MB through the range where the factorisation stops fitting, then room to spare (how much
+         // Steps of 150 MB through the range where the factorisation stops fitting, then room to spare (how much
          // address space the process holds when it checks varies with its threads' malloc arenas).
-         for(int megabytes = 250; megabytes <= 2000; megabytes += megabytes < 1000 ? 75 : 500) {
+         for(int megabytes = 250; megabytes <= 2000; megabytes += megabytes < 1000 ? 150 : 1000) {
            const std::string out = w.path("limited.ply");
            const Program_run r = run(command + " -o " + out, "ulimit -v " + std::to_string(megabytes * 1024) + "; timeout 60 ");
            const std::string at = command.substr(0, command.find(' ')) + " at " + std::to_string(megabytes) + " MB";
