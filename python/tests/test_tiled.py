@@ -725,7 +725,7 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
     without = [s["read"] == s["own"] for s in report["tile_summaries"] if s["halo"] == 0]
     assert without and all(without)
     deformation, _ = subsample_deformation(edit, sub_points, sub_normals)
-    selection = tiled.edit.Edit(edit=edit).selection(points)
+    selection = tiled.edit.Edit(edit=edit).selection(points, np.arange(len(points)))
     expected = cgal_ext.diffuse_points(points, normals, deformation.diffusion_state(), selection=selection,
                                        restore_details=True)
     eight = read_output(tmp_path / "eight.ply")
@@ -755,7 +755,7 @@ def test_the_tiled_edit_restores_the_details_in_tiles_as_one_process(scan, clien
     assert report["widened_tiles"] == 0
     sub_points, sub_normals = client_subsample(scan.points, scan.normals, 100_000)
     state = subsample_deformation(edit, sub_points, sub_normals)[0].diffusion_state()
-    selection = tiled.edit.Edit(edit=edit).selection(scan.points)
+    selection = tiled.edit.Edit(edit=edit).selection(scan.points, np.arange(len(scan.points)))
     expected = cgal_ext.diffuse_points(scan.points, scan.normals, state, selection=selection, restore_details=True)
     diffused = cgal_ext.diffuse_points(scan.points, scan.normals, state, selection=selection)
     out = read_output(tmp_path / "tiled.ply")
@@ -774,20 +774,21 @@ def test_a_tile_near_a_handle_keeps_every_handle_point_the_collar_needs(tmp_path
                   "detail_tolerance": 0.01}
     points, _ = bumpy_sphere(200_000, seed=5)
     lo, hi, halo = np.array([0.3, -0.2, 0.6]), np.array([0.6, 0.2, 0.9]), 0.5  # beside the handle, not on it
-    read = points[plan.own_mask(points, lo - halo, hi + halo)]
-    keep, inner = edit.narrowed(read, lo, hi, halo)
+    rows = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
+    read = points[rows]
+    keep, inner = edit.narrowed(read, rows, lo, hi, halo)
     assert inner == pytest.approx(halo - edit.collar()) and 0 < keep.sum() < len(read)
     kept = read[keep]
     within = kept[plan.own_mask(kept, lo - inner, hi + inner)]
-    handles = points[edit.selection(points) >= 0]
+    handles = points[edit.selection(points, np.arange(len(points))) >= 0]
     needed = handles[np.isfinite(cKDTree(within).query(handles, distance_upper_bound=edit.collar())[0])]
     outside = ~plan.own_mask(needed, lo - inner, hi + inner)
     assert outside.sum() > 100  # the collar reaches handle points beyond the restoration's halo
     assert {tuple(p) for p in needed} <= {tuple(p) for p in kept}
     # Far from every handle, or without the restoration, a tile keeps all it read.
-    assert edit.narrowed(read, lo + 10, hi + 10, halo)[0] is None
+    assert edit.narrowed(read, rows, lo + 10, hi + 10, halo)[0] is None
     edit.state = {**edit.state, "detail_iterations": 0}
-    assert edit.narrowed(read, lo, hi, halo)[0] is None
+    assert edit.narrowed(read, rows, lo, hi, halo)[0] is None
 
 
 def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, tmp_path):
@@ -800,15 +801,69 @@ def test_the_tiled_edit_gives_the_same_bytes_with_a_worker_killed(scan, client, 
     assert (tmp_path / "killed.ply").read_bytes() == (tmp_path / "reference.ply").read_bytes()
 
 
+def test_index_files_and_masks_select_the_rows_they_name(scan, client, tmp_path):
+    """A region given as an index file (rows of the scan, in any order, repeated, with comments) and a handle as a
+    boolean array of the scan's Zarr group select the same points as the sphere specs that chose those rows, and
+    the tiled edit gives the same bits, on the subsample and on every point; a scan in another order with the
+    index file and mask carried along gives the same result in that order."""
+    points, normals = scan.small_points, scan.small_normals
+    rows = np.arange(len(points))
+    region = np.flatnonzero(tiled.edit.inside(points, rows, tiled.edit.region_specs(["sphere:0,0,1,0.8"], "", "")))
+    handle = tiled.edit.inside(points, rows, tiled.edit.region_specs(["sphere:0,0,1,0.25"], "", ""))
+    assert 0 < handle.sum() < len(region) < len(points)
+
+    def write(folder, order):
+        folder.mkdir()
+        write_zarr(folder / "scan.zarr", points[order], normals[order], chunk=30_000)
+        zarr.open_group(str(folder / "scan.zarr"), mode="r+").array("top", handle[order], chunks=(30_000,))
+        at = np.argsort(order)[region]  # the region's rows in this order
+        lines = ["# the region"] + [str(r) for r in np.random.default_rng(2).permutation(at)] + [str(at[0])]
+        (folder / "roi.txt").write_text("\n".join(lines) + "\n")
+        return edit_file(folder, roi="indices:roi.txt", handle="mask:top")
+
+    by_rows = write(tmp_path / "rows", rows)
+    geometric = edit_file(tmp_path)
+    for subsample in (30_000, len(points)):
+        tiled.run("edit", tmp_path / "rows" / "scan.zarr", tmp_path / f"rows{subsample}.ply", client=client, tiles=8,
+                  edit=by_rows, subsample=subsample)
+        tiled.run("edit", tmp_path / "rows" / "scan.zarr", tmp_path / f"specs{subsample}.ply", client=client,
+                  tiles=8, edit=geometric, subsample=subsample)
+        a, b = read_output(tmp_path / f"rows{subsample}.ply"), read_output(tmp_path / f"specs{subsample}.ply")
+        assert np.abs(columns(a, "xyz") - points).max() > 1e-3  # the edit moved points
+        for name in ("x", "y", "z", "nx", "ny", "nz"):
+            assert np.array_equal(a[name], b[name])
+    order = np.random.default_rng(4).permutation(len(points))
+    shuffled = write(tmp_path / "shuffled", order)
+    tiled.run("edit", tmp_path / "shuffled" / "scan.zarr", tmp_path / "shuffled.ply", client=client, tiles=5,
+              edit=shuffled, subsample=30_000)
+    c = read_output(tmp_path / "shuffled.ply")
+    for name in ("x", "y", "z", "nx", "ny", "nz"):
+        assert np.array_equal(c[name], read_output(tmp_path / "rows30000.ply")[name][order])
+
+
 def test_a_bad_edit_fails_before_any_tile_with_nothing_written(scan, client, tmp_path):
+    (tmp_path / "far.txt").write_text(f"1\n{len(scan.small_points)}\n")
+    (tmp_path / "bad.txt").write_text("1\n# a comment\n2.5\n")
+    write_zarr(tmp_path / "scan.zarr", scan.small_points, scan.small_normals)
+    zarr.open_group(str(tmp_path / "scan.zarr"), mode="r+").array("short", np.ones(10, dtype=bool))
     cases = [(edit_file(tmp_path, roi="sphere:5,5,5,0.1", name="far.json"), "roi selects none"),
-             (edit_file(tmp_path, handle="indices:handle.txt", name="indices.json"), "names points by index"),
+             (edit_file(tmp_path, handle="indices:far.txt", name="indices.json"),
+              rf"far.txt:2: index {len(scan.small_points)} is out of range"),
+             (edit_file(tmp_path, handle="indices:bad.txt", name="bad.json"), r"bad.txt:3: '2.5' is not a point index"),
+             (edit_file(tmp_path, handle="indices:none.txt", name="none.json"), "cannot read the index file"),
+             (edit_file(tmp_path, handle="mask:top", name="mask.json"), "is not one"),
+             (edit_file(tmp_path, handle="mask:", name="empty.json"), "is not a region spec"),
              (edit_file(tmp_path, handle="sphere:0,0,-1,0.2", name="outside.json"), "outside the region of interest"),
              (edit_file(tmp_path, rotations="sideways", name="sideways.json"), "rotations must be"),
              (tmp_path / "missing.json", "cannot read")]
     for path, message in cases:
         with pytest.raises(tiled.TiledError, match=message):
             tiled.run("edit", scan.small, tmp_path / "out.ply", client=client, tiles=4, edit=path, subsample=30_000)
+        assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
+    for name, message in (("missing", "has no array 'missing'"), ("short", r"1-D boolean array of the scan's 100000")):
+        with pytest.raises(tiled.TiledError, match=message):
+            tiled.run("edit", tmp_path / "scan.zarr", tmp_path / "out.ply", client=client, tiles=4,
+                      edit=edit_file(tmp_path, handle=f"mask:{name}", name="mask.json"), subsample=30_000)
         assert not (tmp_path / "out.ply").exists() and no_leftovers(tmp_path, "out.ply")
     (tmp_path / "chain.json").write_text(json.dumps({"steps": [{"type": "fill"}]}))
     with pytest.raises(tiled.TiledError, match="not a chain of steps"):

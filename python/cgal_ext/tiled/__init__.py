@@ -72,8 +72,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         neighbourhood radii), simplify (`target_count`, `mode_threshold`, `k`; `subsample`, the points the
         client clusters, 1,000,000 by default; `clusters`, a PLY or Zarr path for the scan with each point's
         `ssp_index` and its cluster's colour, as `point-detail simplify --clusters` writes it), edit (`edit`, the
-        path of an edit JSON as `point-detail edit --edit` reads it, its regions as sphere: and box: specs;
-        `subsample`, the points the client deforms, 1,000,000 by default).
+        path of an edit JSON as `point-detail edit --edit` reads it, its regions as sphere: and box: specs,
+        index files of the scan's rows (`indices:FILE`, relative to the JSON) or boolean arrays of the scan's
+        Zarr group (`mask:ARRAY`); `subsample`, the points the client deforms, 1,000,000 by default).
 
     Returns
     -------

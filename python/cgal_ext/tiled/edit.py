@@ -2,11 +2,14 @@
 computed once on the client, with the library's Deformation on a subsample; every point of the scan then moved
 tile by tile by those motions (diffuse_points), the halo of a tile near a handle holding the handle points within
 the collar's reach, and the details restored (a fixed number of Chebyshev steps, each reaching one neighbourhood
-further) on every point the symmetric certificate finds that many hops from the read box's border. See
-doc/scaling.md, "Editing in tiles".
+further) on every point the symmetric certificate finds that many hops from the read box's border. Regions and
+handles are sphere: and box: specs, index files of the scan's rows or boolean arrays of its Zarr group (mask:).
+See doc/scaling.md, "Editing in tiles".
 """
 import json
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 
@@ -14,43 +17,109 @@ from .. import _core
 from . import ops, plan
 from .runner import timed
 from .simplify import SUBSAMPLE, _whole, sorted_subsample, subsample_pass
-from .store import TiledError
+from .store import TiledError, ZarrSource
 
 FIXED, REGION = -2, -1  # diffuse_points' selection values; a handle point's is its group
 
 
-def region_specs(specs, where):
-    """The sphere and box specs of a list of region spec strings, as ("sphere", centre, radius) and ("box", lo,
-    hi); the tiles evaluate them on their points. Index files name points of the whole scan, which a tile's
-    points are not: refused."""
+def region_specs(specs, where, folder):
+    """The specs of a list of region spec strings: ("sphere", centre, radius) and ("box", lo, hi), which the tiles
+    evaluate on their points; ("indices", path), a file of rows of the scan (one per line, `#` comments; relative
+    to `folder`, the edit JSON's), and ("mask", name), a boolean array of the scan's Zarr group, which
+    Edit.prepare turns into ("rows", .npy of the sorted rows, their bounding box or None)."""
     parsed = []
     for spec in specs:
-        kind, _, numbers = str(spec).partition(":")
-        if kind == "indices":
-            raise TiledError(f"{where}: the tiled edit selects by sphere: and box: specs; {spec!r} names points by "
-                             f"index")
-        values = [float(v) for v in numbers.split(",")] if kind in ("sphere", "box") else []
+        kind, _, rest = str(spec).partition(":")
+        if kind in ("indices", "mask") and rest:
+            parsed.append((kind, str(Path(folder) / rest) if kind == "indices" else rest, None))
+            continue
+        values = [float(v) for v in rest.split(",")] if kind in ("sphere", "box") else []
         if kind == "sphere" and len(values) == 4:
             parsed.append(("sphere", np.array(values[:3]), values[3]))
         elif kind == "box" and len(values) == 6:
             parsed.append(("box", np.array(values[:3]), np.array(values[3:])))
         else:
-            raise TiledError(f"{where}: {spec!r} is not a region spec (sphere:x,y,z,r or box:xmin,ymin,zmin,xmax,"
-                             f"ymax,zmax)")
+            raise TiledError(f"{where}: {spec!r} is not a region spec (sphere:x,y,z,r, box:xmin,ymin,zmin,xmax,"
+                             f"ymax,zmax, indices:FILE or mask:ARRAY)")
     return parsed
 
 
-def inside(points, specs):
-    """Whether each point lies in the union of `specs`, with the program's comparisons (io/region_spec.cpp):
-    squared distances summed x, y, z in turn against the squared radius; boxes closed."""
+def read_index_file(path, count):
+    """The sorted distinct rows an index file names (the program's format: one index per line, `#` comments), or
+    a TiledError naming the file, the line and the problem."""
+    try:
+        if Path(path).exists() and not Path(path).is_file():  # a device would be read without end
+            raise OSError("not a regular file")
+        with open(path, "rb") as f:
+            text = f.read()
+    except OSError as error:
+        raise TiledError(f"cannot read the index file {path}: {error}") from None
+    rows = None
+    tokens = text.split()
+    if b"#" not in text and b"_" not in text and len(tokens) == sum(1 for line in text.splitlines() if line.strip()):
+        try:
+            rows = np.array(tokens, dtype=np.int64)  # one integer per line, as below: read at numpy's speed
+        except (ValueError, OverflowError):
+            pass  # the line-by-line reading below names the bad line
+    if rows is None or (rows < 0).any() or (rows >= count).any():
+        rows = []
+        for number, line in enumerate(text.decode("utf-8", "replace").split("\n"), start=1):
+            line = line.partition("#")[0].strip(" \t\r")
+            if not line:
+                continue
+            if not re.fullmatch(r"[+-]?[0-9]+", line) or int(line) < 0:
+                raise TiledError(f"{path}:{number}: '{line}' is not a point index")
+            if int(line) >= count:
+                raise TiledError(f"{path}:{number}: index {line} is out of range ({count} points)")
+            rows.append(int(line))
+    return np.unique(np.asarray(rows, dtype=np.int64))
+
+
+def read_mask(source, name):
+    """The sorted rows where the scan's Zarr array `name` is True, or a TiledError naming the problem."""
+    if not isinstance(source, ZarrSource):
+        raise TiledError(f"mask:{name} selects by an array of the scan's Zarr group; {source.path} is not one")
+    import zarr
+    group = zarr.open_group(source.path, mode="r")
+    if name not in group.array_keys():
+        raise TiledError(f"{source.path}: the Zarr group has no array {name!r} for mask:{name}")
+    mask = group[name]
+    if mask.dtype != np.bool_ or mask.shape != (source.count,):
+        raise TiledError(f"{source.path}: mask:{name} must be a 1-D boolean array of the scan's {source.count} "
+                         f"points, not {mask.dtype} of shape {mask.shape}")
+    step = max(1, int(mask.chunks[0])) * max(1, 2**24 // max(1, int(mask.chunks[0])))
+    return np.concatenate([begin + np.flatnonzero(mask[begin:begin + step])
+                           for begin in range(0, source.count, step)] or [np.zeros(0, dtype=np.int64)])
+
+
+def inside(points, rows, specs):
+    """Whether each point (at the scan's `rows`) lies in the union of `specs`, with the program's comparisons
+    (io/region_spec.cpp): squared distances summed x, y, z in turn against the squared radius; boxes closed."""
     chosen = np.zeros(len(points), dtype=bool)
     for kind, a, b in specs:
         if kind == "sphere":
             d = points - a
             chosen |= d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2] <= b * b
-        else:
+        elif kind == "box":
             chosen |= np.all((points >= a) & (points <= b), axis=1)
+        else:
+            selected = np.load(a, mmap_mode="r")
+            at = np.minimum(np.searchsorted(selected, rows), len(selected) - 1)
+            chosen |= (np.asarray(selected[at]) == rows) if len(selected) else False
     return chosen
+
+
+def box_reach(specs, lo, hi, reach):
+    """Whether each box [lo[i], hi[i]] comes within `reach` of a spec's points (of a row set's bounding box)."""
+    near = np.zeros(len(lo), dtype=bool)
+    for kind, a, b in specs:
+        if kind == "sphere":
+            near |= plan.box_distances(a, a, lo, hi) <= b + reach
+        elif kind == "box":
+            near |= plan.box_distances(a, b, lo, hi) <= reach
+        elif b is not None:
+            near |= plan.box_distances(b[0], b[1], lo, hi) <= reach
+    return near
 
 
 def restore_steps(state):
@@ -72,6 +141,7 @@ class Edit(ops.Operation):
     name = "edit"
     symmetric = True
     measures_radius = True  # diffuse_points reports each point's 10th-neighbour distance
+    takes_rows = True  # index files and masks select by row
     RELAXATION_NEIGHBORS = 10  # diffuse_points' restoration: the closed ball of the 10th nearest
 
     def __init__(self, edit, subsample=SUBSAMPLE):
@@ -85,44 +155,88 @@ class Edit(ops.Operation):
             raise TiledError(f"edit: cannot read {self.path}: {error}") from None
         if not isinstance(description, dict) or "steps" in description:
             raise TiledError(f"{self.path}: the tiled edit takes one edit (roi, handles), not a chain of steps")
+        folder = Path(self.path).parent
         roi = description.get("roi")
-        self.roi = None if roi is None else region_specs(roi, f"{self.path}: roi")
+        self.roi = None if roi is None else region_specs(roi, f"{self.path}: roi", folder)
         handles = description.get("handles")
         if not isinstance(handles, list) or not handles:
             raise TiledError(f"{self.path}: handles must be a non-empty array of handle groups")
         self.handles = [region_specs(h.get("select", []) if isinstance(h, dict) else [],
-                                     f"{self.path}: handles[{g}].select") for g, h in enumerate(handles)]
+                                     f"{self.path}: handles[{g}].select", folder) for g, h in enumerate(handles)]
+        self.description = description
         self.options, self.settings, self.state = {}, {}, None
 
-    def selection(self, points):
-        """Each point's place in the edit (FIXED, REGION or its handle group), or TiledError naming the first point
-        that is a handle of two groups or a handle outside the region."""
-        region = np.ones(len(points), dtype=bool) if self.roi is None else inside(points, self.roi)
+    def selection(self, points, rows):
+        """Each point's (at the scan's `rows`) place in the edit (FIXED, REGION or its handle group), or TiledError
+        naming the first point that is a handle of two groups or a handle outside the region."""
+        region = np.ones(len(points), dtype=bool) if self.roi is None else inside(points, rows, self.roi)
         selection = np.where(region, REGION, FIXED)
         for group, specs in enumerate(self.handles):
-            chosen = inside(points, specs)
+            chosen = inside(points, rows, specs)
             twice = chosen & (selection >= 0)
             outside = chosen & ~region
             for bad, why in ((twice, "a handle of two groups"), (outside, "a handle outside the region of interest")):
                 if bad.any():
-                    raise TiledError(f"{self.path}: the point at {points[np.argmax(bad)].tolist()} is {why}")
+                    raise TiledError(f"{self.path}: the point at {points[np.argmax(bad)].tolist()} (row "
+                                     f"{rows[np.argmax(bad)]}) is {why}")
             selection[chosen] = group
         return selection
 
+    def _all_specs(self):
+        return [*(self.roi or []), *(spec for group in self.handles for spec in group)]
+
+    def _read_row_sets(self, source, scratch):
+        """Index files and masks read into sorted rows, saved in `scratch` for the tiles (memory-mapped there);
+        returns the .npy paths in the order of the specs."""
+        paths, read = [], {}
+        for kind, name, _ in self._all_specs():
+            if kind in ("indices", "mask") and (kind, name) not in read:
+                rows = read_index_file(name, source.count) if kind == "indices" else read_mask(source, name)
+                read[kind, name] = scratch / f"rows_{len(read)}.npy"
+                np.save(read[kind, name], rows)
+            if kind in ("indices", "mask"):
+                paths.append(read[kind, name])
+        return paths
+
+    def _resolve_row_sets(self, paths, selected):
+        """Each index file or mask of the specs as ("rows", its .npy, its points' bounding box or None), the boxes
+        from the subsample pass's `selected` (select_rows measured them on every row)."""
+        found = iter(enumerate(paths))
+
+        def resolved(specs):
+            out = []
+            for kind, a, b in specs:
+                if kind in ("indices", "mask"):
+                    i, path = next(found)
+                    parts = [s["row_boxes"][i] for s in selected if s["row_boxes"][i] is not None]
+                    a, b = str(path), ((np.min([p[0] for p in parts], axis=0), np.max([p[1] for p in parts], axis=0))
+                                       if parts else None)
+                    kind = "rows"
+                out.append((kind, a, b))
+            return out
+        self.roi = None if self.roi is None else resolved(self.roi)
+        self.handles = [resolved(group) for group in self.handles]
+
     def prepare(self, runner, source):
-        """The client's part: the subsample (chosen by a hash of the coordinates, as the tiled sample points'), the
-        edit read on it by the program's reader, the Deformation built and deformed there, and its diffusion's
-        state for the tiles."""
+        """The client's part: index files and masks read, the subsample (chosen by a hash of the coordinates, as
+        the tiled sample points'), the edit read on it by the program's reader, the Deformation built and deformed
+        there, and its diffusion's state for the tiles. Every error is raised here, before any tile runs."""
         n = source.count
-        selected = subsample_pass(runner, source, self.subsample_size, "the edit turns them with the points")
+        row_sets = self._read_row_sets(source, runner.scratch)
+        selected = subsample_pass(runner, source, self.subsample_size, "the edit turns them with the points",
+                                  row_sets)
+        self._resolve_row_sets(row_sets, selected)
         with timed(runner.report["client_seconds"], "deform subsample"):
-            points, normals = sorted_subsample(selected, "edit", self.subsample_size, n)
+            points, normals, rows = sorted_subsample(selected, "edit", self.subsample_size, n)
+            # The program's reader checks the edit first, as it does a whole scan's.
+            edit_path = self._subsample_edit(self.selection(points, rows), runner.scratch) if row_sets else self.path
             try:
-                edit = _core._read_edit(self.path, points)
+                edit = _core._read_edit(edit_path, points)
             except ValueError as error:
-                raise TiledError(f"edit: {str(error).splitlines()[0]} (on the subsample of {len(points)} points)") \
-                    from None
-            selection = self.selection(points)
+                message = str(error).splitlines()[0].replace(edit_path, self.path).replace(
+                    Path(edit_path).name, Path(self.path).name)  # the reader names the file, or its name alone
+                raise TiledError(f"edit: {message} (on the subsample of {len(points)} points)") from None
+            selection = self.selection(points, rows)
             if not np.array_equal(np.flatnonzero(selection != FIXED), edit["roi"]):
                 raise TiledError(f"{self.path}: the region's specs select differently here and in the program")
             self.settings = edit["settings"]
@@ -142,6 +256,24 @@ class Edit(ops.Operation):
                              collar_reach=self.state["collar_reach"])
         runner.log(f"{n} points, subsample of {len(points)}: {deformation.number_of_sample_points()} sample points, "
                    f"collar reach {self.state['collar_reach']:.4g}")
+
+    def _subsample_edit(self, selection, scratch):
+        """The edit JSON with its selections as index files of the subsample's points (`selection`), for the
+        program's reader, which reads the rest of it (transforms, settings) and checks it as for a whole scan."""
+        description = dict(self.description)
+
+        def indices(name, chosen):
+            path = (scratch / f"subsample_{name}.txt").resolve()
+            np.savetxt(path, np.flatnonzero(chosen), fmt="%d")
+            return [f"indices:{path}"]
+        if self.roi is not None:
+            description["roi"] = indices("roi", selection != FIXED)
+        description["handles"] = [{**handle, "select": indices(f"handle{g}", selection == g)}
+                                  if isinstance(handle, dict) else handle
+                                  for g, handle in enumerate(description["handles"])]
+        path = scratch / "subsample_edit.json"
+        path.write_text(json.dumps(description))
+        return str(path)
 
     @property
     def restores(self):
@@ -174,43 +306,32 @@ class Edit(ops.Operation):
         sample points and on the handle points that near), and the restoration's hops."""
         return self.collar() + (ops.Operation.halo(self, spacing) if self.restores else 0.0)
 
-    def relaxes(self, points):
+    def relaxes(self, points, rows):
         """Which points the restoration may move: the region's, and the handles' unless they are exact."""
-        selection = self.selection(points)
+        selection = self.selection(points, rows)
         return selection == REGION if self.state["exact_handles"] else selection != FIXED
 
-    def needs_certificate(self, points, own):
+    def needs_certificate(self, points, rows, own):
         """The own points that relax, when the edit restores the details."""
-        return self.relaxes(points[own]) & self.restores
+        return self.relaxes(points[own], rows[own]) & self.restores
 
-    def narrowed(self, points, lo, hi, halo):
+    def narrowed(self, points, rows, lo, hi, halo):
         """Near a handle, when restoring: every point within the restoration's halo (`halo` less the collar's
         reach), and beyond it the handle points alone, which the collar needs and the other points do not. Every
         point within that halo then has the handle points within the reach."""
         if not self.restores or not self.near_handles(lo[None], hi[None])[0]:
             return None, halo
         inner = max(halo - self.collar(), 0.0)
-        return plan.own_mask(points, lo - inner, hi + inner) | (self.selection(points) >= 0), inner
+        return plan.own_mask(points, lo - inner, hi + inner) | (self.selection(points, rows) >= 0), inner
 
     def near_handles(self, lo, hi):
         """Whether each box [lo[i], hi[i]] comes within the collar's reach of a handle's spec: only there can a
         point have handle points within the reach (a point's box is [p, p])."""
-        near = np.zeros(len(lo), dtype=bool)
-        reach = self.collar()
-        for kind, a, b in (spec for group in self.handles for spec in group):
-            near |= (plan.box_distances(a, a, lo, hi) <= b + reach if kind == "sphere" else
-                     plan.box_distances(a, b, lo, hi) <= reach)
-        return near
+        return box_reach([spec for group in self.handles for spec in group], lo, hi, self.collar())
 
     def meets_region(self, lo, hi):
         """Whether each box [lo[i], hi[i]] meets the region's specs (all of them without specs)."""
-        if self.roi is None:
-            return np.ones(len(lo), dtype=bool)
-        meets = np.zeros(len(lo), dtype=bool)
-        for kind, a, b in self.roi:
-            meets |= (plan.box_distances(a, a, lo, hi) <= b if kind == "sphere" else
-                      plan.box_distances(a, b, lo, hi) <= 0)
-        return meets
+        return np.ones(len(lo), dtype=bool) if self.roi is None else box_reach(self.roi, lo, hi, 0.0)
 
     def tile_halos(self, lo, hi, halo):
         """`halo` for the tiles near a handle; the restoration's hops for the others whose points may relax; none
@@ -224,8 +345,9 @@ class Edit(ops.Operation):
         mine = points[own]
         return self.collar() if not self.restores and self.near_handles(mine, mine).any() else 0.0
 
-    def compute(self, points, normals, radius=None):
-        """The moved points and normals; `radius`, an (n,) array, receives each point's 10th-neighbour distance."""
-        moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points),
+    def compute(self, points, normals, radius=None, *, rows):
+        """The moved points and normals of the points at the scan's `rows`; `radius`, an (n,) array, receives each
+        point's 10th-neighbour distance."""
+        moved = _core.diffuse_points(points, normals, self.state, selection=self.selection(points, rows),
                                      restore_details=self.restores, neighbor_radius=radius)
         return {name: column for name, column in zip(self.computed_fields(), (*moved.points.T, *moved.normals.T))}

@@ -43,6 +43,7 @@ class Operation:
     banded = True  # the certificate searches neighbours only near the read box's border (plan.banded_neighborhoods)
     measures_radius = False  # compute() can report each point's k-th-neighbour distance (plan.certify_with_radius)
     uses_neighbors = True  # else a point's value needs only the points within required_halo(): nothing to certify
+    takes_rows = False  # compute() takes the points' rows in the scan (`rows=`)
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 
@@ -107,14 +108,15 @@ class Operation:
         """Products with K the values need: the transfer function's degree, else one neighbourhood."""
         return RINGS[self.settings["order"]] if "order" in self.settings else 1
 
-    def needs_certificate(self, points, own):
-        """Which own points of a tile (`points` read, `own` its own) need their neighbourhoods certified (the
-        others' values need no neighbourhood): all of them, or none for an operation that uses none."""
+    def needs_certificate(self, points, rows, own):
+        """Which own points of a tile (`points` read, at the scan's `rows`; `own` its own) need their neighbourhoods
+        certified (the others' values need no neighbourhood): all of them, or none for an operation that uses
+        none."""
         return np.full(int(np.count_nonzero(own)), self.uses_neighbors)
 
-    def narrowed(self, points, lo, hi, halo):
-        """The points a tile [lo, hi) keeps of those it read within `halo` (a mask, None: all of them), and the halo
-        within which it kept every point, which bounds its certificate."""
+    def narrowed(self, points, rows, lo, hi, halo):
+        """The points a tile [lo, hi) keeps of those it read within `halo` (at the scan's `rows`; a mask, None: all
+        of them), and the halo within which it kept every point, which bounds its certificate."""
         return None, halo
 
     def required_halo(self, neighborhoods, own, points):

@@ -221,24 +221,25 @@ def run_tile(job):
             except Exception as error:
                 raise TiledError(f"tile {tile} (box {_box_text(lo, hi)}) cannot be read from {source.path}: "
                                  f"{error}") from None
-            keep, exact_halo = operation.narrowed(points, lo, hi, halo)
+            keep, exact_halo = operation.narrowed(points, rows, lo, hi, halo)
             if keep is not None:
                 rows, points = rows[keep], points[keep]
                 normals = None if normals is None else normals[keep]
             own = plan.own_mask(points, lo, hi)
+            row_arguments = {"rows": rows} if operation.takes_rows else {}
             if not own.any():
                 watch.lap("neighbours")
                 return TileSummary(tile, 0, len(rows), halo, attempts, 0.0, reach, 0.0,
                                    np.zeros(len(chunk_starts) + 1, dtype=np.int64), watch.seconds)
             border = plan.border_distance(points, lo - exact_halo, hi + exact_halo)
             neighborhoods = interior = values = None
-            needs_certificate = operation.needs_certificate(points, own)
+            needs_certificate = operation.needs_certificate(points, rows, own)
             if not needs_certificate.any():
                 kth, tile_reach, searched = 0.0, reach, 0.0
                 certified = np.ones(len(needs_certificate), dtype=bool)
             elif compute_first:
                 radius = np.empty(len(points))
-                values = operation.compute(points, normals, radius)
+                values = operation.compute(points, normals, radius, **row_arguments)
                 watch.lap("compute")
                 kth = float(radius[own].max())
                 tile_reach = max(reach, 1.25 * kth)
@@ -264,7 +265,7 @@ def run_tile(job):
         if values is None:
             if estimate_normals:
                 normals = operation.oriented_normals(points)
-            values = operation.compute(points, normals)
+            values = operation.compute(points, normals, **row_arguments)
             watch.lap("compute")
         folder = scratch / f"tile_{tile}"
         partial = scratch / f".tile_{tile}.{uuid.uuid4().hex[:8]}"

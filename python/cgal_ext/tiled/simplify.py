@@ -53,15 +53,22 @@ def unit_normals(normals):
     return normals / np.where(valid, length, 1.0)[:, None], valid
 
 
-def select_rows(begin, end, source, cutoff):
-    """The points and unit normals of rows [begin, end) whose coordinate hash is at most `cutoff` (all when None),
-    with the bounding box and the first row of the range with a non-finite coordinate or an invalid normal."""
+def select_rows(begin, end, source, cutoff, row_sets=()):
+    """The points, unit normals and rows of rows [begin, end) whose coordinate hash is at most `cutoff` (all when
+    None), with the bounding box and the first row of the range with a non-finite coordinate or an invalid normal;
+    for each of `row_sets` (.npy files of sorted rows of the scan), the bounding box of its points in the range
+    (None where it has none)."""
     points, normals = read_rows(source, begin, end)
     normals, valid = unit_normals(normals)
     keep = np.ones(len(points), dtype=bool) if cutoff is None else coordinate_hash(points) <= np.uint64(cutoff)
-    return {"points": points[keep], "normals": normals[keep], "lo": points.min(axis=0), "hi": points.max(axis=0),
-            "bad_row": first_invalid_row(np.isfinite(points).all(axis=1), begin),
-            "bad_normal": first_invalid_row(valid, begin)}
+    selected = {"points": points[keep], "normals": normals[keep], "lo": points.min(axis=0), "hi": points.max(axis=0),
+                "bad_row": first_invalid_row(np.isfinite(points).all(axis=1), begin),
+                "bad_normal": first_invalid_row(valid, begin), "rows": begin + np.flatnonzero(keep), "row_boxes": []}
+    for path in row_sets:
+        rows = np.load(path, mmap_mode="r")
+        inside = points[np.asarray(rows[np.searchsorted(rows, begin):np.searchsorted(rows, end)]) - begin]
+        selected["row_boxes"].append((inside.min(axis=0), inside.max(axis=0)) if len(inside) else None)
+    return selected
 
 
 _subsamples: Dict[str, Tuple[Any, Dict[str, Any]]] = {}  # per worker process: the run's subsample and its tree
@@ -183,9 +190,10 @@ def _whole(value):
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def subsample_pass(runner, source, size, why_normals):
-    """The pass that chooses about `size` points of `source` by their coordinate hash (select_rows); refuses an
-    empty scan, a scan without normals (`why_normals`: what they are needed for) and invalid rows."""
+def subsample_pass(runner, source, size, why_normals, row_sets=()):
+    """The pass that chooses about `size` points of `source` by their coordinate hash (select_rows, which measures
+    `row_sets` too); refuses an empty scan, a scan without normals (`why_normals`: what they are needed for) and
+    invalid rows."""
     n = source.count
     if n == 0:
         raise TiledError(f"{source.path}: the scan has no points")
@@ -193,20 +201,21 @@ def subsample_pass(runner, source, size, why_normals):
         raise TiledError(f"{source.path}: has no normals; {why_normals} (run `python3 -m cgal_ext.tiled normals` "
                          f"first: its output has them, oriented across the tiles)")
     cutoff = None if size >= n else int(size / n * 2.0**64)
-    selected = runner.map(select_rows, runner.row_ranges(n), source, cutoff, what="subsample")
+    selected = runner.map(select_rows, runner.row_ranges(n), source, cutoff, row_sets, what="subsample")
     runner.refuse_invalid_rows(source, selected)
     return selected
 
 
 def sorted_subsample(selected, who, size, n):
     """The points and unit normals of the passes' `selected` (select_rows), sorted: -0.0 as 0.0, as the hash sees
-    them, so that the subsample's order, and what the client computes from it, does not depend on the scan's."""
+    them, so that the subsample's order, and what the client computes from it, does not depend on the scan's; and
+    their rows in the scan."""
     points = np.concatenate([s["points"] for s in selected]) + 0.0
     normals = np.concatenate([s["normals"] for s in selected]) + 0.0
     if not len(points):
         raise TiledError(f"{who}: the subsample of {size} of the {n} points holds none; give a larger subsample")
     order = np.lexsort((*normals.T[::-1], *points.T[::-1]))
-    return points[order], normals[order]
+    return points[order], normals[order], np.concatenate([s["rows"] for s in selected])[order]
 
 
 def options(source, output, subsample=SUBSAMPLE, clusters=None, **library):
@@ -244,7 +253,7 @@ def simplify(runner, source, output, scratch, subsample_size, clusters_path, lib
     ranges = runner.row_ranges(n)
     report = runner.report
     with runner.client_step("cluster subsample"):
-        points, normals = sorted_subsample(selected, "simplify", subsample_size, n)
+        points, normals, _ = sorted_subsample(selected, "simplify", subsample_size, n)
         diagonal = float(np.linalg.norm(np.max([s["hi"] for s in selected], axis=0)
                                         - np.min([s["lo"] for s in selected], axis=0)))
         try:
