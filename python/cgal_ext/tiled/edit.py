@@ -142,6 +142,9 @@ class Edit(ops.Operation):
     symmetric = True
     measures_radius = True  # diffuse_points reports each point's 10th-neighbour distance
     takes_rows = True  # index files and masks select by row
+    # Larger tiles than the other runs': a tile in the region reads the restoration's halo, about 63 k-th-neighbour
+    # distances deep, and computes in proportion to the points it reads (doc/scaling.md, "Editing in tiles").
+    points_per_tile = 1 << 20
     RELAXATION_NEIGHBORS = 10  # diffuse_points' restoration: the closed ball of the 10th nearest
 
     def __init__(self, edit, subsample=SUBSAMPLE):

@@ -44,6 +44,7 @@ class Operation:
     measures_radius = False  # compute() can report each point's k-th-neighbour distance (plan.certify_with_radius)
     uses_neighbors = True  # else a point's value needs only the points within required_halo(): nothing to certify
     takes_rows = False  # compute() takes the points' rows in the scan (`rows=`)
+    points_per_tile = 1 << 18  # the tiles' size by default (a tile's own points)
     extra_options: Tuple[str, ...] = ()  # the runs' own options beside the library function's
     extra_defaults: Dict[str, Any] = {}
 

@@ -23,7 +23,6 @@ from . import plan, store
 from .store import TiledError
 
 CHUNK_ROWS = 1 << 20
-POINTS_PER_TILE = 1 << 18
 SAMPLE_PER_TILE = 4000
 SPACING_QUERIES = 20_000
 
@@ -466,7 +465,8 @@ class Run(Passes):
         starts = [begin for begin, _ in ranges]
         workers = max(1, len(self.client.scheduler_info()["workers"]))
         # A multiple of the workers, so that none is left alone with the last tile.
-        tile_count = self.tiles or workers * max(2, -(-n // (POINTS_PER_TILE * workers)))
+        per_tile = self.operation.points_per_tile
+        tile_count = self.tiles or workers * max(2, -(-n // (per_tile * workers)))
         stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
 
         scans = self.map(scan_rows, ranges, self.source, stride, what="scan")
