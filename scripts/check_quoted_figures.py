@@ -182,7 +182,7 @@ def read_sources(root):
 
 def write_sources(root, bound):
     with open(os.path.join(root, SOURCES), "w", newline="") as f:
-        w = csv.writer(f)
+        w = csv.writer(f, lineterminator="\n")  # the file's own line ends
         w.writerow(["page", "block", "figure", "quoted", "key", "scale"])
         for (page, block), entries in sorted(bound.items()):
             for i, e in enumerate(entries):
