@@ -50,7 +50,8 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     memory_limit : str or int
         Memory limit per LocalCluster worker ("3GiB", bytes, or "auto").
     tiles : int, optional
-        Number of tiles (default: about 262,000 points each, a multiple of the workers, at least two per worker).
+        Number of tiles (default: about 262,000 points each, 1,048,576 for "edit", a multiple of the workers, at
+        least two per worker).
         Not taken by "simplify", which has no tiles.
     halo : float, optional
         The first halo width (default: from the operation's rings and the scan's spacing); a halo too small for

@@ -28,7 +28,8 @@ def parser():
         engine.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster)")
         engine.add_argument("--workers", type=int, help="LocalCluster workers (default: one per core)")
         engine.add_argument("--memory-limit", default="auto", help="memory limit per LocalCluster worker, e.g. 3GiB")
-        engine.add_argument("--tiles", type=int, help="number of tiles (default: about 262,000 points each)")
+        engine.add_argument("--tiles", type=int,
+                            help="number of tiles (default: about 262,000 points each; 1,048,576 for edit)")
         engine.add_argument("--halo", type=float, help="first halo width (default: from the operation and spacing)")
         engine.add_argument("--scratch", help="folder every worker can reach (default: beside the output)")
         engine.add_argument("--threads-per-task", type=int, default=1, help="library threads inside each task")
