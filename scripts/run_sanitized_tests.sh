@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the library, the program and every test with AddressSanitizer and UndefinedBehaviorSanitizer
-# (scripts/sanitized_build.sh, which builds the fuzz targets too) and runs the test suite but for three parts
+# (scripts/sanitized_build.sh, which builds the fuzz targets too) and runs the test suite but for the parts
 # left to the Release pass (below); any memory error, leak or undefined behaviour fails it.
 # Usage: scripts/run_sanitized_tests.sh   (as root on a fresh Debian 12 machine)
 set -euo pipefail
@@ -13,6 +13,7 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Left to the Release pass: the installed-package test (it builds a separate consumer project without
 # sanitizers) and the determinism reruns of every subcommand on the armadillo (each subcommand runs under the
 # sanitizers in the program's own tests; the reruns are half the pass's test time), which it does not build;
-# and the editing tests rerun on the diffusion's portable path (the stencil's own tests run it here).
+# the editing tests rerun on the diffusion's portable path (the stencil's own tests run it here); and the demo's
+# pictures (every subcommand and picture it makes runs here in the program's own tests).
 timed_stage "sanitized tests" ctest --test-dir "$build" -j"$(nproc)" --output-on-failure \
-  -E '^(installed_package_consumer|portable_diffusion_.*)$'
+  -E '^(installed_package_consumer|portable_diffusion_.*|Cli\.RenderAndDemoWritePictures)$'

@@ -7,7 +7,7 @@
 # header (scripts/include_layers.py), that the C++ lines changed since .clang-format follow it
 # (scripts/check_format.sh), the API reference (no Doxygen warning allowed), the manual's pictures (into
 # the build folder), the unit tests of the library and the program built with AddressSanitizer and
-# UndefinedBehaviorSanitizer (the unit tests again), and each fuzz target for 15 seconds. Ends with
+# UndefinedBehaviorSanitizer (the unit tests again), and each fuzz target for 10 seconds. Ends with
 # the time of each stage, checked to add up to the whole run (scripts/check_stage_times.py); doc/build_time.md
 # gives the figures of a fresh clone with the compiler cache off on 2 cores.
 # Usage: scripts/run_tests.sh        (as root on a fresh Debian 12 machine)
@@ -47,5 +47,5 @@ timed_stage layout bash scripts/check_format.sh
 timed_stage "API reference" bash scripts/build_api_docs.sh
 timed_stage pictures env BUILD_DIR="$build" DOC_IMAGES_DIR="$build/doc_images" bash scripts/make_doc_images.sh
 bash scripts/run_sanitized_tests.sh # times "sanitized build" and "sanitized tests"
-bash scripts/run_fuzzers.sh 15      # times "fuzz build" and "fuzz runs"
+bash scripts/run_fuzzers.sh 10      # times "fuzz build" and "fuzz runs"
 python3 scripts/check_stage_times.py "$STAGE_TIMES" "$(echo "$(date +%s.%N) - $run_start" | bc)"
