@@ -185,40 +185,39 @@ class Edit(ops.Operation):
             selection[chosen] = group
         return selection
 
-    def _all_specs(self):
-        return [*(self.roi or []), *(spec for group in self.handles for spec in group)]
+    def _map_specs(self, change):
+        """Every list of specs (the region's, each handle group's) replaced by `change` of it."""
+        self.roi = None if self.roi is None else change(self.roi)
+        self.handles = [change(group) for group in self.handles]
 
     def _read_row_sets(self, source, scratch):
-        """Index files and masks read into sorted rows, saved in `scratch` for the tiles (memory-mapped there);
-        returns the .npy paths in the order of the specs."""
-        paths, read = [], {}
-        for kind, name, _ in self._all_specs():
-            if kind in ("indices", "mask") and (kind, name) not in read:
-                rows = read_index_file(name, source.count) if kind == "indices" else read_mask(source, name)
-                read[kind, name] = scratch / f"rows_{len(read)}.npy"
-                np.save(read[kind, name], rows)
-            if kind in ("indices", "mask"):
-                paths.append(read[kind, name])
-        return paths
+        """Each index file and mask read once into sorted rows, saved in `scratch` for the tiles (memory-mapped
+        there), and its specs turned into ("rows", .npy, None); returns the distinct .npy paths."""
+        saved = {}
 
-    def _resolve_row_sets(self, paths, selected):
-        """Each index file or mask of the specs as ("rows", its .npy, its points' bounding box or None), the boxes
-        from the subsample pass's `selected` (select_rows measured them on every row)."""
-        found = iter(enumerate(paths))
-
-        def resolved(specs):
+        def read(specs):
             out = []
             for kind, a, b in specs:
                 if kind in ("indices", "mask"):
-                    i, path = next(found)
-                    parts = [s["row_boxes"][i] for s in selected if s["row_boxes"][i] is not None]
-                    a, b = str(path), ((np.min([p[0] for p in parts], axis=0), np.max([p[1] for p in parts], axis=0))
-                                       if parts else None)
-                    kind = "rows"
+                    if (kind, a) not in saved:
+                        saved[kind, a] = str(scratch / f"rows_{len(saved)}.npy")
+                        np.save(saved[kind, a], read_index_file(a, source.count) if kind == "indices"
+                                else read_mask(source, a))
+                    kind, a = "rows", saved[kind, a]
                 out.append((kind, a, b))
             return out
-        self.roi = None if self.roi is None else resolved(self.roi)
-        self.handles = [resolved(group) for group in self.handles]
+        self._map_specs(read)
+        return list(saved.values())
+
+    def _set_row_boxes(self, paths, selected):
+        """Each row set's bounding box (None when it holds no row) from the subsample pass's `selected`, which
+        measured `paths` on every row."""
+        boxes = {}
+        for i, path in enumerate(paths):
+            parts = [s["row_boxes"][i] for s in selected if s["row_boxes"][i] is not None]
+            boxes[path] = ((np.min([p[0] for p in parts], axis=0), np.max([p[1] for p in parts], axis=0))
+                           if parts else None)
+        self._map_specs(lambda specs: [(kind, a, boxes[a] if kind == "rows" else b) for kind, a, b in specs])
 
     def prepare(self, runner, source):
         """The client's part: index files and masks read, the subsample (chosen by a hash of the coordinates, as
@@ -228,7 +227,7 @@ class Edit(ops.Operation):
         row_sets = self._read_row_sets(source, runner.scratch)
         selected = subsample_pass(runner, source, self.subsample_size, "the edit turns them with the points",
                                   row_sets)
-        self._resolve_row_sets(row_sets, selected)
+        self._set_row_boxes(row_sets, selected)
         with timed(runner.report["client_seconds"], "deform subsample"):
             points, normals, rows = sorted_subsample(selected, "edit", self.subsample_size, n)
             # The program's reader checks the edit first, as it does a whole scan's.
