@@ -41,8 +41,8 @@ def selection(points):
     return np.flatnonzero(up > np.quantile(up, 0.5)), np.flatnonzero(up > np.quantile(up, 0.9))
 
 
-def server_costs(folder, name, frames, releases):
-    session = Session(folder)
+def server_costs(folder, name, frames, releases, session_options=None):
+    session = Session(folder, **(session_options or {}))
     session.load(name)
     region, handle = selection(session.points)
     session.select("roi", "add", region)
@@ -76,7 +76,7 @@ def server_costs(folder, name, frames, releases):
         release.append(time.perf_counter() - start)
     return {"preprocess_s": preprocess, "frame_s": median(frame_times), "frame_bytes": max(sizes),
             "frame_budget_bytes": 64 * int(setup["sample_points"]) + 1024, "sample_points": int(setup["sample_points"]),
-            "release_s": median(release), "region": len(region)}
+            "release_s": median(release), "region": len(region), "points": len(session.points)}
 
 
 class Recorder:

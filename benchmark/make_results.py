@@ -333,7 +333,8 @@ STAGE_FILES = [("bench_simplification", "simplification_results.csv"), ("bench_u
                ("bench_details", "details_results.csv"), ("bench_python", "python_results.csv"),
                ("bench_studio", "studio_results.csv"), ("studio_on_models", "studio_models_results.csv"),
                ("bench_tiled", "tiled_results.csv"), ("bench_drag", "drag_results.csv"),
-               ("bench_tiled_simplify", "tiled_simplify_results.csv"), ("bench_tiled_edit", "tiled_edit_results.csv")]
+               ("bench_tiled_simplify", "tiled_simplify_results.csv"), ("bench_tiled_edit", "tiled_edit_results.csv"),
+               ("bench_studio_level", "studio_level_results.csv")]
 
 
 def long_rows(out_dir):
@@ -382,7 +383,7 @@ def main():
                "[editing](editing_results.md), [up-sampling](upsampling_results.md), "
                "[SSPs](simplification_results.md), [curvature](curvature_results.md), [normals](normals_results.md), "
                "[detail scaling](scaling_results.md), [details](details_results.md), [memory](memory_results.md), "
-               "[raw scans](raw_scan_results.md), [Python](python_results.md), [drags at scale](drag_results.md), [studio](studio_results.md) ([on CGAL's models](studio_models_results.md)), "
+               "[raw scans](raw_scan_results.md), [Python](python_results.md), [drags at scale](drag_results.md), [studio](studio_results.md) ([on CGAL's models](studio_models_results.md), [on a scan larger than it edits whole](studio_level_results.md)), "
                "[tiled runs on Dask](tiled_results.md) ([sample points](tiled_simplify_results.md), "
                "[edit](tiled_edit_results.md)).\n")
     table(out, ["machine", ""], machine_facts(build_dir, threads))

@@ -49,6 +49,9 @@ PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_studio.py "${flags[@
 echo "== studio_on_models.py" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/studio_on_models.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/studio_on_models.log"
+echo "== bench_studio_level.py (full run: a scan of 100M points, about 15 minutes and 5 GB of temporary files)" >&2
+PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_studio_level.py "${flags[@]}" --build "$build" --data data \
+  --out "$out" > "$build/benchmark/logs/bench_studio_level.log"
 echo "== bench_tiled.py (full run: 10M, 30M and 100M points, about 15 minutes and 15 GB of temporary files)" >&2
 PYTHONPATH="$build/python" /usr/bin/python3 benchmark/bench_tiled.py "${flags[@]}" --build "$build" --data data --out "$out" \
   > "$build/benchmark/logs/bench_tiled.log"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import cgal_ext
-from conftest import DATA, xyz
+from conftest import DATA, read_ply, xyz
 from studio_support import (Server, assert_the_region_bends, chromium, hole_fraction, idle, lasso_above, pointer_path,
                             save_as, saved_and_reproduced, screen_box, wait_for)
 from test_studio import click, first_hits, seen_from, shot
@@ -84,12 +84,9 @@ def test_the_brush_takes_only_what_is_seen_on_a_scan(page, scan):
     wait_for(driver, "studio.state.region === 0", what="the cleared selection")
 
 
-def test_an_edit_of_its_upper_part_bends_and_the_program_reproduces_it(page, scan):
-    server, driver = page
-    idle(driver)
-    points = cgal_ext.read_points(scan).points
-    diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    # The region: the upper half on the screen, through the model (X-ray); the handle: the ears' tips.
+def paint_and_drag_the_ear(driver, points):
+    """The region: the upper half on the screen, through the model (X-ray); the handle: the ears' tips, dragged up
+    and to the right by the gizmo and released. Returns the labels painted."""
     x0, x1, y0, y1 = screen_box(driver)
     lasso_above(driver, 0.5 * (y0 + y1))
     click(driver, "new-group")
@@ -101,18 +98,25 @@ def test_an_edit_of_its_upper_part_bends_and_the_program_reproduces_it(page, sca
     wait_for(driver, "studio.labels && studio.labels.some(l => l === 2)", what="the handle")
     click(driver, "xray")
     labels = np.array(driver.execute_script("return Array.from(studio.labels)"))
-    handle, in_region = labels == 2, labels != 0
-    assert 20 < handle.sum() < 0.2 * in_region.sum()
-
     click(driver, "tool-orbit")
     click(driver, "edit-start")
     wait_for(driver, "studio.prepared && studio.state.preprocessed", what="the preprocessing (no warning)")
-    assert not driver.execute_script("return studio.warnings && studio.warnings.length")
     px, py = driver.execute_script("return studio.pivotScreen()")
-    path = [(px, py)] + [(px + 0.8 * t, py - 0.4 * t) for t in range(5, 101, 5)]
-    pointer_path(driver, path)
+    pointer_path(driver, [(px, py)] + [(px + 0.8 * t, py - 0.4 * t) for t in range(5, 101, 5)])
     wait_for(driver, "studio.state.step === 1", what="the release")
     idle(driver)
+    return labels
+
+
+def test_an_edit_of_its_upper_part_bends_and_the_program_reproduces_it(page, scan):
+    server, driver = page
+    idle(driver)
+    points = cgal_ext.read_points(scan).points
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    labels = paint_and_drag_the_ear(driver, points)
+    handle, in_region = labels == 2, labels != 0
+    assert 20 < handle.sum() < 0.2 * in_region.sum()
+    assert not driver.execute_script("return studio.warnings && studio.warnings.length")
     shot(driver, "bunny_3_edited")
 
     save_as(driver, "edited")
@@ -121,6 +125,60 @@ def test_an_edit_of_its_upper_part_bends_and_the_program_reproduces_it(page, sca
     motion = (xyz(saved) - points)[handle].mean(axis=0)
     assert np.linalg.norm(motion) > 0.02 * diagonal
     assert_the_region_bends(points, xyz(saved), handle, in_region, motion, least_near=20)
+
+
+@pytest.fixture(scope="module")
+def level_page(scan, tmp_path_factory):
+    """The bunny as a binary PLY opened with a limit below its points: the studio opens its level of detail."""
+    folder = tmp_path_factory.mktemp("bunny_level")
+    cloud = cgal_ext.read_points(scan)
+    cgal_ext.write_ply(folder / "bunny.ply", cloud.points, cloud.normals)
+    server = Server(folder / "bunny.ply", ["--level-of-detail-above", "30000", "--level-points", "20000"])
+    driver = chromium()
+    try:
+        driver.get(server.url)
+        wait_for(driver, "studio.n > 0 && studio.state && studio.state.scan && studio.spacing", timeout=120,
+                 what="the level of detail")
+        idle(driver)
+        yield server, driver, folder / "bunny.ply"
+    finally:
+        driver.quit()
+        server.stop()
+
+
+def test_over_the_limit_the_level_of_detail_is_edited_and_saved_through_the_tiled_edit(level_page):
+    """Painted, dragged and saved in the page, the edit of the level of detail is carried to every point of the
+    scan by the tiled edit: what the tiled command makes of the saved JSON, a region that bends."""
+    import subprocess
+    import sys
+    from scipy.spatial import cKDTree
+    server, driver, scan = level_page
+    points = cgal_ext.read_points(scan).points
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    shown = np.array(driver.execute_script("return Array.from(studio.rest)")).reshape(-1, 3)
+    assert 15_000 < len(shown) < 25_000 and driver.execute_script("return studio.state.level_of_detail.scan_points") == \
+        len(points)
+    assert "level of detail" in driver.find_element("id", "status").text
+    labels = paint_and_drag_the_ear(driver, points)
+    shot(driver, "bunny_4_level_of_detail")
+
+    driver.execute_script("studio.lastSaved = null")
+    driver.find_element("id", "save-name").clear()
+    driver.find_element("id", "save-name").send_keys("edited")
+    driver.find_element("id", "save").click()
+    wait_for(driver, "studio.lastSaved", timeout=300, what="the save through the tiled edit")
+    saved = xyz(read_ply(scan.parent / "edited.ply"))
+    subprocess.run([sys.executable, "-m", "cgal_ext.tiled", "edit", str(scan), "--edit", str(scan.parent / "edited.json"),
+                    "-o", str(scan.parent / "command.ply"), "--subsample", "20000"], check=True, capture_output=True)
+    assert np.abs(saved - xyz(read_ply(scan.parent / "command.ply"))).max() <= 1e-12 * diagonal
+    # Each point of the scan labelled as its nearest point of the level (the points shown): a region that bends.
+    level = cgal_ext.read_points(scan.parent / "edited.sample.ply").points
+    assert np.abs(level - shown).max() < 1e-6 * diagonal
+    carried = labels[cKDTree(level).query(points)[1]]
+    handle, in_region = carried == 2, carried != 0
+    motion = (saved - points)[handle].mean(axis=0)
+    assert np.linalg.norm(motion) > 0.02 * diagonal
+    assert_the_region_bends(points, saved, handle, in_region, motion, least_near=20)
 
 
 def test_the_page_logged_no_error(page):

@@ -340,3 +340,68 @@ def test_a_release_that_swings_the_region_is_told_and_the_default_order_does_not
     assert [w["kind"] for w in warnings] == ["swing"] and "times as far as any handle" in warnings[0]["message"]
     moved = np.linalg.norm(session.shown_points - p, axis=1)
     assert moved[~handle].max() > 2 * moved[handle].mean()  # what it tells
+
+
+def test_a_scan_over_the_limit_opens_as_its_level_of_detail_and_saves_through_the_tiled_edit(tmp_path):
+    """A scan of more points than the session edits whole opens as the tiled edit's subsample, built by a tiled
+    pass and cached beside the scan (read back while the scan is unchanged, built again once it changes); an edit
+    of it is saved through the tiled edit, which the tiled command reproduces from the saved JSON, with the
+    selection carried to each point by its nearest point of the level; what a level cannot carry is refused, and
+    a save whose tiled run fails writes nothing."""
+    import os
+    from cgal_ext import tiled
+    from cgal_ext.studio import level_of_detail
+    from scipy.spatial import cKDTree
+    points, normals = bumpy_sphere(60_000)
+    cgal_ext.write_ply(tmp_path / "sphere.ply", points, normals)
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+
+    def opened():
+        session = Session(tmp_path, level_of_detail_above=30_000, level_points=20_000)
+        session.load("sphere.ply")
+        return session
+    session = opened()
+    keep = tiled.simplify.coordinate_hash(points) <= np.uint64(int(20_000 / 60_000 * 2.0**64))
+    assert np.array_equal(np.sort(session.points, axis=0), np.sort(points[keep], axis=0))
+    assert session.state()["level_of_detail"] == {"scan_points": 60_000, "cached": False}
+    again = opened()
+    assert again.state()["level_of_detail"]["cached"] and np.array_equal(again.points, session.points)
+    status = os.stat(tmp_path / "sphere.ply")
+    os.utime(tmp_path / "sphere.ply", ns=(status.st_atime_ns, status.st_mtime_ns + 1000))
+    assert not opened().state()["level_of_detail"]["cached"]
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == [".sphere.ply.lod"]
+
+    level = session.points
+    with pytest.raises(StudioError, match="paint a region"):
+        session.save("edited")
+    edit(session, level[:, 2] > 0, level[:, 2] > 0.9, translation(0.1, 0, 0.15))
+    for refused in (session.commit, session.fill, lambda: session.details("scale", 2.0, apply=True)):
+        with pytest.raises(StudioError, match="level of detail"):
+            refused()
+    shown_level = session.shown_points.copy()
+    assert session.save("edited") == sorted(["edited.json", "edited.ply", "edited.roi.txt", "edited.handle0.txt",
+                                             "edited.sample.ply"])
+    saved = xyz(read_ply(tmp_path / "edited.ply"))
+    tiled.run("edit", tmp_path / "sphere.ply", tmp_path / "command.ply", edit=tmp_path / "edited.json",
+              subsample=20_000)
+    assert np.abs(saved - xyz(read_ply(tmp_path / "command.ply"))).max() <= 1e-12 * diagonal
+    # Carried by the nearest point of the level: the points nearest a handle point moved with the handle, those
+    # nearest a fixed point far from the region did not move.
+    distance, nearest = cKDTree(level).query(points)
+    labels = session.labels[nearest]
+    assert distance.max() <= json.loads((tmp_path / "edited.json").read_text())["sample"]["reach"]
+    assert np.abs(saved[labels == FIRST_HANDLE] - points[labels == FIRST_HANDLE] - [0.1, 0, 0.15]).max() < 1e-12
+    far = points[:, 2] < -0.5
+    assert np.array_equal(saved[far], points[far])
+    # What the page showed: the saved result at the level's points, within 1 % of the diagonal (doc/studio.md).
+    at_level = cKDTree(points).query(level)[1]
+    assert np.abs(saved[at_level] - shown_level).max() <= 0.01 * diagonal
+
+    # A failed tiled run (the scan cut short after it was opened) writes nothing.
+    before = sorted(p.name for p in tmp_path.iterdir())
+    data = (tmp_path / "sphere.ply").read_bytes()
+    (tmp_path / "sphere.ply").write_bytes(data[:len(data) // 2])
+    with pytest.raises(StudioError, match="nothing written"):
+        session.save("again")
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert level_of_detail.cache_folder(tmp_path / "sphere.ply").is_dir()

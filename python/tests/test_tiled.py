@@ -841,11 +841,53 @@ def test_index_files_and_masks_select_the_rows_they_name(scan, client, tmp_path)
         assert np.array_equal(c[name], read_output(tmp_path / "rows30000.ply")[name][order])
 
 
+def test_a_selection_painted_on_a_sample_carries_to_every_point_by_its_nearest(scan, client, tmp_path):
+    """A selection painted on a sample of the scan (nearest: specs, as the studio saves an edit of a level of
+    detail) selects each point of the scan whose nearest sample point, within the sample's reach, is listed: the
+    same bits as the index files of those rows; on the sample itself, the painted selection; and the scan in
+    another order, with the same sample and files, gives the same result in that order."""
+    from scipy.spatial import cKDTree
+    points, normals = scan.small_points, scan.small_normals
+    sample = client_subsample(points, normals, 30_000)[0]
+    cgal_ext.write_ply(tmp_path / "sample.ply", sample)
+    painted = {name: np.flatnonzero(tiled.edit.inside(sample, None, tiled.edit.region_specs([spec], "", "")))
+               for name, spec in (("roi", "sphere:0,0,1,0.8"), ("handle", "sphere:0,0,1,0.25"))}
+    distance, nearest = cKDTree(sample).query(points)
+    reach = float(np.quantile(distance, 0.99))  # the farthest percent of the points are not selected
+    for name, listed in painted.items():
+        (tmp_path / f"{name}.txt").write_text("".join(f"{i}\n" for i in listed))
+        rows = np.flatnonzero(np.isin(nearest, listed) & (distance <= reach))
+        (tmp_path / f"{name}_rows.txt").write_text("".join(f"{i}\n" for i in rows))
+    by_sample = edit_file(tmp_path, roi="nearest:roi.txt", handle="nearest:handle.txt", name="nearest.json",
+                          sample={"points": "sample.ply", "reach": reach})
+    by_rows = edit_file(tmp_path, roi="indices:roi_rows.txt", handle="indices:handle_rows.txt", name="rows.json")
+    for edit, name in ((by_sample, "nearest.ply"), (by_rows, "rows.ply")):
+        tiled.run("edit", scan.small, tmp_path / name, client=client, tiles=6, edit=edit, subsample=30_000)
+    a, b = read_output(tmp_path / "nearest.ply"), read_output(tmp_path / "rows.ply")
+    assert np.abs(columns(a, "xyz") - points).max() > 1e-3
+    for name in ("x", "y", "z", "nx", "ny", "nz"):
+        assert np.array_equal(a[name], b[name])
+    # On the sample, whose points are the tiled edit's subsample, the selection is the one painted.
+    operation = tiled.edit.Edit(by_sample, subsample=30_000)
+    operation._read_row_sets(SimpleNamespace(count=len(points)), tmp_path)
+    selection = operation.selection(sample, np.arange(len(sample)))
+    assert np.array_equal(np.flatnonzero(selection != tiled.edit.FIXED), painted["roi"])
+    assert np.array_equal(np.flatnonzero(selection == 0), painted["handle"])
+    order = np.random.default_rng(5).permutation(len(points))
+    cgal_ext.write_ply(tmp_path / "shuffled.ply", points[order], normals[order])
+    tiled.run("edit", tmp_path / "shuffled.ply", tmp_path / "shuffled_out.ply", client=client, tiles=5,
+              edit=by_sample, subsample=30_000)
+    c = read_output(tmp_path / "shuffled_out.ply")
+    for name in ("x", "y", "z", "nx", "ny", "nz"):
+        assert np.array_equal(c[name], a[name][order])
+
+
 def test_a_bad_edit_fails_before_any_tile_with_nothing_written(scan, client, tmp_path):
     (tmp_path / "far.txt").write_text(f"1\n{len(scan.small_points)}\n")
     (tmp_path / "bad.txt").write_text("1\n# a comment\n2.5\n")
     write_zarr(tmp_path / "scan.zarr", scan.small_points, scan.small_normals)
     zarr.open_group(str(tmp_path / "scan.zarr"), mode="r+").array("short", np.ones(10, dtype=bool))
+    cgal_ext.write_ply(tmp_path / "few.ply", scan.small_points[:1])
     cases = [(edit_file(tmp_path, roi="sphere:5,5,5,0.1", name="far.json"), "roi selects none"),
              (edit_file(tmp_path, handle="indices:far.txt", name="indices.json"),
               rf"far.txt:2: index {len(scan.small_points)} is out of range"),
@@ -855,6 +897,14 @@ def test_a_bad_edit_fails_before_any_tile_with_nothing_written(scan, client, tmp
              (edit_file(tmp_path, handle="mask:", name="empty.json"), "is not a region spec"),
              (edit_file(tmp_path, handle="sphere:0,0,-1,0.2", name="outside.json"), "outside the region of interest"),
              (edit_file(tmp_path, rotations="sideways", name="sideways.json"), "rotations must be"),
+             (edit_file(tmp_path, handle="nearest:far.txt", name="nosample.json"), "give both or neither"),
+             (edit_file(tmp_path, sample={"points": "s.ply", "reach": 1}, name="nonearest.json"), "give both"),
+             (edit_file(tmp_path, handle="nearest:far.txt", sample={"points": "s.ply", "reach": 1}, name="s.json"),
+              "cannot read the sample"),
+             (edit_file(tmp_path, handle="nearest:far.txt", sample={"points": "s.ply", "reach": -1}, name="r.json"),
+              "reach must be a positive distance"),
+             (edit_file(tmp_path, handle="nearest:far.txt", sample={"points": "few.ply", "reach": 1},
+                        name="few.json"), "far.txt:1: index 1 is out of range \\(1 points\\)"),
              (tmp_path / "missing.json", "cannot read")]
     for path, message in cases:
         with pytest.raises(tiled.TiledError, match=message):

@@ -75,8 +75,8 @@ class Inbox:
 class Studio:
     """The server's state: the session, the token, the tab that holds the session."""
 
-    def __init__(self, root, scan=None, token=None):
-        self.session = Session(root)
+    def __init__(self, root, scan=None, token=None, **level):
+        self.session = Session(root, **level)
         self.initial_scan = scan
         self.token = token or secrets.token_urlsafe(24)
         self.socket = None
@@ -208,13 +208,15 @@ class Studio:
         await ws.send_json(dict(self.session.state(), type="state", files=self.session.files()))
 
     def progress_reporter(self, ws, stage):
+        """report(fraction, named stage or None for `stage`), sent to the page at every 2 % and each new stage."""
         loop = asyncio.get_running_loop()
-        last = [-1.0]
+        last = [-1.0, stage]
 
-        def report(fraction):
-            if fraction - last[0] >= 0.02 or fraction >= 1:
-                last[0] = fraction
-                asyncio.run_coroutine_threadsafe(ws.send_json({"type": "progress", "stage": stage,
+        def report(fraction, named=None):
+            named = named or stage
+            if named != last[1] or fraction - last[0] >= 0.02 or fraction >= 1:
+                last[:] = fraction, named
+                asyncio.run_coroutine_threadsafe(ws.send_json({"type": "progress", "stage": named,
                                                                "fraction": fraction}), loop)
         return report
 
@@ -419,7 +421,8 @@ class Studio:
         await ws.send_bytes(pack({"type": "colors", "by": by}, [("colors", colors)]))
 
     async def on_save(self, ws, command):
-        written = await self.run(self.session.save, command.get("name"), command.get("overwrite", False))
+        written = await self.run(self.session.save, command.get("name"), command.get("overwrite", False),
+                                 progress=self.progress_reporter(ws, "save"))
         await ws.send_json({"type": "saved", "files": written})
         await self.send_state(ws)
 

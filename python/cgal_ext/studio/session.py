@@ -18,6 +18,7 @@ import numpy as np
 
 import cgal_ext
 
+from . import level_of_detail
 from .selection import Graph
 
 # A point's label: fixed, in the region, or a handle of group g (FIRST_HANDLE + g). The page gets these codes and
@@ -48,14 +49,23 @@ def _identity():
     return np.eye(4)
 
 
+def _text_writer(content):
+    return lambda path: pathlib.Path(path).write_text(content)
+
+
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 _EYE3 = np.eye(3)
 
 
 class Session:
-    """A scan opened in the studio, inside the folder `root` that bounds every file it reads or writes."""
+    """A scan opened in the studio, inside the folder `root` that bounds every file it reads or writes. A scan of
+    more than `level_of_detail_above` points is opened as its level of detail of about `level_points` points
+    (level_of_detail.py)."""
 
-    def __init__(self, root):
+    def __init__(self, root, level_of_detail_above=level_of_detail.LEVEL_OF_DETAIL_ABOVE,
+                 level_points=level_of_detail.LEVEL_POINTS):
+        self.level_of_detail_above, self.level_points = int(level_of_detail_above), int(level_points)
+        self.level = None  # for a level of detail: the scan's path and points, the level's reach
         self.root = pathlib.Path(root).resolve()
         if not self.root.is_dir():
             raise StudioError("%s is not a folder" % root)
@@ -180,16 +190,22 @@ class Session:
         return found
 
     def load(self, name, progress=None):
-        """Reads a scan (normals estimated when it has none, as the program does) and starts a new history."""
-        cloud, status, resolved = self._read_points(name)
-        points = cloud.points
+        """Reads a scan (normals estimated when it has none, as the program does), or the level of detail of a
+        scan too large to edit whole, and starts a new history. `progress(fraction, stage=None)`."""
+        resolved = self._checked(name)[1]
+        count = level_of_detail.point_count(resolved)
+        if count is not None and count > self.level_of_detail_above:
+            points, normals, level, status = self._read_level(name, resolved, count, progress)
+        else:
+            cloud, status, resolved = self._read_points(name)
+            points, normals, level = cloud.points, cloud.normals, None
         if len(points) < 20:
             raise StudioError("%s has %d points; editing needs at least 20" % (name, len(points)))
-        normals = cloud.normals
         if normals is None or not np.all(np.isfinite(normals)) or np.any(np.all(normals == 0, axis=1)):
             if normals is not None:
                 raise StudioError("%s has missing or zero normals; give all or none" % name)
             normals = cgal_ext.estimate_oriented_normals(points, k=min(18, len(points)), progress=progress)
+        self.level = level
         self.scan, self.scan_points = name, points
         self._scan_file = (resolved, (status.st_dev, status.st_ino))
         self.points, self.normals = points, normals
@@ -199,6 +215,21 @@ class Session:
         self._blank_edit()
         self.history, self.step = [self._snapshot("open")], 0
         self._start_editor()
+
+    def _read_level(self, name, resolved, count, progress):
+        """The level of detail of the scan `name` (`count` points), read on Dask by path (its workers cannot be
+        handed the open file) and cached beside it; with its level description and the scan's stat."""
+        from ..tiled import TiledError
+
+        def passes(what, done, total):
+            if progress:
+                progress(done / max(total, 1), "level of detail: " + what)
+        try:
+            status = os.stat(resolved)
+            points, normals, reach, built = level_of_detail.open_level(resolved, count, self.level_points, passes)
+        except (TiledError, OSError) as error:
+            raise StudioError("%s: %s" % (name, str(error).replace(str(resolved), name)))
+        return points, normals, {"path": resolved, "points": count, "reach": reach, "built": built}, status
 
     def _blank_edit(self):
         """A new edit of the current base: no selection, no groups, shown as the base."""
@@ -596,9 +627,17 @@ class Session:
                 "transforms": tuple(T.copy() for T in self.transforms), "settings": dict(self.settings),
                 "ssp_index": self.ssp_index}
 
+    def _require_whole(self, what):
+        """Refuses what a level of detail cannot carry to its scan: the tiled edit saves one edit."""
+        if self.level is not None:
+            raise StudioError("%s: this scan is open as its level of detail, whose save carries one edit to its %d "
+                              "points; commits, detail scalings and fills stay with scans of at most %d points" %
+                              (what, self.level["points"], self.level_of_detail_above))
+
     def commit(self):
         """The shown state becomes the base of a new edit (no selection, no groups): one step of history."""
         self._require_scan()
+        self._require_whole("commit")
         self._require_released_edit("commit")
         chain = self.chain + (self._edit_step(),)
         self._new_base(chain, self.shown_points, self.shown_normals, "commit")
@@ -621,6 +660,8 @@ class Session:
         point-detail scale / enhance do; with `apply`, a step of the chain: the result, its normals refitted where
         points moved, becomes the input of the edit (its selection kept)."""
         self._require_scan()
+        if apply is True:
+            self._require_whole("applying details")
         self._require_undeformed("changing the details")
         if mode not in ("scale", "enhance"):
             raise StudioError("details: mode must be scale or enhance")
@@ -745,6 +786,7 @@ class Session:
         at the local spacing of its input (point-detail edit --upsample); the new points are appended. One step
         of history, two of the chain (the edit, the fill)."""
         self._require_scan()
+        self._require_whole("fill")
         self._require_released_edit("fill")
         moved = np.flatnonzero((self.shown_points != self.points).any(axis=1))
         if not len(moved):
@@ -848,18 +890,17 @@ class Session:
         if len(name.encode()) > 200:
             raise StudioError("save: a file name of at most 200 bytes")
 
-    def _outputs(self, name):
+    def _outputs(self, name, progress=None):
         """The files a save as `name` writes, in the order they are put in place: (file name, writer of a path)."""
+        if self.level is not None:
+            return self._level_outputs(name, progress)
         outputs = []
-
-        def text(content):
-            return lambda path: pathlib.Path(path).write_text(content)
         snapshot, chain = self._saved_chain()
         if chain:
             edit, files = self._edit_files(name)
             for file_name, indices in files:
-                outputs.append((file_name, text("".join("%d\n" % i for i in indices))))
-            outputs.append((name + ".json", text(json.dumps(edit, indent=2) + "\n")))
+                outputs.append((file_name, _text_writer("".join("%d\n" % i for i in indices))))
+            outputs.append((name + ".json", _text_writer(json.dumps(edit, indent=2) + "\n")))
         points, normals = snapshot["shown_points"], snapshot["shown_normals"]
         n, scanned = len(points), len(self.scan_points)
         # The program's fields: distance from the scan (0 for inserted points), the last edit's status and sample
@@ -880,6 +921,41 @@ class Session:
             path, points, normals, colors=cgal_ext.sequential_colors(moved), **fields)))
         return outputs
 
+    def _level_outputs(self, name, progress):
+        """A level of detail's save: the edit's JSON with its selections as nearest: specs of the level's points
+        (NAME.sample.ply), and NAME.ply, the tiled edit of the scan run with it (`python3 -m cgal_ext.tiled edit
+        SCAN --edit NAME.json --subsample <the level's points>` writes the same)."""
+        from .. import tiled
+        _, chain = self._saved_chain()
+        if not chain:
+            raise StudioError("save: paint a region and a handle and drag it; a level of detail saves its edit, "
+                              "carried to the scan's %d points" % self.level["points"])
+        edit, files = self._step_json(chain[0], name)
+        del edit["type"]
+        edit["roi"] = [spec.replace("indices:", "nearest:", 1) for spec in edit["roi"]]
+        for handle in edit["handles"]:
+            handle["select"] = [spec.replace("indices:", "nearest:", 1) for spec in handle["select"]]
+        edit["sample"] = {"points": name + ".sample.ply", "reach": self.level["reach"]}
+        level_points = self.scan_points
+        outputs = [(file_name, _text_writer("".join("%d\n" % i for i in indices))) for file_name, indices in files]
+        outputs.append((name + ".sample.ply", lambda path: cgal_ext.write_ply(path, level_points)))
+        outputs.append((name + ".json", _text_writer(json.dumps(edit, indent=2) + "\n")))
+        small = list(outputs)
+
+        def passes(what, done, total):
+            if progress:
+                progress(done / max(total, 1), "save: " + what)
+
+        def edited(path):
+            # The tiled edit reads the edit's files by their names beside its JSON: written once more, in private.
+            with tempfile.TemporaryDirectory(dir=self.root, prefix=".%s.edit." % name) as private:
+                for file_name, write in small:
+                    write(os.path.join(private, file_name))
+                tiled.run("edit", str(self.level["path"]), path, edit=os.path.join(private, name + ".json"),
+                          subsample=self.level_points, scratch=private, progress=passes)
+        outputs.append((name + ".ply", edited))
+        return outputs
+
     def _is_scan(self, path):
         """Whether `path` is the scan's file: the same resolved path, or the same file through another name."""
         resolved, identity = self._scan_file
@@ -891,7 +967,7 @@ class Session:
             return False
         return (status.st_dev, status.st_ino) == identity
 
-    def save(self, name, overwrite=False):
+    def save(self, name, overwrite=False, progress=None):
         """Writes NAME.ply (the shown state with the program's fields) and NAME.json (+ index files) such that
         `point-detail edit -i SCAN --edit NAME.json` reproduces NAME.ply: all of them or, on any failure, none
         (the files they replace restored). Never the scan itself; a file this session did not write only with
@@ -900,7 +976,7 @@ class Session:
         self._check_save_name(name)
         if not isinstance(overwrite, bool):
             raise StudioError("save: overwrite is true or false")
-        outputs = self._outputs(name)
+        outputs = self._outputs(name, progress)
         targets, replaced = [], []
         for file_name, _ in outputs:
             path = self.inside(file_name, must_exist=False)
@@ -951,7 +1027,9 @@ class Session:
         return sorted(file_name for file_name, _ in outputs)
 
     def _temporary(self, file_name, suffix):
-        fd, path = tempfile.mkstemp(prefix="." + file_name + ".", suffix=suffix, dir=self.root)
+        # The file's own extension last: the tiled edit writes a PLY only to a name ending in .ply.
+        fd, path = tempfile.mkstemp(prefix="." + file_name + ".", suffix=suffix + pathlib.PurePath(file_name).suffix,
+                                    dir=self.root)
         os.close(fd)
         return path
 
@@ -1098,7 +1176,7 @@ class Session:
         if self.points is None:
             return {"scan": None, "points": None, "groups": 0, "settings": self.settings, "step": 0, "steps": 0,
                     "preprocessed": False, "base_changed": False, "region": 0, "transforms": [], "chain": [],
-                    "history": [], "committable": False}
+                    "history": [], "committable": False, "level_of_detail": None}
         snapshot = self.history[self.step]
         return {"scan": self.scan, "points": len(self.points), "groups": self.groups, "settings": self.settings,
                 "step": self.step, "steps": len(self.history) - 1,
@@ -1107,4 +1185,6 @@ class Session:
                 "transforms": [t.reshape(-1).tolist() for t in self.transforms],
                 "chain": [step["type"] for step in self.chain],
                 "history": [s["kind"] for s in self.history],
-                "committable": snapshot["kind"] == "drag" and not self._dragged()}
+                "committable": snapshot["kind"] == "drag" and not self._dragged() and self.level is None,
+                "level_of_detail": None if self.level is None else {"scan_points": self.level["points"],
+                                                                      "cached": not self.level["built"]}}

@@ -11,6 +11,7 @@ one-process results. Enhancement is a global solve and is approximated with a ma
 of a subsample, with every point's cluster and the surfels computed over the whole scan (doc/scaling.md).
 The command line: `python3 -m cgal_ext.tiled --help`.
 """
+import contextlib
 import importlib.util
 import os
 import shutil
@@ -22,7 +23,7 @@ from . import edit, ops, simplify
 from .runner import Passes, Run, timed
 from .store import TiledError, checked_output, open_source
 
-__all__ = ["TiledError", "run", "OPERATIONS"]
+__all__ = ["TiledError", "run", "subsample", "OPERATIONS"]
 
 OPERATIONS = (*ops.OPERATIONS, "simplify", "edit")
 
@@ -63,8 +64,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         library function.
     connect_timeout : float
         Seconds to wait for `scheduler` to answer.
-    progress : bool
-        Dask's progress bar per pass on the terminal.
+    progress : bool or callable
+        Dask's progress bar per pass on the terminal; a function is called as progress(pass, tasks done, tasks)
+        instead.
     log : callable, optional
         Receives one-line messages (the plan, the dashboard's address).
     **options
@@ -74,8 +76,10 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         client clusters, 1,000,000 by default; `clusters`, a PLY or Zarr path for the scan with each point's
         `ssp_index` and its cluster's colour, as `point-detail simplify --clusters` writes it), edit (`edit`, the
         path of an edit JSON as `point-detail edit --edit` reads it, its regions as sphere: and box: specs,
-        index files of the scan's rows (`indices:FILE`, relative to the JSON) or boolean arrays of the scan's
-        Zarr group (`mask:ARRAY`); `subsample`, the points the client deforms, 1,000,000 by default).
+        index files of the scan's rows (`indices:FILE`, relative to the JSON), boolean arrays of the scan's
+        Zarr group (`mask:ARRAY`) or indices of a sample of points the JSON names (`nearest:FILE`, with
+        "sample": {"points": FILE, "reach": DISTANCE}: a point is selected when its nearest sample point,
+        within the reach, is listed); `subsample`, the points the client deforms, 1,000,000 by default).
 
     Returns
     -------
@@ -104,28 +108,39 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         op = ops.operation(operation, **options)
     scratch_root = Path(scratch) if scratch else output.parent
     folder = scratch_root / f".{output.name}.tiles-{uuid.uuid4().hex[:8]}"
-    own_client, cluster = client is None, None
     try:
-        if client is None:
-            client, cluster = _connect(scheduler, workers, memory_limit, connect_timeout, log)
-        folder.mkdir(parents=True)
-        if operation == "simplify":
-            report = simplify.simplify(Passes(client, progress, log, {"operation": operation}), source, output, folder,
-                                       **op)
-        else:
-            runner = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log)
-            if operation == "edit":
-                op.prepare(runner, source)
-            report = runner.execute()
-        with timed(report["client_seconds"], "remove scratch"):
-            shutil.rmtree(folder)
-        return report
+        with _client(client, scheduler, workers, memory_limit, connect_timeout, log) as client:
+            folder.mkdir(parents=True)
+            if operation == "simplify":
+                report = simplify.simplify(Passes(client, progress, log, {"operation": operation}), source, output,
+                                           folder, **op)
+            else:
+                runner = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log)
+                if operation == "edit":
+                    op.prepare(runner, source)
+                report = runner.execute()
+            with timed(report["client_seconds"], "remove scratch"):
+                shutil.rmtree(folder)
+            return report
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-        if own_client and client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
+
+
+def subsample(input, size=simplify.SUBSAMPLE, *, client=None, workers=None, memory_limit="auto", connect_timeout=20,
+              progress=False, log=None):
+    """The even subsample of about `size` points of a scan that the tiled edit deforms (`run("edit", ...,
+    subsample=size)`), read in one pass on Dask: its points and unit normals, sorted, as arrays. The studio opens it
+    in place of a scan too large to edit whole. `input` and the other parameters are run()'s; the scan needs its
+    normals."""
+    log = log or (lambda message: None)
+    source = open_source(input)
+    if not simplify._whole(size) or size < 1:
+        raise TiledError(f"subsample: size must be a whole number of points >= 1, not {size!r}")
+    with _client(client, None, workers, memory_limit, connect_timeout, log) as client:
+        passes = Passes(client, progress, log, {"operation": "subsample"})
+        selected = simplify.subsample_pass(passes, source, int(size), "the subsample carries them")
+        points, normals, _ = simplify.sorted_subsample(selected, "subsample", size, source.count)
+        return points, normals
 
 
 def worker_environment():
@@ -140,6 +155,21 @@ def worker_environment():
     environ.pop("MALLOC_TRIM_THRESHOLD_", None)
     environ.update(tuned_environment())
     return environ
+
+
+@contextlib.contextmanager
+def _client(client, scheduler, workers, memory_limit, timeout, log):
+    """`client` as it is, or a client of `scheduler` or of a new LocalCluster, closed with its cluster at the end."""
+    if client is not None:
+        yield client
+        return
+    client, cluster = _connect(scheduler, workers, memory_limit, timeout, log)
+    try:
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def _connect(scheduler, workers, memory_limit, timeout, log):

@@ -72,7 +72,8 @@ def parser():
     simplify.add_argument("--clusters", default=S,
                           help="also write the scan with each point's ssp_index and cluster colour (PLY or Zarr)")
     edit = command("edit", "the detail-preserving edit of an edit JSON (regions as sphere: and box: specs, index "
-                           "files of the scan's rows or mask:ARRAY, a boolean array of the scan's Zarr group): its sample "
+                           "files of the scan's rows, mask:ARRAY, a boolean array of the scan's Zarr group, or nearest:FILE, "
+                           "indices of the JSON's sample, each point taking its nearest sample point's): its sample "
                            "points, solve and motions on a subsample on the client, every point diffused tile by "
                            "tile with its exact handles and collar, and its details restored as point-detail edit "
                            "restores them")

@@ -3,20 +3,23 @@ computed once on the client, with the library's Deformation on a subsample; ever
 tile by tile by those motions (diffuse_points), the halo of a tile near a handle holding the handle points within
 the collar's reach, and the details restored (a fixed number of Chebyshev steps, each reaching one neighbourhood
 further) on every point the symmetric certificate finds that many hops from the read box's border. Regions and
-handles are sphere: and box: specs, index files of the scan's rows or boolean arrays of its Zarr group (mask:).
+handles are sphere: and box: specs, index files of the scan's rows, boolean arrays of its Zarr group (mask:), or
+index files of a sample the selection was painted on (nearest:, each point taking its nearest sample point's).
 See doc/scaling.md, "Editing in tiles".
 """
 import json
 import math
 import re
 from pathlib import Path
+from typing import Any, Dict
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import _core
 from . import ops, plan
 from .runner import timed
-from .simplify import SUBSAMPLE, _whole, sorted_subsample, subsample_pass
+from .simplify import SUBSAMPLE, _whole, sorted_subsample, spatial_order, subsample_pass
 from .store import TiledError, ZarrSource
 
 FIXED, REGION = -2, -1  # diffuse_points' selection values; a handle point's is its group
@@ -26,12 +29,13 @@ def region_specs(specs, where, folder):
     """The specs of a list of region spec strings: ("sphere", centre, radius) and ("box", lo, hi), which the tiles
     evaluate on their points; ("indices", path), a file of rows of the scan (one per line, `#` comments; relative
     to `folder`, the edit JSON's), and ("mask", name), a boolean array of the scan's Zarr group, which
-    Edit.prepare turns into ("rows", .npy of the sorted rows, their bounding box or None)."""
+    Edit.prepare turns into ("rows", .npy of the sorted rows, their bounding box or None); ("nearest", path), a
+    file of indices of the edit's sample, which it turns into ("near", .npy of them, the box they reach or None)."""
     parsed = []
     for spec in specs:
         kind, _, rest = str(spec).partition(":")
-        if kind in ("indices", "mask") and rest:
-            parsed.append((kind, str(Path(folder) / rest) if kind == "indices" else rest, None))
+        if kind in ("indices", "mask", "nearest") and rest:
+            parsed.append((kind, rest if kind == "mask" else str(Path(folder) / rest), None))
             continue
         values = [float(v) for v in rest.split(",")] if kind in ("sphere", "box") else []
         if kind == "sphere" and len(values) == 4:
@@ -40,7 +44,7 @@ def region_specs(specs, where, folder):
             parsed.append(("box", np.array(values[:3]), np.array(values[3:])))
         else:
             raise TiledError(f"{where}: {spec!r} is not a region spec (sphere:x,y,z,r, box:xmin,ymin,zmin,xmax,"
-                             f"ymax,zmax, indices:FILE or mask:ARRAY)")
+                             f"ymax,zmax, indices:FILE, mask:ARRAY or nearest:FILE)")
     return parsed
 
 
@@ -92,9 +96,10 @@ def read_mask(source, name):
                            for begin in range(0, source.count, step)] or [np.zeros(0, dtype=np.int64)])
 
 
-def inside(points, rows, specs):
-    """Whether each point (at the scan's `rows`) lies in the union of `specs`, with the program's comparisons
-    (io/region_spec.cpp): squared distances summed x, y, z in turn against the squared radius; boxes closed."""
+def inside(points, rows, specs, nearest=None):
+    """Whether each point (at the scan's `rows`; `nearest`, its nearest sample point within the sample's reach, or
+    -1) lies in the union of `specs`, with the program's comparisons (io/region_spec.cpp): squared distances summed
+    x, y, z in turn against the squared radius; boxes closed."""
     chosen = np.zeros(len(points), dtype=bool)
     for kind, a, b in specs:
         if kind == "sphere":
@@ -103,10 +108,44 @@ def inside(points, rows, specs):
         elif kind == "box":
             chosen |= np.all((points >= a) & (points <= b), axis=1)
         else:
-            selected = np.load(a, mmap_mode="r")
-            at = np.minimum(np.searchsorted(selected, rows), len(selected) - 1)
-            chosen |= (np.asarray(selected[at]) == rows) if len(selected) else False
+            chosen |= _listed(np.load(a, mmap_mode="r"), nearest if kind == "near" else rows)
     return chosen
+
+
+def _listed(selected, values):
+    """Whether each of `values` is in the sorted array `selected`."""
+    if not len(selected):
+        return np.zeros(len(values), dtype=bool)
+    at = np.minimum(np.searchsorted(selected, values), len(selected) - 1)
+    return np.asarray(selected[at]) == values
+
+
+_sample_trees: Dict[str, Any] = {}  # per process: the run's sample's tree
+
+
+def _sample_tree(path):
+    if path not in _sample_trees:
+        _sample_trees.clear()  # one run at a time keeps its tree
+        _sample_trees[path] = cKDTree(np.load(path))
+    return _sample_trees[path]
+
+
+def read_sample(sample, where, folder):
+    """The edit's "sample" ({"points": a point file, relative to `folder`; "reach": the farthest a point may lie
+    from its nearest sample point and be selected through it}): its points and reach, or a TiledError."""
+    if not isinstance(sample, dict) or set(sample) != {"points", "reach"} or not isinstance(sample["points"], str):
+        raise TiledError(f"{where}: give the sample as {{\"points\": FILE, \"reach\": DISTANCE}}")
+    reach = sample["reach"]
+    if isinstance(reach, bool) or not isinstance(reach, (int, float)) or not 0 < reach < math.inf:
+        raise TiledError(f"{where}: reach must be a positive distance, not {reach!r}")
+    path = Path(folder) / sample["points"]
+    try:
+        points = _core.read_points(str(path)).points
+    except (OSError, ValueError, RuntimeError) as error:
+        raise TiledError(f"{where}: cannot read the sample {path}: {str(error).splitlines()[0]}") from None
+    if not len(points) or not np.isfinite(points).all():
+        raise TiledError(f"{where}: the sample {path} must hold points, all finite")
+    return np.ascontiguousarray(points, dtype=np.float64), float(reach)
 
 
 def box_reach(specs, lo, hi, reach):
@@ -166,16 +205,46 @@ class Edit(ops.Operation):
             raise TiledError(f"{self.path}: handles must be a non-empty array of handle groups")
         self.handles = [region_specs(h.get("select", []) if isinstance(h, dict) else [],
                                      f"{self.path}: handles[{g}].select", folder) for g, h in enumerate(handles)]
+        by_nearest = any(kind == "nearest" for specs in (self.roi or [], *self.handles) for kind, _, _ in specs)
+        if by_nearest != ("sample" in description):
+            raise TiledError(f"{self.path}: nearest: specs select through the edit's sample, and a sample is given "
+                             f"for them: give both or neither")
+        # The sample's points, then (prepare) the .npy the tiles read them from.
+        self.sample = read_sample(description["sample"], f"{self.path}: sample", folder) if by_nearest else None
         self.description = description
         self.options, self.settings, self.state = {}, {}, None
+        self._nearest_cache = None
+
+    def __getstate__(self):
+        return dict(self.__dict__, _nearest_cache=None)  # each process its own
+
+    def nearest(self, points, rows):
+        """Each point's nearest sample point, -1 beyond the sample's reach; None without a sample. A tile asks
+        for its points, then for subsets of them: the last answer is kept, by row."""
+        if self.sample is None:
+            return None
+        cached = self._nearest_cache
+        if cached is not None:
+            at = np.minimum(np.searchsorted(cached[0], rows), len(cached[0]) - 1)
+            if np.array_equal(cached[0][at], rows):
+                return cached[1][at]
+        path, reach = self.sample
+        order = spatial_order(points)  # neighbouring queries in turn: the tree's branches stay in the cache
+        distance, index = _sample_tree(path).query(points[order], 1)
+        near = np.empty(len(points), dtype=np.int64)
+        near[order] = np.where(distance <= reach, index, -1)
+        by_row = np.argsort(rows, kind="stable")
+        self._nearest_cache = (rows[by_row], near[by_row])
+        return near
 
     def selection(self, points, rows):
         """Each point's (at the scan's `rows`) place in the edit (FIXED, REGION or its handle group), or TiledError
         naming the first point that is a handle of two groups or a handle outside the region."""
-        region = np.ones(len(points), dtype=bool) if self.roi is None else inside(points, rows, self.roi)
+        nearest = self.nearest(points, rows)
+        region = np.ones(len(points), dtype=bool) if self.roi is None else inside(points, rows, self.roi, nearest)
         selection = np.where(region, REGION, FIXED)
         for group, specs in enumerate(self.handles):
-            chosen = inside(points, rows, specs)
+            chosen = inside(points, rows, specs, nearest)
             twice = chosen & (selection >= 0)
             outside = chosen & ~region
             for bad, why in ((twice, "a handle of two groups"), (outside, "a handle outside the region of interest")):
@@ -191,23 +260,36 @@ class Edit(ops.Operation):
         self.handles = [change(group) for group in self.handles]
 
     def _read_row_sets(self, source, scratch):
-        """Each index file and mask read once into sorted rows, saved in `scratch` for the tiles (memory-mapped
-        there), and its specs turned into ("rows", .npy, None); returns the distinct .npy paths."""
-        saved = {}
+        """Each index file and mask read once into sorted rows (of the scan; of the sample for nearest:), saved in
+        `scratch` for the tiles (memory-mapped there), and its specs turned into ("rows", .npy, None) or ("near",
+        .npy, the box its sample points reach); the sample saved there too. Returns the distinct .npy paths of
+        the scan's rows, which the subsample pass measures."""
+        saved, boxes = {}, {}
+        if self.sample is not None:
+            sample, reach = self.sample
+            self.sample = (str(scratch / "sample.npy"), reach)
+            np.save(self.sample[0], sample)
 
         def read(specs):
             out = []
             for kind, a, b in specs:
-                if kind in ("indices", "mask"):
+                if kind in ("indices", "mask", "nearest"):
                     if (kind, a) not in saved:
                         saved[kind, a] = str(scratch / f"rows_{len(saved)}.npy")
-                        np.save(saved[kind, a], read_index_file(a, source.count) if kind == "indices"
-                                else read_mask(source, a))
-                    kind, a = "rows", saved[kind, a]
+                        if kind == "nearest":
+                            rows = read_index_file(a, len(sample))
+                            chosen = sample[rows]
+                            boxes[saved[kind, a]] = (chosen.min(axis=0) - reach, chosen.max(axis=0) + reach) \
+                                if len(rows) else None
+                        else:
+                            rows = read_index_file(a, source.count) if kind == "indices" else read_mask(source, a)
+                        np.save(saved[kind, a], rows)
+                    kind, a = "near" if kind == "nearest" else "rows", saved[kind, a]
+                    b = boxes.get(a)
                 out.append((kind, a, b))
             return out
         self._map_specs(read)
-        return list(saved.values())
+        return [path for path in saved.values() if path not in boxes]
 
     def _set_row_boxes(self, paths, selected):
         """Each row set's bounding box (None when it holds no row) from the subsample pass's `selected`, which
@@ -231,7 +313,8 @@ class Edit(ops.Operation):
         with timed(runner.report["client_seconds"], "deform subsample"):
             points, normals, rows = sorted_subsample(selected, "edit", self.subsample_size, n)
             # The program's reader checks the edit first, as it does a whole scan's.
-            edit_path = self._subsample_edit(self.selection(points, rows), runner.scratch) if row_sets else self.path
+            edit_path = self._subsample_edit(self.selection(points, rows), runner.scratch) if self.rewritten() \
+                else self.path
             try:
                 edit = _core._read_edit(edit_path, points)
             except ValueError as error:
@@ -259,10 +342,16 @@ class Edit(ops.Operation):
         runner.log(f"{n} points, subsample of {len(points)}: {deformation.number_of_sample_points()} sample points, "
                    f"collar reach {self.state['collar_reach']:.4g}")
 
+    def rewritten(self):
+        """Whether the program's reader needs the edit with its selections as index files of the subsample: it
+        reads sphere: and box: specs itself."""
+        return any(kind not in ("sphere", "box") for specs in (self.roi or [], *self.handles) for kind, _, _ in specs)
+
     def _subsample_edit(self, selection, scratch):
         """The edit JSON with its selections as index files of the subsample's points (`selection`), for the
         program's reader, which reads the rest of it (transforms, settings) and checks it as for a whole scan."""
         description = dict(self.description)
+        description.pop("sample", None)
 
         def indices(name, chosen):
             path = (scratch / f"subsample_{name}.txt").resolve()
@@ -314,8 +403,9 @@ class Edit(ops.Operation):
         return selection == REGION if self.state["exact_handles"] else selection != FIXED
 
     def needs_certificate(self, points, rows, own):
-        """The own points that relax, when the edit restores the details."""
-        return self.relaxes(points[own], rows[own]) & self.restores
+        """The own points that relax, when the edit restores the details (the selection of all the tile's points,
+        which its compute asks for next: nearest: specs find their sample points once)."""
+        return self.relaxes(points, rows)[own] & self.restores
 
     def narrowed(self, points, rows, lo, hi, halo):
         """Near a handle, when restoring: every point within the restoration's halo (`halo` less the collar's

@@ -380,8 +380,9 @@ def _box_text(lo, hi):
 # ---- the client's side ------------------------------------------------------------------------------------------
 
 class Passes:
-    """Maps a pass's tasks over items on a Dask client (a progress bar per pass when `progress`), timing each
-    pass in `report["seconds"]` and the client's own steps in `report["client_seconds"]`."""
+    """Maps a pass's tasks over items on a Dask client (a progress bar per pass when `progress` is True; when it
+    is a function, progress(pass, tasks done, tasks) as each task ends), timing each pass in `report["seconds"]`
+    and the client's own steps in `report["client_seconds"]`."""
 
     def __init__(self, client, progress, log, report):
         self.client, self.progress, self.log, self.report = client, progress, log, report
@@ -390,7 +391,12 @@ class Passes:
 
     def _gather(self, futures, what):
         with timed(self.report["seconds"], what):
-            if self.progress:
+            if callable(self.progress):
+                from distributed import as_completed
+                self.progress(what, 0, len(futures))
+                for done, _ in enumerate(as_completed(futures), start=1):
+                    self.progress(what, done, len(futures))
+            elif self.progress:
                 from distributed import progress
                 self.log(f"{what}:")
                 progress(futures)

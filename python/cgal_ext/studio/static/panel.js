@@ -125,7 +125,9 @@ export class Panel {
     $('history').textContent = `step ${m.step} of ${m.steps}`;
     this.showHistory(m);
     if (m.preprocessed || m.groups === 0) this.showWarnings(null);
-    status(m.scan ? `${m.scan}: ${m.points} points, region ${m.region}, ${m.groups} handle group(s)` +
+    const level = m.level_of_detail;
+    const points = level ? `its level of detail, ${m.points} of ${level.scan_points} points` : `${m.points} points`;
+    status(m.scan ? `${m.scan}: ${points}, region ${m.region}, ${m.groups} handle group(s)` +
                     (m.preprocessed ? ', ready to drag' : '') : 'no scan open');
     $('progress-bar').style.width = '0';
     const material = this.material();
