@@ -161,12 +161,18 @@ def test_over_the_limit_the_level_of_detail_is_edited_and_saved_through_the_tile
     assert "level of detail" in driver.find_element("id", "status").text
     labels = paint_and_drag_the_ear(driver, points)
     shot(driver, "bunny_4_level_of_detail")
+    # What a level of detail cannot carry to its scan is off, and says why.
+    for button in ("commit", "fill", "details-apply"):
+        assert not driver.find_element("id", button).is_enabled()
+        assert "level of detail" in driver.find_element("id", button).get_attribute("title")
 
     driver.execute_script("studio.lastSaved = null")
     driver.find_element("id", "save-name").clear()
     driver.find_element("id", "save-name").send_keys("edited")
     driver.find_element("id", "save").click()
     wait_for(driver, "studio.lastSaved", timeout=300, what="the save through the tiled edit")
+    # Beside the button, at the panel's foot: what was saved (each pass's progress before it).
+    assert "edited.ply" in driver.find_element("id", "save-status").text
     saved = xyz(read_ply(scan.parent / "edited.ply"))
     subprocess.run([sys.executable, "-m", "cgal_ext.tiled", "edit", str(scan), "--edit", str(scan.parent / "edited.json"),
                     "-o", str(scan.parent / "command.ply"), "--subsample", "20000"], check=True, capture_output=True)

@@ -27,14 +27,27 @@ const panel = new Panel({ view, connection, gizmo, material: () => material, onC
 
 function onCommand(m) {
   if (m.type === 'error' && m.replace) { askToReplace(m); return; }
-  if (m.type === 'error') { showError(m.message); studio.busy = false; studio.inFlight = false; return; }
+  if (m.type === 'error') {
+    showError(m.message);
+    studio.busy = false;
+    studio.inFlight = false;
+    $('save-status').textContent = '';
+    return;
+  }
   if (m.type === 'refused') { showError(m.message); return; }
   if (m.type === 'progress') {
     $('progress-bar').style.width = `${Math.round(100 * m.fraction)}%`;
     status(`${m.stage}: ${Math.round(100 * m.fraction)} %`);
+    // A save's progress also beside its button, at the panel's foot (a level of detail's save takes minutes).
+    if (m.stage.startsWith('save')) $('save-status').textContent = `${m.stage}: ${Math.round(100 * m.fraction)} %`;
     return;
   }
-  if (m.type === 'saved') { studio.lastSaved = m.files; status(`saved ${m.files.join(', ')}`); return; }
+  if (m.type === 'saved') {
+    studio.lastSaved = m.files;
+    status(`saved ${m.files.join(', ')}`);
+    $('save-status').textContent = `saved ${m.files.join(', ')}`;
+    return;
+  }
   if (m.type === 'warning') { panel.showWarnings(m.warnings); return; }
   if (m.type === 'state') panel.onState(m);
 }
@@ -48,6 +61,7 @@ function askToReplace(m) {
     connection.send({ type: 'save', name: m.name, overwrite: true });
   } else {
     showError(`not saved: ${files} kept`);
+    $('save-status').textContent = '';
   }
 }
 

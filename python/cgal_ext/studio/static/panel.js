@@ -75,7 +75,10 @@ export class Panel {
     $('details-s').oninput = () => { $('details-value').textContent = Number($('details-s').value).toFixed(1); };
     $('details-preview').onclick = () => busy({ type: 'details', mode: $('details-mode').value, s: Number($('details-s').value) });
     $('details-apply').onclick = () => busy({ type: 'details', mode: $('details-mode').value, s: Number($('details-s').value), apply: true });
-    $('save').onclick = () => send({ type: 'save', name: $('save-name').value });
+    $('save').onclick = () => {
+      $('save-status').textContent = 'saving…';
+      send({ type: 'save', name: $('save-name').value });
+    };
 
     $('typed-apply').onclick = () => this.applyTyped();
     $('typed-centre').onclick = () => this.showPivot(true);
@@ -154,6 +157,13 @@ export class Panel {
       list.appendChild(item);
     });
     if ('committable' in m) $('commit').disabled = !m.committable && !(m.step > 0);
+    // A level of detail saves one edit, carried to the whole scan: what would change its base is off.
+    const level = Boolean(m.level_of_detail);
+    for (const id of ['commit', 'fill', 'details-apply']) {
+      if (level) $(id).disabled = true;
+      else if (id !== 'commit') $(id).disabled = false;
+      $(id).title = level ? 'a level of detail saves one edit, carried to every point of the scan' : '';
+    }
   }
 
   // The server's word before an edit that would not make sense (each warning with its remedy, or edit anyway),
