@@ -356,11 +356,14 @@ def test_a_scan_over_the_limit_opens_as_its_level_of_detail_and_saves_through_th
     cgal_ext.write_ply(tmp_path / "sphere.ply", points, normals)
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
 
+    stages = []
+
     def opened():
         session = Session(tmp_path, level_of_detail_above=30_000, level_points=20_000)
-        session.load("sphere.ply")
+        session.load("sphere.ply", progress=lambda fraction, stage=None: stages.append((stage, fraction)))
         return session
     session = opened()
+    assert stages[-1] == ("level of detail: subsample", 1.0)
     keep = tiled.simplify.coordinate_hash(points) <= np.uint64(int(20_000 / 60_000 * 2.0**64))
     assert np.array_equal(np.sort(session.points, axis=0), np.sort(points[keep], axis=0))
     assert session.state()["level_of_detail"] == {"scan_points": 60_000, "cached": False}
@@ -379,8 +382,9 @@ def test_a_scan_over_the_limit_opens_as_its_level_of_detail_and_saves_through_th
         with pytest.raises(StudioError, match="level of detail"):
             refused()
     shown_level = session.shown_points.copy()
-    assert session.save("edited") == sorted(["edited.json", "edited.ply", "edited.roi.txt", "edited.handle0.txt",
+    assert session.save("edited", progress=lambda fraction, stage=None: stages.append((stage, fraction))) == sorted(["edited.json", "edited.ply", "edited.roi.txt", "edited.handle0.txt",
                                              "edited.sample.ply"])
+    assert ("save: tiles", 1.0) in stages  # each pass of the tiled edit reported, to its end
     saved = xyz(read_ply(tmp_path / "edited.ply"))
     tiled.run("edit", tmp_path / "sphere.ply", tmp_path / "command.ply", edit=tmp_path / "edited.json",
               subsample=20_000)
