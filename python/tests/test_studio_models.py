@@ -1,6 +1,7 @@
 # The studio in Chromium on a scan its other tests were not tuned on: CGAL's bunny (bunny00, a range scan with
 # holes, its normals from the mesh's faces). It opens upright and whole, the brush takes only what is seen, and an
-# edit by hand of its upper part bends the region and is what the program reproduces.
+# edit by hand of its upper part bends the region and is what the program reproduces. Opened as its level of detail
+# (a limit below its points), the same edit is saved through the tiled edit, which its command reproduces.
 import os
 import shutil
 
