@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The studio on a scan larger than it edits whole (doc/studio.md, "Scans larger than one machine"), on a seeded
-sampling of CGAL's armadillo to 100M points (--quick: 3M, the limit and the level of detail ten times smaller):
+sampling of CGAL's armadillo to 100M points (--quick: 600k, the limit 400k, the level 60k):
 
 - from starting `python3 -m cgal_ext.studio SCAN` to its geometry received by a WebSocket client connected as the
   page connects: the first time (the level of detail read by a tiled pass on Dask and cached beside the scan), then
@@ -89,7 +89,7 @@ def save_costs(folder, name, options):
 def main():
     reexecute_tuned([sys.executable] + sys.argv)
     args = harness_arguments()
-    n, above, level = (3_000_000, 2_000_000, 100_000) if args.quick else (100_000_000, 20_000_000, 1_000_000)
+    n, above, level = (600_000, 400_000, 60_000) if args.quick else (100_000_000, 20_000_000, 1_000_000)
     options = ["--level-of-detail-above", str(above), "--level-points", str(level)]
     rows = []
     os.makedirs(args.out, exist_ok=True)
