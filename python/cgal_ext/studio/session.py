@@ -53,6 +53,19 @@ def _text_writer(content):
     return lambda path: pathlib.Path(path).write_text(content)
 
 
+def _index_files(files):
+    """(file name, writer) of each (file name, indices): one index per line, the program's format."""
+    return [(file_name, _text_writer("".join("%d\n" % i for i in indices))) for file_name, indices in files]
+
+
+def _pass_progress(progress, prefix):
+    """A tiled run's progress(pass, done, tasks) as the session's progress(fraction, stage)."""
+    def report(what, done, total):
+        if progress:
+            progress(done / max(total, 1), prefix + what)
+    return report
+
+
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 _EYE3 = np.eye(3)
 
@@ -220,13 +233,10 @@ class Session:
         """The level of detail of the scan `name` (`count` points), read on Dask by path (its workers cannot be
         handed the open file) and cached beside it; with its level description and the scan's stat."""
         from ..tiled import TiledError
-
-        def passes(what, done, total):
-            if progress:
-                progress(done / max(total, 1), "level of detail: " + what)
         try:
             status = os.stat(resolved)
-            points, normals, reach, built = level_of_detail.open_level(resolved, count, self.level_points, passes)
+            points, normals, reach, built = level_of_detail.open_level(resolved, count, self.level_points,
+                                                                       _pass_progress(progress, "level of detail: "))
         except (TiledError, OSError) as error:
             raise StudioError("%s: %s" % (name, str(error).replace(str(resolved), name)))
         return points, normals, {"path": resolved, "points": count, "reach": reach, "built": built}, status
@@ -846,23 +856,24 @@ class Session:
         return snapshot, chain
 
     @staticmethod
-    def _step_json(step, prefix):
-        """A step as the program's edit JSON spells it, and its index files: (json, [(file name, indices)])."""
+    def _step_json(step, prefix, spec="indices"):
+        """A step as the program's edit JSON spells it, and its index files: (json, [(file name, indices)]); its
+        selections as `spec`:FILE (nearest: for a level of detail, whose indices are the level's)."""
         files = []
         if step["type"] == "fill":
             return {"type": "fill"}, files
         roi = step["labels"] != FIXED if step["type"] == "edit" else step["roi"]
         files.append((prefix + ".roi.txt", np.flatnonzero(roi)))
         if step["type"] != "edit":
-            return {"type": step["type"], "s": step["s"], "roi": ["indices:%s.roi.txt" % prefix]}, files
+            return {"type": step["type"], "s": step["s"], "roi": ["%s:%s.roi.txt" % (spec, prefix)]}, files
         handles = []
         for g in range(step["groups"]):
             T = step["transforms"][g]
             files.append(("%s.handle%d.txt" % (prefix, g), np.flatnonzero(step["labels"] == FIRST_HANDLE + g)))
-            handles.append({"select": ["indices:%s.handle%d.txt" % (prefix, g)],
+            handles.append({"select": ["%s:%s.handle%d.txt" % (spec, prefix, g)],
                             "matrix": T[:3, :3].tolist(), "translation": T[:3, 3].tolist()})
         settings = step["settings"]
-        return {"type": "edit", "roi": ["indices:%s.roi.txt" % prefix], "handles": handles,
+        return {"type": "edit", "roi": ["%s:%s.roi.txt" % (spec, prefix)], "handles": handles,
                 "filter": {"order": settings["order"]}, "rotations": settings["rotations"],
                 "strength_distance": settings["strength_distance"]}, files
 
@@ -898,8 +909,7 @@ class Session:
         snapshot, chain = self._saved_chain()
         if chain:
             edit, files = self._edit_files(name)
-            for file_name, indices in files:
-                outputs.append((file_name, _text_writer("".join("%d\n" % i for i in indices))))
+            outputs += _index_files(files)
             outputs.append((name + ".json", _text_writer(json.dumps(edit, indent=2) + "\n")))
         points, normals = snapshot["shown_points"], snapshot["shown_normals"]
         n, scanned = len(points), len(self.scan_points)
@@ -930,21 +940,14 @@ class Session:
         if not chain:
             raise StudioError("save: paint a region and a handle and drag it; a level of detail saves its edit, "
                               "carried to the scan's %d points" % self.level["points"])
-        edit, files = self._step_json(chain[0], name)
+        edit, files = self._step_json(chain[0], name, spec="nearest")
         del edit["type"]
-        edit["roi"] = [spec.replace("indices:", "nearest:", 1) for spec in edit["roi"]]
-        for handle in edit["handles"]:
-            handle["select"] = [spec.replace("indices:", "nearest:", 1) for spec in handle["select"]]
         edit["sample"] = {"points": name + ".sample.ply", "reach": self.level["reach"]}
         level_points = self.scan_points
-        outputs = [(file_name, _text_writer("".join("%d\n" % i for i in indices))) for file_name, indices in files]
+        outputs = _index_files(files)
         outputs.append((name + ".sample.ply", lambda path: cgal_ext.write_ply(path, level_points)))
         outputs.append((name + ".json", _text_writer(json.dumps(edit, indent=2) + "\n")))
         small = list(outputs)
-
-        def passes(what, done, total):
-            if progress:
-                progress(done / max(total, 1), "save: " + what)
 
         def edited(path):
             # The tiled edit reads the edit's files by their names beside its JSON: written once more, in private.
@@ -952,7 +955,8 @@ class Session:
                 for file_name, write in small:
                     write(os.path.join(private, file_name))
                 tiled.run("edit", str(self.level["path"]), path, edit=os.path.join(private, name + ".json"),
-                          subsample=self.level_points, scratch=private, progress=passes)
+                          subsample=self.level_points, scratch=private,
+                          progress=_pass_progress(progress, "save: "))
         outputs.append((name + ".ply", edited))
         return outputs
 

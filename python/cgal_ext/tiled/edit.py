@@ -11,7 +11,6 @@ import json
 import math
 import re
 from pathlib import Path
-from typing import Any, Dict
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -19,7 +18,7 @@ from scipy.spatial import cKDTree
 from .. import _core
 from . import ops, plan
 from .runner import timed
-from .simplify import SUBSAMPLE, _whole, sorted_subsample, spatial_order, subsample_pass
+from .simplify import SUBSAMPLE, _whole, kept_per_process, nearest_in, sorted_subsample, subsample_pass
 from .store import TiledError, ZarrSource
 
 FIXED, REGION = -2, -1  # diffuse_points' selection values; a handle point's is its group
@@ -120,16 +119,6 @@ def _listed(selected, values):
     return np.asarray(selected[at]) == values
 
 
-_sample_trees: Dict[str, Any] = {}  # per process: the run's sample's tree
-
-
-def _sample_tree(path):
-    if path not in _sample_trees:
-        _sample_trees.clear()  # one run at a time keeps its tree
-        _sample_trees[path] = cKDTree(np.load(path))
-    return _sample_trees[path]
-
-
 def read_sample(sample, where, folder):
     """The edit's "sample" ({"points": a point file, relative to `folder`; "reach": the farthest a point may lie
     from its nearest sample point and be selected through it}): its points and reach, or a TiledError."""
@@ -205,7 +194,7 @@ class Edit(ops.Operation):
             raise TiledError(f"{self.path}: handles must be a non-empty array of handle groups")
         self.handles = [region_specs(h.get("select", []) if isinstance(h, dict) else [],
                                      f"{self.path}: handles[{g}].select", folder) for g, h in enumerate(handles)]
-        by_nearest = any(kind == "nearest" for specs in (self.roi or [], *self.handles) for kind, _, _ in specs)
+        by_nearest = any(kind == "nearest" for kind, _, _ in self._all_specs())
         if by_nearest != ("sample" in description):
             raise TiledError(f"{self.path}: nearest: specs select through the edit's sample, and a sample is given "
                              f"for them: give both or neither")
@@ -229,10 +218,8 @@ class Edit(ops.Operation):
             if np.array_equal(cached[0][at], rows):
                 return cached[1][at]
         path, reach = self.sample
-        order = spatial_order(points)  # neighbouring queries in turn: the tree's branches stay in the cache
-        distance, index = _sample_tree(path).query(points[order], 1)
-        near = np.empty(len(points), dtype=np.int64)
-        near[order] = np.where(distance <= reach, index, -1)
+        distance, index = nearest_in(kept_per_process(path, lambda: cKDTree(np.load(path))), points)
+        near = np.where(distance <= reach, index, -1)
         by_row = np.argsort(rows, kind="stable")
         self._nearest_cache = (rows[by_row], near[by_row])
         return near
@@ -254,6 +241,9 @@ class Edit(ops.Operation):
             selection[chosen] = group
         return selection
 
+    def _all_specs(self):
+        return [spec for specs in (self.roi or [], *self.handles) for spec in specs]
+
     def _map_specs(self, change):
         """Every list of specs (the region's, each handle group's) replaced by `change` of it."""
         self.roi = None if self.roi is None else change(self.roi)
@@ -270,22 +260,25 @@ class Edit(ops.Operation):
             self.sample = (str(scratch / "sample.npy"), reach)
             np.save(self.sample[0], sample)
 
+        def saved_as(kind, name):
+            """The .npy of a set, read and saved the first time it is named (with the box a nearest: set reaches)."""
+            if (kind, name) not in saved:
+                path = saved[kind, name] = str(scratch / f"rows_{len(saved)}.npy")
+                if kind == "nearest":
+                    rows = read_index_file(name, len(sample))
+                    boxes[path] = (sample[rows].min(axis=0) - reach, sample[rows].max(axis=0) + reach) \
+                        if len(rows) else None
+                else:
+                    rows = read_index_file(name, source.count) if kind == "indices" else read_mask(source, name)
+                np.save(path, rows)
+            return saved[kind, name]
+
         def read(specs):
             out = []
             for kind, a, b in specs:
                 if kind in ("indices", "mask", "nearest"):
-                    if (kind, a) not in saved:
-                        saved[kind, a] = str(scratch / f"rows_{len(saved)}.npy")
-                        if kind == "nearest":
-                            rows = read_index_file(a, len(sample))
-                            chosen = sample[rows]
-                            boxes[saved[kind, a]] = (chosen.min(axis=0) - reach, chosen.max(axis=0) + reach) \
-                                if len(rows) else None
-                        else:
-                            rows = read_index_file(a, source.count) if kind == "indices" else read_mask(source, a)
-                        np.save(saved[kind, a], rows)
-                    kind, a = "near" if kind == "nearest" else "rows", saved[kind, a]
-                    b = boxes.get(a)
+                    a = saved_as(kind, a)
+                    kind, b = ("near", boxes[a]) if kind == "nearest" else ("rows", None)
                 out.append((kind, a, b))
             return out
         self._map_specs(read)
@@ -345,7 +338,7 @@ class Edit(ops.Operation):
     def rewritten(self):
         """Whether the program's reader needs the edit with its selections as index files of the subsample: it
         reads sphere: and box: specs itself."""
-        return any(kind not in ("sphere", "box") for specs in (self.roi or [], *self.handles) for kind, _, _ in specs)
+        return any(kind not in ("sphere", "box") for kind, _, _ in self._all_specs())
 
     def _subsample_edit(self, selection, scratch):
         """The edit JSON with its selections as index files of the subsample's points (`selection`), for the

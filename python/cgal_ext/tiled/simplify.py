@@ -9,7 +9,7 @@ See doc/scaling.md, "Sample points".
 """
 import os
 import uuid
-from typing import Any, Dict, Tuple
+from typing import Any, Dict
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -71,14 +71,19 @@ def select_rows(begin, end, source, cutoff, row_sets=()):
     return selected
 
 
-_subsamples: Dict[str, Tuple[Any, Dict[str, Any]]] = {}  # per worker process: the run's subsample and its tree
+_kept: Dict[str, Any] = {}  # per worker process: what the run's tasks share (a tree of its subsample or sample)
+
+
+def kept_per_process(key, make):
+    """make(), once per process for `key`; one run at a time keeps what it made."""
+    if key not in _kept:
+        _kept.clear()
+        _kept[key] = make()
+    return _kept[key]
 
 
 def _subsample(key, subsample):
-    if key not in _subsamples:
-        _subsamples.clear()  # one run at a time keeps its tree
-        _subsamples[key] = (cKDTree(subsample["points"]), subsample)
-    return _subsamples[key]
+    return kept_per_process(key, lambda: (cKDTree(subsample["points"]), subsample))
 
 
 def _spread_bits(q):
@@ -99,12 +104,18 @@ def spatial_order(points):
                       | (_spread_bits(cells[:, 2]) << np.uint64(2)), kind="stable")
 
 
+def nearest_in(tree, points):
+    """The distance to each point's nearest point of `tree` and that point's index, queried along a Morton curve."""
+    order = spatial_order(points)
+    distance, index = np.empty(len(points)), np.empty(len(points), dtype=np.int64)
+    distance[order], index[order] = tree.query(points[order], 1)
+    return distance, index
+
+
 def assign(points, normals, tree, subsample):
     """Each point's cluster: that of its nearest subsample point if their unit normals agree (cosine >
     AGREEMENT), else of the nearest of its CANDIDATES nearest that agrees, else of the nearest."""
-    order = spatial_order(points)
-    nearest = np.empty(len(points), dtype=np.int64)
-    nearest[order] = tree.query(points[order], 1)[1]
+    nearest = nearest_in(tree, points)[1]
     disagree = np.flatnonzero(np.einsum("ij,ij->i", subsample["normals"][nearest], normals) <= AGREEMENT)
     count = min(CANDIDATES, len(subsample["labels"]))
     if len(disagree) and count > 1:
