@@ -19,6 +19,7 @@
 #include <cmath>
 #include <functional>
 #include <iterator>
+#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -91,7 +92,14 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
                                  progress, result, new_points, new_normals))
     return {};
   if(!progress.report(1.0)) return {};
-  for(std::size_t m = 0; m < new_points.size(); ++m)
+  // In the order of their coordinates: the output is then the same whoever computes which of the points (a tiled
+  // run merges its tiles' new points in this order).
+  std::vector<std::size_t> order(new_points.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return lexicographically_before(new_points[a], new_points[b]);
+  });
+  for(const std::size_t m : order)
     *output++ = std::make_pair(typename Kernel::Point_3(new_points[m].x(), new_points[m].y(), new_points[m].z()),
                                typename Kernel::Vector_3(new_normals[m].x(), new_normals[m].y(), new_normals[m].z()));
   result.inserted = new_points.size();
@@ -123,7 +131,8 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   `Sparse_direction_settings`); a new point takes the spacing of its gap's ends.
 
   \tparam OutputIterator accepts `std::pair<Kernel::Point_3, Kernel::Vector_3>`: each new point with its
-          unit normal (the input points are not repeated, so every output point is a new one).
+          unit normal, in the order of their coordinates (x, then y, then z); the input points are not
+          repeated, so every output point is a new one.
 
   \param points the points, with normals (`normal_map`, required)
   \param settings target spacing (0: each point's local spacing, see `Sparse_direction_settings`), largest hole,

@@ -764,6 +764,43 @@ def test_the_tiled_edit_restores_the_details_in_tiles_as_one_process(scan, clien
     assert np.abs(columns(out, ("nx", "ny", "nz")) - expected.normals).max() <= 1e-12
 
 
+def test_the_tiled_edit_fills_what_it_stretched_as_one_process(scan, client, tmp_path):
+    """upsample=True: after the scan's edited rows come the library's new points for the whole edited scan,
+    up-sampled from the points the edit moved at their spacing before it (point-detail edit --upsample), in the
+    order of their coordinates; the same bytes with other tiles and with the points in another order."""
+    edit = tmp_path / "pull.json"
+    edit.write_text(json.dumps({"roi": ["sphere:0,0,1,0.9"], "handles": [{"select": ["sphere:0,0,1,0.3"],
+                                                                          "translation": [0, 0, 0.5]}]}))
+    options = dict(client=client, edit=edit, subsample=30_000, upsample=True)
+    report = tiled.run("edit", scan.small, tmp_path / "filled.ply", tiles=8, **options)
+    tiled.run("edit", scan.small, tmp_path / "edited.ply", client=client, tiles=8, edit=edit, subsample=30_000)
+    points, normals = scan.small_points, scan.small_normals
+    edited = read_output(tmp_path / "edited.ply")
+    moved = np.flatnonzero(np.any(columns(edited, "xyz") != points, axis=1))
+    expected = cgal_ext.upsample_point_set(columns(edited, "xyz"), columns(edited, ("nx", "ny", "nz")), roi=moved,
+                                           spacing_before=cgal_ext.compute_local_spacing(points))
+    assert len(expected.points) > 1000  # the pull stretched the collar
+    assert report["fill"]["inserted"] == len(expected.points) and report["fill"]["tiles"] == 8
+    assert report["fill"]["read_points"] < 8 * len(points)  # each tile read part of the edited scan
+    filled = read_output(tmp_path / "filled.ply")
+    n = len(points)
+    for name in ("x", "y", "z", "nx", "ny", "nz"):
+        assert np.array_equal(filled[name][:n], edited[name])
+    assert np.array_equal(filled["inserted"], np.repeat([0.0, 1.0], [n, len(expected.points)]))
+    assert np.abs(columns(filled, "xyz")[n:] - expected.points).max() <= 1e-12
+    assert np.abs(columns(filled, ("nx", "ny", "nz"))[n:] - expected.normals).max() <= 1e-12
+    # Other tiles, and the points in another order: the same bytes, the scan's rows in its order.
+    tiled.run("edit", scan.small, tmp_path / "five.ply", tiles=5, **options)
+    order = np.random.default_rng(5).permutation(n)
+    cgal_ext.write_ply(tmp_path / "shuffled.ply", points[order], normals[order])
+    tiled.run("edit", tmp_path / "shuffled.ply", tmp_path / "shuffled_out.zarr", tiles=8, **options)
+    five, shuffled = read_output(tmp_path / "five.ply"), read_output(tmp_path / "shuffled_out.zarr")
+    for name in ("x", "y", "z", "nx", "ny", "nz", "inserted"):
+        assert np.array_equal(five[name], filled[name])
+        assert np.array_equal(shuffled[name], np.concatenate([filled[name][:n][order], filled[name][n:]]))
+    assert no_leftovers(tmp_path, "filled.ply")
+
+
 def test_a_tile_near_a_handle_keeps_every_handle_point_the_collar_needs(tmp_path):
     """Edit.narrowed: a tile near the handle keeps the points within the restoration's halo (the read halo less
     the collar's reach) and, beyond it, the handle points alone; every point it keeps within that halo has each

@@ -17,7 +17,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <memory>
+#include <numeric>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
@@ -71,6 +74,43 @@ private:
   std::unordered_map<Key, std::vector<int>, Hash> m_members;
 };
 
+/// The order in which new samples are kept, from their coordinates alone (a splitmix64 hash of their bits): which
+/// of two close candidates is kept then depends on those two, not on how the points are numbered or which points
+/// a tile of a larger scan holds. Unlike an order along an axis, it starts no chain of decisions running across
+/// the surface: a decision depends on candidates within a few spacings.
+inline std::uint64_t keep_priority(const Eigen::Vector3d& x)
+{
+  std::uint64_t h = 0;
+  for(int d = 0; d < 3; ++d) {
+    const double c = x[d] + 0.0; // -0 as +0
+    std::uint64_t bits;
+    std::memcpy(&bits, &c, sizeof bits);
+    h += bits + 0x9E3779B97F4A7C15ULL;
+    h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    h = (h ^ (h >> 27)) * 0x94D049BB133111EBULL;
+    h ^= h >> 31;
+  }
+  return h;
+}
+
+/// Whether `a` comes before `b` in the order of their coordinates, x first.
+inline bool lexicographically_before(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
+{
+  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+}
+
+/// Sorts the rows `near` of `samples` by their distance to `x`, ties by their coordinates: sums over them then
+/// come in an order of the points alone. Tree searches break ties by row, and a new point halfway across a gap is
+/// often exactly as far from both ends, whose rows depend on which points a tile of a larger scan holds.
+inline void in_canonical_order(const Matrix_n3& samples, const Eigen::Vector3d& x, std::vector<int>& near)
+{
+  const auto key = [&](int j) {
+    const Eigen::Vector3d p = samples.row(j).transpose();
+    return std::make_tuple(squared_distance(p.x(), p.y(), p.z(), x.x(), x.y(), x.z()), p.x(), p.y(), p.z());
+  };
+  std::sort(near.begin(), near.end(), [&](int a, int b) { return key(a) < key(b); });
+}
+
 /// Projects `x` onto the surface fitted to the input samples around it, with a normal oriented like `normal`;
 /// updates both. Near the samples, a degree-2 fit to the `k` nearest. Inside a hole, where the nearest sample
 /// is `d` > 1.5 h away, the k nearest would lie on the hole's near side and the fit would extrapolate from there;
@@ -115,6 +155,7 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     else
       tree.nearest(query, wanted, take);
   }
+  in_canonical_order(samples, x, near);
   fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
   x = fit.project(x);
   const Eigen::Vector3d n = fit.normal(x);
@@ -183,7 +224,8 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
       result.hole_boundary_points = std::size_t(std::count(boundary.begin(), boundary.end(), 1));
     }
     // Candidates along every gap at the target spacing (interpolated between the gap's ends); a candidate is
-    // kept only at least half a spacing from every sample and from the candidates kept before it.
+    // kept only at least half a spacing from every sample and from the candidates kept before it, in the order
+    // of `keep_priority`.
     double widest = 0;
     for(const Hole_gap& g : gaps) widest = std::max({widest, all_spacing[std::size_t(g.from)], all_spacing[std::size_t(g.across)]});
     Cell_set kept(0.5 * widest);
@@ -212,9 +254,22 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
       tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 1,
                    [&](int, double d2) { near_sample[c] = d2 < 0.25 * candidate.h * candidate.h; });
     });
+    std::vector<std::uint64_t> priority(candidates.size());
+    for(std::size_t c = 0; c < candidates.size(); ++c) priority[c] = keep_priority(candidates[c].x);
+    std::vector<std::size_t> keep_order(candidates.size());
+    std::iota(keep_order.begin(), keep_order.end(), std::size_t(0));
+    std::sort(keep_order.begin(), keep_order.end(), [&](std::size_t a, std::size_t b) {
+      if(priority[a] != priority[b]) return priority[a] < priority[b];
+      const Candidate &p = candidates[a], &q = candidates[b];
+      if(p.x != q.x) return lexicographically_before(p.x, q.x);
+      // The same position from two gaps: the gap with the first ends takes it.
+      const Eigen::Vector3d p_from = all.row(p.gap->from).transpose(), q_from = all.row(q.gap->from).transpose();
+      if(p_from != q_from) return lexicographically_before(p_from, q_from);
+      return lexicographically_before(all.row(p.gap->across).transpose(), all.row(q.gap->across).transpose());
+    });
     std::vector<Eigen::Vector3d> round_points, round_normals;
     std::vector<double> round_spacing, round_empty_factor;
-    for(std::size_t c = 0; c < candidates.size(); ++c) {
+    for(const std::size_t c : keep_order) {
       const auto& [gap, t, h, x] = candidates[c];
       if(near_sample[c] || kept.near(x, 0.5 * h, round_points)) continue;
       const Hole_gap& g = *gap;
@@ -256,19 +311,26 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
         const double h = round_spacing[m], radius = 1.5 * h;
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
-          auto repel = [&push, &x, radius](const Matrix_n3* from) {
-            return [&push, &x, radius, from](int j, double d2) {
-              const double d = std::sqrt(d2);
-              if(d >= radius || !(d > 0)) return;
+          thread_local std::vector<int> pushing;
+          auto repel = [&push, &x, radius](const Matrix_n3& from) {
+            in_canonical_order(from, x, pushing);
+            for(const int j : pushing) {
+              const Eigen::Vector3d away = x - from.row(j).transpose();
+              const double d = away.norm();
+              if(d >= radius || !(d > 0)) continue;
               const double w = 1 - d / radius;
-              push += w * w * (x - from->row(j).transpose()) / d;
-            };
+              push += w * w * away / d;
+            }
           };
-          near_samples.nearest(m, x, 12, repel(&all));
+          const auto gather = [](int j, double) { pushing.push_back(j); };
+          pushing.clear();
+          near_samples.nearest(m, x, 12, gather);
+          repel(all);
           // Of the 12 nearest new points (this one among them), those within its reach: a search bounded there
           // costs less than the 12 nearest.
-          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, repel(&moving),
-                              std::nextafter(radius * radius, 0.0));
+          pushing.clear();
+          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, gather, std::nextafter(radius * radius, 0.0));
+          repel(moving);
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;

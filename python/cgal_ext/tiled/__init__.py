@@ -19,7 +19,7 @@ import uuid
 from pathlib import Path
 
 from .._process import tuned_environment
-from . import edit, ops, simplify
+from . import edit, fill, ops, simplify
 from .runner import Passes, Run, timed
 from .store import TiledError, checked_output, open_source
 
@@ -79,7 +79,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
         index files of the scan's rows (`indices:FILE`, relative to the JSON), boolean arrays of the scan's
         Zarr group (`mask:ARRAY`) or indices of a sample of points the JSON names (`nearest:FILE`, with
         "sample": {"points": FILE, "reach": DISTANCE}: a point is selected when its nearest sample point,
-        within the reach, is listed); `subsample`, the points the client deforms, 1,000,000 by default).
+        within the reach, is listed); `subsample`, the points the client deforms, 1,000,000 by default;
+        `upsample`, True to fill what the edit stretched as `point-detail edit --upsample` does, in tiles after
+        the edit: the new points follow the scan's, in the order of their coordinates, with `inserted` = 1).
 
     Returns
     -------
@@ -95,6 +97,7 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     log = log or (lambda message: None)
     source = open_source(input)
     output = checked_output(output, source)
+    upsample = False
     if operation == "simplify":
         if tiles is not None or halo is not None or threads_per_task != 1:
             raise TiledError("simplify: has no tiles, no halo and no library call in its tasks; tiles, halo and "
@@ -103,6 +106,9 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
     elif operation == "edit":
         if "edit" not in options:
             raise TiledError("edit: needs the edit JSON (edit=PATH, --edit PATH)")
+        upsample = options.pop("upsample", False)
+        if not isinstance(upsample, bool):
+            raise TiledError(f"edit: upsample must be True or False, not {upsample!r}")
         op = edit.Edit(**options)
     else:
         op = ops.operation(operation, **options)
@@ -115,10 +121,15 @@ def run(operation, input, output, *, scheduler=None, client=None, workers=None, 
                 report = simplify.simplify(Passes(client, progress, log, {"operation": operation}), source, output,
                                            folder, **op)
             else:
-                runner = Run(client, source, output, op, tiles, halo, folder, threads_per_task, progress, log)
+                edited = folder / "edited.zarr" if upsample else output
+                runner = Run(client, source, edited, op, tiles, halo, folder, threads_per_task, progress, log)
                 if operation == "edit":
                     op.prepare(runner, source)
                 report = runner.execute()
+                if upsample:
+                    (folder / "fill").mkdir()
+                    report["fill"] = fill.fill(runner, edited, source, output, folder / "fill", tiles,
+                                               threads_per_task=threads_per_task)
             with timed(report["client_seconds"], "remove scratch"):
                 shutil.rmtree(folder)
             return report

@@ -80,6 +80,8 @@ def parser():
     edit.add_argument("--edit", required=True, help="the edit JSON, as point-detail edit --edit reads it")
     edit.add_argument("--subsample", type=int, default=S,
                       help="points the client deforms (default 1,000,000; a smaller scan is deformed whole)")
+    edit.add_argument("--upsample", action="store_true", default=S,
+                      help="fill what the edit stretched, as point-detail edit --upsample (new points: inserted = 1)")
     return main
 
 

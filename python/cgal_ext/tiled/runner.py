@@ -92,18 +92,20 @@ def bucket_rows(begin, end, source, tiling, halos, folder):
 
 
 def _bucket(begin, rows, points, normals):
-    """Row numbers begin + rows (exact in float64 below 2^53), and the points and normals at `rows`, side by side."""
-    table = np.empty((len(rows), 4 if normals is None else 7))
+    """Row numbers begin + rows (exact in float64 below 2^53), and the points and normals at `rows` (with the
+    columns a source carries after them), side by side."""
+    table = np.empty((len(rows), 4 if normals is None else 4 + normals.shape[1]))
     table[:, 0] = begin + rows
     # Gathered straight into the table's columns ("clip": the rows are valid, and it spares a buffered copy).
     np.take(points, rows, axis=0, out=table[:, 1:4], mode="clip")
     if normals is not None:
-        np.take(normals, rows, axis=0, out=table[:, 4:7], mode="clip")
+        np.take(normals, rows, axis=0, out=table[:, 4:], mode="clip")
     return table
 
 
 def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_starts):
-    """Global rows, points and normals (or None) inside the tile's box grown by `halo`."""
+    """Global rows, points and normals (or None; with the columns the source carries after them) inside the tile's
+    box grown by `halo`."""
     if halo <= bucket_halo:
         parts = [np.load(path) for path in (bucket_folder / f"c{b}_t{tile}.npy" for b in chunk_starts)
                  if path.exists()]
@@ -113,10 +115,10 @@ def _read_tile(source, tile, lo, hi, halo, bucket_folder, bucket_halo, chunk_sta
             points, normals = source.points_and_normals(begin, min(source.count, begin + CHUNK_ROWS))
             inside = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
             parts.append(_bucket(begin, inside, points, normals))
-    width = 7 if source.has_normals else 4
+    width = 4 + source.carried_columns if source.has_normals else 4
     table = np.concatenate(parts) if parts else np.empty((0, width))
     return (table[:, 0].astype(np.int64), np.ascontiguousarray(table[:, 1:4]),
-            np.ascontiguousarray(table[:, 4:7]) if source.has_normals else None)
+            np.ascontiguousarray(table[:, 4:]) if source.has_normals else None)
 
 
 def result_columns(operation, estimate_normals):

@@ -89,8 +89,10 @@ def _parse_ply_header(path):
 class Source:
     """What the passes ask of an input: `path`, `count`, `dtype`, the fields of the coordinates and of the normals
     (None when there are none), optionally a `scale` and a `shift` of the coordinates, and `read(begin, end)`: the
-    records of rows [begin, end), a structured array with those fields."""
+    records of rows [begin, end), a structured array with those fields. `carried_columns`: the columns the tiles read
+    as normals (a source may carry more after them)."""
     scale = shift = None
+    carried_columns = 3
 
     @staticmethod
     def _columns(records, names):
