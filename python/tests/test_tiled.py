@@ -190,24 +190,26 @@ def test_curvature_equals_the_one_process_call_with_a_worker_killed(scan, client
     assert np.array_equal(columns(out, ("red", "green", "blue")), cgal_ext.diverging_colors(curvature))
 
 
-def test_without_normals_the_tiles_agree_on_one_orientation(scan, client):
-    report = tiled.run("details", scan.bare, scan.folder / "bare_details.ply", client=client, tiles=8)
-    out = read_output(scan.folder / "bare_details.ply")
-    reference = cgal_ext.estimate_oriented_normals(scan.points)
+def test_without_normals_the_tiles_agree_on_one_orientation(scan, client, tmp_path):
+    points = scan.small_points
+    write_zarr(tmp_path / "bare.zarr", points)
+    report = tiled.run("details", tmp_path / "bare.zarr", tmp_path / "bare_details.ply", client=client, tiles=8)
+    out = read_output(tmp_path / "bare_details.ply")
+    reference = cgal_ext.estimate_oriented_normals(points)
     same = np.einsum("ij,ij->i", columns(out, ("nx", "ny", "nz")), reference) > 0
     assert same.mean() >= 0.999
     # Flips along the tile borders (within 3 spacings of a face between tiles) no more frequent than inside.
     lo = np.array([[-np.inf if v is None else v for v in box[:3]] for box in report["tile_boxes"]])
     hi = np.array([[np.inf if v is None else v for v in box[3:]] for box in report["tile_boxes"]])
-    gap = np.full(N, np.inf)
+    gap = np.full(len(points), np.inf)
     for a, b in zip(lo, hi):
-        inside = np.all((scan.points >= a) & (scan.points < b), axis=1)
-        gap[inside] = np.min(np.minimum(scan.points[inside] - a, b - scan.points[inside]), axis=1)
+        inside = np.all((points >= a) & (points < b), axis=1)
+        gap[inside] = np.min(np.minimum(points[inside] - a, b - points[inside]), axis=1)
     border = gap < 3 * report["spacing"]
     assert border.sum() > 10_000 and (~border).sum() > 10_000
     assert (~same[border]).mean() <= (~same[~border]).mean()
     # The signed fields follow each tile's orientation: equal to the one-process call's where the normals agree.
-    _, magnitude = cgal_ext.compute_geometric_details(scan.points)
+    _, magnitude = cgal_ext.compute_geometric_details(points)
     assert np.abs(out["detail_magnitude"] - magnitude)[same].max() <= 1e-12
     assert report["orientation_conflicts"] == 0
 
@@ -233,19 +235,22 @@ def test_a_halo_too_small_is_detected_and_widened(scan, client, tmp_path):
 
 
 def test_enhancement_matches_the_one_process_call(scan, client, tmp_path):
-    # A halo that covers the whole scan gives the one-process result; the default margin of 80 neighbourhood
-    # radii gives it within a small fraction of the displacement (the base surface is a global solve).
+    # A halo that covers the whole scan gives the one-process result; a margin of neighbourhood radii gives it
+    # within a fraction of the displacement that falls with the margin (the base surface is a global solve). On
+    # these 100,000 points the default of 80 radii covers the sphere: margins of 10 and 30, tiles reading part.
     moved = cgal_ext.enhance_geometric_details(scan.small_points, scan.small_normals, s=2)
     tiled.run("enhance", scan.small, tmp_path / "whole.ply", client=client, tiles=8, s=2, margin=1e4)
     assert np.abs(columns(read_output(tmp_path / "whole.ply"), "xyz") - moved).max() <= 1e-12
-    report = tiled.run("enhance", scan.ply, tmp_path / "out.ply", client=client, tiles=8, s=2)
-    assert not report["exact"]
-    moved = cgal_ext.enhance_geometric_details(scan.points, scan.normals, s=2)
-    out = read_output(tmp_path / "out.ply")
-    displacement = np.linalg.norm(moved - scan.points, axis=1)
-    error = np.abs(columns(out, "xyz") - moved).max()
-    assert error <= 2e-6 * np.sqrt((displacement ** 2).mean())
-    assert np.abs(out["displacement"] - np.einsum("ij,ij->i", moved - scan.points, scan.normals)).max() <= 1e-9
+    rms = np.sqrt((np.linalg.norm(moved - scan.small_points, axis=1) ** 2).mean())
+    errors = {}
+    for margin in (10, 30):
+        report = tiled.run("enhance", scan.small, tmp_path / "out.ply", client=client, tiles=8, s=2, margin=margin)
+        assert not report["exact"] and report["read_points"] < 8 * len(scan.small_points)
+        out = read_output(tmp_path / "out.ply")
+        errors[margin] = np.abs(columns(out, "xyz") - moved).max() / rms
+    assert errors[30] <= 2e-4 and errors[30] <= errors[10] / 100, errors
+    assert np.abs(out["displacement"] - np.einsum("ij,ij->i", moved - scan.small_points, scan.small_normals)
+                  ).max() <= 2e-4 * rms
 
 
 def test_unreadable_rows_fail_the_run_naming_them(scan, client, tmp_path):
