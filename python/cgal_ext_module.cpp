@@ -542,9 +542,10 @@ void bind_deformation(py::module_& m)
          "``deformed_sample_positions`` (s, 3), ``motions`` (s, 3, 4: a point p carried by sample point j alone moves\n"
          "by motions[j] @ (p, 1)), ``region_samples`` (s,), ``handle_transforms`` (g, 7: quaternion w, x, y, z and\n"
          "translation), ``stencil_size``, ``origin``, ``portable``, ``exact_handles``, ``collar_reach`` and the\n"
-         "restoration's settings ``detail_anchor``, ``detail_iterations`` and ``detail_tolerance``: what\n"
-         "diffuse_points() needs to move points this deformation was not built on, in this process or another (a\n"
-         "tiled edit's workers).")
+         "restoration's settings ``detail_anchor``, ``detail_iterations`` and ``detail_tolerance``, with the\n"
+         "Chebyshev steps they give (``detail_steps``, read only: a point's restored position depends on the points\n"
+         "that many hops away): what diffuse_points() needs to move points this deformation was not built on, in\n"
+         "this process or another (a tiled edit's workers).")
     .def("statistics", &Deformation::statistics, "Sizes and timings of the last calls, as a dict.")
     .def_property_readonly("settings", &Deformation::settings, "The settings, under the constructor's keyword names.")
     .def("__len__", &Deformation::size)

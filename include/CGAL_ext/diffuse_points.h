@@ -186,8 +186,8 @@ Diffuse_points_outcome diffuse_points(PointRange& points, const Diffusion_state&
   const std::size_t neighbors = std::min<std::size_t>(10, cloud.size() - 1);
   const bool restore =
     CGAL::parameters::choose_parameter(CGAL::parameters::get_parameter(np, internal_np::restore_details), false) &&
-    neighbors > 0 && state.detail_iterations > 0;
-  if((restore || radius_asked) && neighbors > 0) {
+    state.detail_iterations > 0;
+  if((restore || radius_asked) && neighbors > 0) { // a single point has no neighbours: nothing to relax or measure
     Progress progress;
     const Neighbor_graph balls = k_nearest_neighbor_graph<ConcurrencyTag>(cloud.positions, neighbors, progress);
     if(restore) {

@@ -246,7 +246,9 @@ public:
                     "origin"_a = setting_name(state.origin), "portable"_a = state.portable,
                     "exact_handles"_a = state.exact_handles, "collar_reach"_a = state.collar_reach,
                     "detail_anchor"_a = state.detail_anchor, "detail_iterations"_a = state.detail_iterations,
-                    "detail_tolerance"_a = state.detail_tolerance);
+                    "detail_tolerance"_a = state.detail_tolerance,
+                    "detail_steps"_a = CGAL_ext::internal::Detail_relaxation::steps(
+                      state.detail_anchor, state.detail_iterations, state.detail_tolerance));
   }
 
   py::dict statistics() const

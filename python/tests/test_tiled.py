@@ -706,6 +706,7 @@ def test_the_tiled_edit_equals_the_deformation_of_its_subsample_and_its_diffusio
     assert report["subsample"] == len(points) and report["collar_reach"] > 0
     sub_points, sub_normals = client_subsample(points, normals, len(points))
     deformation, handle = subsample_deformation(edit, sub_points, sub_normals)
+    assert deformation.diffusion_state()["detail_steps"] == 38  # the restoration's hops by default
     diffused = deformation.diffuse()
     expected = deformation.restore_details()
     assert np.abs(expected.points - diffused.points).max() > 1e-4  # the restoration moves points
@@ -813,7 +814,7 @@ def test_a_tile_near_a_handle_keeps_every_handle_point_the_collar_needs(tmp_path
     from cgal_ext.tiled import plan
     edit = tiled.edit.Edit(edit=edit_file(tmp_path))
     edit.state = {"collar_reach": 0.3, "exact_handles": True, "detail_anchor": 0.01, "detail_iterations": 100,
-                  "detail_tolerance": 0.01}
+                  "detail_tolerance": 0.01, "detail_steps": 38}
     points, _ = bumpy_sphere(200_000, seed=5)
     lo, hi, halo = np.array([0.3, -0.2, 0.6]), np.array([0.6, 0.2, 0.9]), 0.5  # beside the handle, not on it
     rows = np.flatnonzero(plan.own_mask(points, lo - halo, hi + halo))
@@ -829,7 +830,7 @@ def test_a_tile_near_a_handle_keeps_every_handle_point_the_collar_needs(tmp_path
     assert {tuple(p) for p in needed} <= {tuple(p) for p in kept}
     # Far from every handle, or without the restoration, a tile keeps all it read.
     assert edit.narrowed(read, rows, lo + 10, hi + 10, halo)[0] is None
-    edit.state = {**edit.state, "detail_iterations": 0}
+    edit.state = {**edit.state, "detail_iterations": 0, "detail_steps": 0}
     assert edit.narrowed(read, rows, lo, hi, halo)[0] is None
 
 

@@ -104,11 +104,15 @@ inline bool lexicographically_before(const Eigen::Vector3d& a, const Eigen::Vect
 /// often exactly as far from both ends, whose rows depend on which points a tile of a larger scan holds.
 inline void in_canonical_order(const Matrix_n3& samples, const Eigen::Vector3d& x, std::vector<int>& near)
 {
-  const auto key = [&](int j) {
-    const Eigen::Vector3d p = samples.row(j).transpose();
-    return std::make_tuple(squared_distance(p.x(), p.y(), p.z(), x.x(), x.y(), x.z()), p.x(), p.y(), p.z());
-  };
-  std::sort(near.begin(), near.end(), [&](int a, int b) { return key(a) < key(b); });
+  thread_local std::vector<std::pair<double, int>> ranked;
+  ranked.clear();
+  for(const int j : near)
+    ranked.emplace_back(squared_distance(samples(j, 0), samples(j, 1), samples(j, 2), x.x(), x.y(), x.z()), j);
+  std::sort(ranked.begin(), ranked.end(), [&](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+    if(a.first != b.first) return a.first < b.first;
+    return lexicographically_before(samples.row(a.second).transpose(), samples.row(b.second).transpose());
+  });
+  for(std::size_t m = 0; m < near.size(); ++m) near[m] = ranked[m].second;
 }
 
 /// Projects `x` onto the surface fitted to the input samples around it, with a normal oriented like `normal`;

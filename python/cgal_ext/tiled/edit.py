@@ -150,17 +150,6 @@ def box_reach(specs, lo, hi, reach):
     return near
 
 
-def restore_steps(state):
-    """The Chebyshev steps of diffuse_points' restoration for a diffusion state (internal::Detail_relaxation::steps):
-    the fewest with T_K(1 + anchor) >= 1 / tolerance, at most detail_iterations."""
-    tolerance, cap = float(state["detail_tolerance"]), int(state["detail_iterations"])
-    if not tolerance < 1:
-        return 0
-    if not tolerance > 0:
-        return cap
-    return min(cap, math.ceil(math.acosh(1 / tolerance) / math.acosh(1 + float(state["detail_anchor"]))))
-
-
 class Edit(ops.Operation):
     """The tiled edit as a tiled operation: the moved positions and normals as its values. Near the handles a tile
     reads the collar's reach; where its own points relax (the region's, but exact handles), the certificate of the
@@ -361,7 +350,7 @@ class Edit(ops.Operation):
 
     @property
     def restores(self):
-        return restore_steps(self.state) > 0
+        return int(self.state["detail_steps"]) > 0
 
     @property
     def uses_neighbors(self):
@@ -380,7 +369,7 @@ class Edit(ops.Operation):
         return self.RELAXATION_NEIGHBORS
 
     def rings(self):
-        return restore_steps(self.state) + 3
+        return int(self.state["detail_steps"]) + 3
 
     def collar(self):
         return 1.01 * float(self.state["collar_reach"])
