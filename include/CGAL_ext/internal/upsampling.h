@@ -99,20 +99,23 @@ inline bool lexicographically_before(const Eigen::Vector3d& a, const Eigen::Vect
   return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
 }
 
-/// Sorts the rows `near` of `samples` by their distance to `x`, ties by their coordinates: sums over them then
-/// come in an order of the points alone. Tree searches break ties by row, and a new point halfway across a gap is
-/// often exactly as far from both ends, whose rows depend on which points a tile of a larger scan holds.
-inline void in_canonical_order(const Matrix_n3& samples, const Eigen::Vector3d& x, std::vector<int>& near)
+/// Rows of `samples` with their squared distances to a point, nearest first, as a tree search visits them.
+using Ranked_rows = std::vector<std::pair<double, int>>;
+
+/// Orders the rows of `near` that lie at one distance by their coordinates: sums over them then come in an order
+/// of the points alone. Tree searches break such ties by row, and a new point halfway across a gap is often exactly
+/// as far from both ends, whose rows depend on which points a tile of a larger scan holds.
+inline void break_ties_by_coordinates(const Matrix_n3& samples, Ranked_rows& near)
 {
-  thread_local std::vector<std::pair<double, int>> ranked;
-  ranked.clear();
-  for(const int j : near)
-    ranked.emplace_back(squared_distance(samples(j, 0), samples(j, 1), samples(j, 2), x.x(), x.y(), x.z()), j);
-  std::sort(ranked.begin(), ranked.end(), [&](const std::pair<double, int>& a, const std::pair<double, int>& b) {
-    if(a.first != b.first) return a.first < b.first;
-    return lexicographically_before(samples.row(a.second).transpose(), samples.row(b.second).transpose());
-  });
-  for(std::size_t m = 0; m < near.size(); ++m) near[m] = ranked[m].second;
+  for(std::size_t a = 0; a < near.size();) {
+    std::size_t b = a + 1;
+    while(b < near.size() && near[b].first == near[a].first) ++b;
+    if(b - a > 1)
+      std::sort(near.begin() + std::ptrdiff_t(a), near.begin() + std::ptrdiff_t(b), [&](const auto& p, const auto& q) {
+        return lexicographically_before(samples.row(p.second).transpose(), samples.row(q.second).transpose());
+      });
+    a = b;
+  }
 }
 
 /// Projects `x` onto the surface fitted to the input samples around it, with a normal oriented like `normal`;
@@ -127,13 +130,13 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
                                  Moving_neighbors& nearest_in_hole, std::size_t point, std::size_t k, double h,
                                  Eigen::Vector3d& x, Eigen::Vector3d& normal)
 {
-  thread_local std::vector<int> near;
+  thread_local Ranked_rows near;
   near.clear();
   const Position_tree::Point query(x.x(), x.y(), x.z());
   double nearest2 = 0;
   nearest.nearest(point, x, k, [&](int j, double d2) {
     if(near.empty()) nearest2 = d2;
-    near.push_back(j);
+    near.emplace_back(d2, j);
   });
   const bool inside_hole = nearest2 > 2.25 * h * h;
   Height_fit fit(x, normal, inside_hole ? 3 : 2);
@@ -144,13 +147,13 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     constexpr double pi = CGAL_PI;
     const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
     std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    const auto take = [&](int j, double) {
+    const auto take = [&](int j, double d2) {
       const Eigen::Vector3d d = samples.row(j).transpose() - x;
       const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
       std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
       if(in_direction < per_direction) {
         ++in_direction;
-        near.push_back(j);
+        near.emplace_back(d2, j);
       }
     };
     const std::size_t wanted = std::min<std::size_t>(candidates, std::size_t(samples.rows()));
@@ -159,8 +162,8 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     else
       tree.nearest(query, wanted, take);
   }
-  in_canonical_order(samples, x, near);
-  fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)]).transpose()); });
+  break_ties_by_coordinates(samples, near);
+  fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)].second).transpose()); });
   x = fit.project(x);
   const Eigen::Vector3d n = fit.normal(x);
   normal = n.dot(normal) < 0 ? Eigen::Vector3d(-n) : n;
@@ -273,12 +276,22 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     });
     std::vector<Eigen::Vector3d> round_points, round_normals;
     std::vector<double> round_spacing, round_empty_factor;
+    std::vector<char> chosen(candidates.size(), 0);
+    std::vector<Eigen::Vector3d> chosen_points;
     for(const std::size_t c : keep_order) {
+      const Candidate& candidate = candidates[c];
+      if(near_sample[c] || kept.near(candidate.x, 0.5 * candidate.h, chosen_points)) continue;
+      kept.insert(candidate.x, int(chosen_points.size()));
+      chosen_points.push_back(candidate.x);
+      chosen[c] = 1;
+    }
+    // Stored in the gaps' order, which follows the points along the surface: the relaxation's searches then walk
+    // the trees in that order, not in the hash's.
+    for(std::size_t c = 0; c < candidates.size(); ++c) {
+      if(!chosen[c]) continue;
       const auto& [gap, t, h, x] = candidates[c];
-      if(near_sample[c] || kept.near(x, 0.5 * h, round_points)) continue;
       const Hole_gap& g = *gap;
       const Eigen::Vector3d na = all_normals.row(g.from).transpose(), nb = all_normals.row(g.across).transpose();
-      kept.insert(x, int(round_points.size()));
       round_points.push_back(x);
       Eigen::Vector3d normal = (1 - t) * na + t * nb;
       round_normals.push_back(normal.norm() > 0 ? Eigen::Vector3d(normal.normalized()) : na);
@@ -315,18 +328,17 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
         const double h = round_spacing[m], radius = 1.5 * h;
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
-          thread_local std::vector<int> pushing;
+          thread_local Ranked_rows pushing;
           auto repel = [&push, &x, radius](const Matrix_n3& from) {
-            in_canonical_order(from, x, pushing);
-            for(const int j : pushing) {
-              const Eigen::Vector3d away = x - from.row(j).transpose();
-              const double d = away.norm();
+            break_ties_by_coordinates(from, pushing);
+            for(const auto& [d2, j] : pushing) {
+              const double d = std::sqrt(d2);
               if(d >= radius || !(d > 0)) continue;
               const double w = 1 - d / radius;
-              push += w * w * away / d;
+              push += w * w * (x - from.row(j).transpose()) / d;
             }
           };
-          const auto gather = [](int j, double) { pushing.push_back(j); };
+          const auto gather = [](int j, double d2) { pushing.emplace_back(d2, j); };
           pushing.clear();
           near_samples.nearest(m, x, 12, gather);
           repel(all);
