@@ -69,8 +69,8 @@ TEST(UpsamplePointSet, TheSameHoleIsFilledTheSameWayInAnyUnits)
     for(const auto& p : from) {
       double nearest = std::numeric_limits<double>::infinity();
       for(const auto& q : to)
-        nearest = std::min(nearest, std::sqrt(CGAL::squared_distance(p.first, Point(scale * q.first.x(), scale * q.first.y(),
-                                                                                      scale * q.first.z()))));
+        nearest = std::min(nearest, std::sqrt(CGAL::squared_distance(
+                                      p.first, Point(scale * q.first.x(), scale * q.first.y(), scale * q.first.z()))));
       worst = std::max(worst, nearest);
     }
     return worst;
@@ -216,7 +216,8 @@ TEST(UpsamplePointSet, NewPointsDependOnTheirNeighbourhoodAloneAndComeInTheOrder
   CGAL_ext::upsample_point_set(cylinder.indices(), settings, std::back_inserter(whole), cylinder.np());
   CGAL_ext::upsample_point_set(part.indices(), settings, std::back_inserter(of_part), part.np());
   const auto before = [](const std::pair<Point, Vector>& a, const std::pair<Point, Vector>& b) {
-    return std::make_tuple(a.first.x(), a.first.y(), a.first.z()) < std::make_tuple(b.first.x(), b.first.y(), b.first.z());
+    return std::make_tuple(a.first.x(), a.first.y(), a.first.z()) <
+           std::make_tuple(b.first.x(), b.first.y(), b.first.z());
   };
   EXPECT_TRUE(std::is_sorted(whole.begin(), whole.end(), before));
   EXPECT_TRUE(std::is_sorted(of_part.begin(), of_part.end(), before));
@@ -226,7 +227,8 @@ TEST(UpsamplePointSet, NewPointsDependOnTheirNeighbourhoodAloneAndComeInTheOrder
   for(const auto& p : of_part)
     if(p.first.z() < cut - depth) part_inside.push_back(p);
   ASSERT_GT(whole_inside.size(), 300u);
-  EXPECT_TRUE(whole_inside == part_inside) << whole_inside.size() << " new points inside against " << part_inside.size();
+  EXPECT_TRUE(whole_inside == part_inside)
+    << whole_inside.size() << " new points inside against " << part_inside.size();
 }
 
 TEST(UpsamplePointSet, ARegionLimitsWhereGapsAreFilled)

@@ -163,7 +163,8 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
       tree.nearest(query, wanted, take);
   }
   break_ties_by_coordinates(samples, near);
-  fit.fit(int(near.size()), [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)].second).transpose()); });
+  fit.fit(int(near.size()),
+          [&](int m) { return Eigen::Vector3d(samples.row(near[std::size_t(m)].second).transpose()); });
   x = fit.project(x);
   const Eigen::Vector3d n = fit.normal(x);
   normal = n.dot(normal) < 0 ? Eigen::Vector3d(-n) : n;
@@ -345,7 +346,8 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
           // Of the 12 nearest new points (this one among them), those within its reach: a search bounded there
           // costs less than the 12 nearest.
           pushing.clear();
-          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, gather, std::nextafter(radius * radius, 0.0));
+          moving_tree.nearest(Position_tree::Point(x.x(), x.y(), x.z()), 12, gather,
+                              std::nextafter(radius * radius, 0.0));
           repel(moving);
           push = 0.5 * h * (push - push.dot(normal) * normal);
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();

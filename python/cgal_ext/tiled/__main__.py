@@ -106,6 +106,8 @@ def main(argv=None):
     done = (f"{report['sample_points']} sample points from a subsample of {report['subsample']}"
             if arguments["operation"] == "simplify" else
             f"{report['tiles']} tiles, {report['widened_tiles']} tile(s) widened their halo")
+    if "fill" in report:
+        done += f", {report['fill']['inserted']} new points in {report['fill']['tiles']} fill tiles"
     print(f"{report['points']} points: {done}; {seconds:.1f} s ({report['points'] / seconds:,.0f} points/s); "
           f"wrote {arguments['output']}", file=sys.stderr)
     if arguments["report"]:
