@@ -429,6 +429,13 @@ class Passes:
     def client_step(self, step):
         return timed(self.report["client_seconds"], step)
 
+    def tile_count_and_stride(self, n, tiles, per_tile):
+        """The tiles of a scan of n points (`tiles`, or a multiple of the workers, so that none is left alone with
+        the last tile, of about `per_tile` points each) and the stride of the plan's sample of its rows."""
+        workers = max(1, len(self.client.scheduler_info()["workers"]))
+        tile_count = tiles or workers * max(2, -(-n // (per_tile * workers)))
+        return tile_count, max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
+
     @staticmethod
     def row_ranges(n):
         """The passes' row ranges [begin, end) of a scan of n points."""
@@ -471,11 +478,7 @@ class Run(Passes):
             raise TiledError(f"{self.source.path}: the scan has no points")
         ranges = self.row_ranges(n)
         starts = [begin for begin, _ in ranges]
-        workers = max(1, len(self.client.scheduler_info()["workers"]))
-        # A multiple of the workers, so that none is left alone with the last tile.
-        per_tile = self.operation.points_per_tile
-        tile_count = self.tiles or workers * max(2, -(-n // (per_tile * workers)))
-        stride = max(1, n // max(200_000, SAMPLE_PER_TILE * tile_count))
+        tile_count, stride = self.tile_count_and_stride(n, self.tiles, self.operation.points_per_tile)
 
         scans = self.map(scan_rows, ranges, self.source, stride, what="scan")
         self.refuse_invalid_rows(self.source, scans)
