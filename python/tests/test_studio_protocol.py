@@ -57,11 +57,11 @@ class Client:
         self.server, self.http, self.ws = server, http, ws
 
     @classmethod
-    async def open(cls, server, origin=None, token=None):
+    async def open(cls, server, origin=None, token=None, compress=0):
         http = ClientSession()
         try:
             ws = await http.ws_connect("ws://127.0.0.1:%d/ws?token=%s" % (server.port, token or server.token),
-                                       headers={"Origin": origin or server.base}, max_msg_size=0)
+                                       headers={"Origin": origin or server.base}, max_msg_size=0, compress=compress)
         except BaseException:
             await http.close()
             raise
@@ -227,6 +227,16 @@ def test_a_second_tab_is_refused(server):
         assert (await first.command({"type": "state"}))["type"] == "state"  # the first tab is unaffected
         await second.close()
         await first.close()
+    run(scenario())
+
+
+def test_the_frames_go_uncompressed_when_the_browser_offers_deflate(server):
+    """Browsers offer permessage-deflate; deflating float arrays in the server's loop costs more than it saves."""
+    async def scenario():
+        client = await Client.open(server, compress=15)  # the offer Chromium makes
+        assert client.ws.compress == 0  # declined
+        assert (await client.until("state"))["type"] == "state"
+        await client.close()
     run(scenario())
 
 

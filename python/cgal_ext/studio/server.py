@@ -153,7 +153,10 @@ class Studio:
     async def websocket(self, request):
         if not self.origin_allowed(request):
             return web.Response(status=403, text="403: WebSocket from another origin\n")
-        ws = web.WebSocketResponse(max_msg_size=MAX_BINARY + MAX_HEADER + 4, heartbeat=30)
+        # No permessage-deflate, which browsers offer and aiohttp accepts by default: the frames are float arrays
+        # that deflate by a few percent, and aiohttp deflates in the event loop, which then stalls on every
+        # geometry and drag frame (doc/studio.md, "How a drag reaches the screen").
+        ws = web.WebSocketResponse(max_msg_size=MAX_BINARY + MAX_HEADER + 4, heartbeat=30, compress=False)
         await ws.prepare(request)
         if self.socket is not None and not self.socket.closed:
             await ws.send_json({"type": "refused", "message": "this studio session is open in another tab; close "
