@@ -444,8 +444,11 @@ TEST(DetailPreservingDeformation, PointsItWasNotBuiltOnMoveByTheSamplePointsMoti
     for(std::size_t i = 0; i < dense_moved.size(); i += 7) {
       const Eigen::Vector3d p = dense.point(i);
       std::vector<std::pair<double, std::size_t>> by_distance(samples);
-      for(std::size_t s = 0; s < samples; ++s)
-        by_distance[s] = {(p - Eigen::Map<const Eigen::Vector3d>(&state.sample_positions[3 * s])).norm(), s};
+      for(std::size_t s = 0; s < samples; ++s) { // plain arithmetic: the sanitized tests run it unoptimised
+        const double* q = &state.sample_positions[3 * s];
+        const double dx = p.x() - q[0], dy = p.y() - q[1], dz = p.z() - q[2];
+        by_distance[s] = {std::sqrt(dx * dx + dy * dy + dz * dz), s};
+      }
       std::partial_sort(by_distance.begin(), by_distance.begin() + std::ptrdiff_t(m + 1), by_distance.end());
       Eigen::Matrix<double, 3, 4> blend = Eigen::Matrix<double, 3, 4>::Zero();
       double total = 0;
