@@ -880,3 +880,28 @@ def test_the_command_table_is_the_manuals_list():
     listed = documented_commands()
     assert len(listed) == len(set(listed)), listed
     assert sorted(listed) == sorted(COMMANDS), (sorted(set(listed) ^ set(COMMANDS)))
+
+
+def test_a_binary_frame_holds_each_array_at_its_offset_converted_and_padded():
+    """pack() writes each array once into the frame, converted to its wire dtype, at a 4-byte aligned offset with
+    zero padding; read back as the page reads it, every value is there."""
+    from cgal_ext.studio.codec import pack
+    rng = np.random.default_rng(5)
+    arrays = [("positions", rng.normal(size=(7, 3)), "<f4"), ("labels", np.arange(5, dtype=np.uint8)),
+              ("indices", np.array([3, 1, 4], np.int64), "<u4"), ("empty", np.zeros((0, 3), np.float32))]
+    data = bytes(pack({"type": "geometry", "scan": "s.ply"}, arrays))
+    (length,) = struct.unpack_from("<I", data)
+    assert length % 4 == 0
+    header = json.loads(data[4:4 + length])
+    assert header["type"] == "geometry" and header["scan"] == "s.ply"
+    end = 4 + length
+    for (name, array, *wire), listed in zip(arrays, header["arrays"]):
+        dtype = np.dtype(wire[0] if wire else array.dtype)
+        assert listed["name"] == name and listed["dtype"] == dtype.str and listed["shape"] == list(array.shape)
+        start = 4 + length + listed["offset"]
+        assert start % 4 == 0 and start >= end
+        assert not any(data[end:start])  # the padding before it is zeros
+        read = np.frombuffer(data, dtype, array.size, start).reshape(array.shape)
+        assert np.array_equal(read, array.astype(dtype))
+        end = start + array.size * dtype.itemsize
+    assert len(data) == (end + 3) // 4 * 4 and not any(data[end:])

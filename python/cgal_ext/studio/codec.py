@@ -19,18 +19,23 @@ MAX_HEADER = 4096
 
 
 def pack(header, arrays=()):
-    """A binary frame: header (a dict; the arrays' names, dtypes, shapes and offsets added) and arrays."""
-    arrays = [(name, np.ascontiguousarray(a)) for name, a in arrays]
+    """A binary frame: header (a dict; the arrays' names, dtypes, shapes and offsets added) and arrays, each given
+    as (name, array) or (name, array, dtype on the wire). Each array is copied once, converted on the way, into
+    the frame: a 1M-point geometry is some 40 MB."""
+    arrays = [(entry[0], np.asarray(entry[1]), np.dtype(entry[2] if len(entry) > 2 else entry[1].dtype))
+              for entry in arrays]
     listed, offset = [], 0
-    for name, a in arrays:
-        listed.append({"name": name, "dtype": a.dtype.str, "shape": list(a.shape), "offset": offset})
-        offset += (a.nbytes + 3) // 4 * 4
+    for name, a, dtype in arrays:
+        listed.append({"name": name, "dtype": dtype.str, "shape": list(a.shape), "offset": offset})
+        offset += (a.size * dtype.itemsize + 3) // 4 * 4
     text = json.dumps(dict(header, arrays=listed)).encode()
     text += b" " * (-len(text) % 4)
-    parts = [struct.pack("<I", len(text)), text]
-    for _, a in arrays:
-        parts += [a.tobytes(), b"\0" * (-a.nbytes % 4)]
-    return b"".join(parts)
+    frame = bytearray(4 + len(text) + offset)  # zeros: the padding
+    struct.pack_into("<I", frame, 0, len(text))
+    frame[4:4 + len(text)] = text
+    for (_, a, dtype), entry in zip(arrays, listed):
+        np.frombuffer(frame, dtype, a.size, 4 + len(text) + entry["offset"]).reshape(a.shape)[...] = a
+    return frame
 
 
 def unpack(data):

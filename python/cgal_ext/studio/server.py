@@ -254,10 +254,9 @@ class Studio:
 
     async def send_geometry(self, ws):
         s = self.session
-        arrays = [("positions", s.shown_points.astype("<f4")), ("normals", s.shown_normals.astype("<f4")),
-                  ("labels", s.labels)]
+        arrays = [("positions", s.shown_points, "<f4"), ("normals", s.shown_normals, "<f4"), ("labels", s.labels)]
         if s.shown_points is not s.points and not np.array_equal(s.shown_points, s.points):
-            arrays += [("rest", s.points.astype("<f4")), ("rest_normals", s.normals.astype("<f4"))]
+            arrays += [("rest", s.points, "<f4"), ("rest_normals", s.normals, "<f4")]
         spacing, exact = s.drawn_spacing()
         if spacing is not None:
             arrays.append(("spacing", spacing))
