@@ -22,8 +22,8 @@ def pack(header, arrays=()):
     """A binary frame: header (a dict; the arrays' names, dtypes, shapes and offsets added) and arrays, each given
     as (name, array) or (name, array, dtype on the wire). Each array is copied once, converted on the way, into
     the frame: a 1M-point geometry is some 40 MB."""
-    arrays = [(entry[0], np.asarray(entry[1]), np.dtype(entry[2] if len(entry) > 2 else entry[1].dtype))
-              for entry in arrays]
+    arrays = [(name, a, np.dtype(wire[0] if wire else a.dtype))
+              for name, a, *wire in ((entry[0], np.asarray(entry[1]), *entry[2:]) for entry in arrays)]
     listed, offset = [], 0
     for name, a, dtype in arrays:
         listed.append({"name": name, "dtype": dtype.str, "shape": list(a.shape), "offset": offset})
