@@ -336,12 +336,12 @@ class Studio:
                                   "collar_handles": len(setup["collar_handles"])},
                                  [("movable", movable),
                                   # uint16 where the sample points allow it: half the bytes on the wire
-                                  ("stencil_samples", setup["stencil_samples"][movable].astype(
-                                      "<u2" if setup["sample_points"] <= 65536 else "<f4")),
+                                  ("stencil_samples", setup["stencil_samples"][movable],
+                                   "<u2" if setup["sample_points"] <= 65536 else "<f4"),
                                   ("stencil_weights", setup["stencil_weights"][movable]),
                                   ("handle_group", setup["handle_group"][movable]),
-                                  ("collar_points", setup["collar_points"].astype("<u4")),
-                                  ("collar_slots", setup["collar_slots"].astype("<f4")),
+                                  ("collar_points", setup["collar_points"], "<u4"),
+                                  ("collar_slots", setup["collar_slots"], "<f4"),
                                   ("collar_weights", setup["collar_weights"])]))
         await self.send_state(ws)
 
@@ -352,9 +352,9 @@ class Studio:
     async def send_shown(self, ws):
         s = self.session
         movable = s.renderer["movable"]  # release, undo and redo need the edit prepared
-        await ws.send_bytes(pack({"type": "shown"}, [("indices", movable.astype("<u4")),
-                                                     ("positions", s.shown_points[movable].astype("<f4")),
-                                                     ("normals", s.shown_normals[movable].astype("<f4"))]))
+        await ws.send_bytes(pack({"type": "shown"}, [("indices", movable, "<u4"),
+                                                     ("positions", s.shown_points[movable], "<f4"),
+                                                     ("normals", s.shown_normals[movable], "<f4")]))
         await self.send_state(ws)
 
     async def on_release(self, ws, command):
@@ -412,7 +412,7 @@ class Studio:
         result = await self.run(s.details, command.get("mode"), command.get("s"), applied)
         region = np.flatnonzero(s.labels != FIXED)
         await ws.send_bytes(pack({"type": "details", "applied": applied},
-                                 [("indices", region.astype("<u4")), ("positions", result[region].astype("<f4"))]))
+                                 [("indices", region, "<u4"), ("positions", result[region], "<f4")]))
         if applied:
             await self.send_geometry(ws)
         await self.send_state(ws)

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import _core, threads
 from . import plan
+from .edit import Edit
 from .ops import NORMALS, XYZ
 from .runner import CHUNK_ROWS, Run, _read_tile, bucket_rows, scan_rows, timed
 from .store import ZarrSource
@@ -28,7 +29,6 @@ from .store import ZarrSource
 # spacings more. No certificate: the margin is measured (doc/scaling.md, "Up-sampling in tiles").
 HALO_NEIGHBOR_DISTANCES = 24
 NEIGHBORS = 12  # the up-sampling's default neighbours
-POINTS_PER_TILE = 1 << 20  # as the edit's tiles
 KEY_STRIDE = 64  # every 64th new point's x goes to the client, to split the merge into ranges
 FIELDS = XYZ + NORMALS + [("inserted", "f8")]
 
@@ -124,7 +124,7 @@ def fill(passes, edited_path, scan, output, scratch, tiles=None, halo=None, thre
     n = source.count
     ranges = passes.row_ranges(n)
     starts = [begin for begin, _ in ranges]
-    tile_count, stride = passes.tile_count_and_stride(n, tiles, POINTS_PER_TILE)
+    tile_count, stride = passes.tile_count_and_stride(n, tiles, Edit.points_per_tile)
     scans = passes.map(scan_rows, ranges, source, stride, what="fill scan")
     with passes.client_step("fill plan"):
         sample = np.concatenate([s["sample"] for s in scans])
