@@ -253,6 +253,91 @@ TEST(UpsamplePointSet, ARegionLimitsWhereGapsAreFilled)
                CGAL_ext::Invalid_input);
 }
 
+TEST(UpsamplePointSet, ARegionsSurroundingsGiveTheWholeSetsNewPoints)
+{
+  // With a region and the spacings before an edit, only the points near the region take part (the studio's Fill
+  // gaps on a large scan): the new points must be the whole set's, bit for bit. Two parallel planes 400 long,
+  // a jittered grid and an exact lattice (whose ties the numbering breaks), each with its middle strip |x| < 5
+  // stretched threefold along x; the region is the strip of the lower plane.
+  for(const bool lattice : {false, true}) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+    Oriented_points planes;
+    for(const double z : {0.0, 20.0})
+      for(double x = -199.5; x < 200; x += 1)
+        for(double y = -19.5; y < 20; y += 1) {
+          const double dx = lattice ? 0 : jitter(rng), dy = lattice ? 0 : jitter(rng);
+          planes.points.emplace_back(x + dx, y + dy, z);
+          planes.normals.emplace_back(0, 0, 1);
+        }
+    std::vector<double> before(planes.points.size());
+    CGAL_ext::compute_local_spacing(planes.indices(), CGAL::make_property_map(before), planes.points_only());
+    std::vector<std::size_t> strip;
+    for(std::size_t i = 0; i < planes.points.size(); ++i) {
+      const Point& p = planes.points[i];
+      if(std::abs(p.x()) < 5 && p.z() == 0) strip.push_back(i);
+      const double x = p.x() < -5 ? p.x() - 10 : p.x() > 5 ? p.x() + 10 : 3 * p.x();
+      planes.points[i] = Point(x, p.y(), p.z());
+    }
+    Inserted surroundings, whole;
+    const CGAL_ext::Upsampling_settings settings;
+    const auto spacing = CGAL::make_property_map(before);
+    CGAL_ext::upsample_point_set(planes.indices(), strip, spacing, settings, std::back_inserter(surroundings),
+                                 planes.np());
+    CGAL_ext::internal::upsample_point_set_impl<CGAL::Parallel_if_available_tag>(
+      planes.indices(), &strip, spacing, settings, std::back_inserter(whole), planes.np(), false);
+    std::printf("%s strip stretched: %zu new points from the surroundings, %zu from the whole set\n",
+                lattice ? "lattice" : "jittered", surroundings.size(), whole.size());
+    // The strip tripled: about two points missing for each of its 10 x 40.
+    EXPECT_GT(whole.size(), 400u) << (lattice ? "lattice" : "jittered");
+    EXPECT_TRUE(surroundings == whole) << (lattice ? "lattice: " : "jittered: ") << surroundings.size()
+                                       << " new points from the surroundings against " << whole.size();
+  }
+}
+
+TEST(UpsamplePointSet, TheSurroundingsHoldEveryPointWithinTheirReachWhateverTheOrder)
+{
+  // points_near: every point within the reach of a region point, none beyond 1.5 sqrt(3) reaches (whole cells of
+  // half a reach are taken), and the same points in any order of the input.
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> coordinate(-50, 50);
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  std::vector<SC_point> points;
+  for(int i = 0; i < 20000; ++i) points.emplace_back(coordinate(rng), coordinate(rng), 0.1 * coordinate(rng));
+  std::vector<int> region;
+  for(int i = 0; i < 20000; ++i)
+    if(std::hypot(points[std::size_t(i)].x() - 10, points[std::size_t(i)].y() + 5) < 8) region.push_back(i);
+  const double reach = 6;
+  const std::vector<int> near = CGAL_ext::internal::points_near(points, region, reach);
+  std::vector<char> kept(points.size(), 0);
+  for(const int i : near) kept[std::size_t(i)] = 1;
+  std::size_t within = 0;
+  for(std::size_t i = 0; i < points.size(); ++i) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for(const int r : region)
+      nearest = std::min(nearest, std::sqrt(CGAL::squared_distance(points[i], points[std::size_t(r)])));
+    if(nearest <= reach) {
+      ++within;
+      EXPECT_TRUE(kept[i]) << "point " << i << " at " << nearest << " from the region";
+    }
+    if(nearest > 1.5 * std::sqrt(3.0) * reach) EXPECT_FALSE(kept[i]) << "point " << i << " at " << nearest;
+  }
+  EXPECT_GT(within, 1000u);
+  EXPECT_LT(near.size(), points.size() / 2);
+  EXPECT_TRUE(std::is_sorted(near.begin(), near.end()));
+  // Reversed: the same positions.
+  std::vector<SC_point> reversed(points.rbegin(), points.rend());
+  std::vector<int> reversed_region;
+  for(const int r : region) reversed_region.push_back(int(points.size()) - 1 - r);
+  std::vector<SC_point> near_points, near_reversed;
+  for(const int i : near) near_points.push_back(points[std::size_t(i)]);
+  for(const int i : CGAL_ext::internal::points_near(reversed, reversed_region, reach))
+    near_reversed.push_back(reversed[std::size_t(i)]);
+  std::sort(near_points.begin(), near_points.end());
+  std::sort(near_reversed.begin(), near_reversed.end());
+  EXPECT_TRUE(near_points == near_reversed);
+}
+
 TEST(UpsamplePointSet, AUniformSphereGetsAlmostNothing)
 {
   const auto shape = CGAL_ext::shapes::bumpy_sphere<Kernel>(4000, 1.0, 0.0);

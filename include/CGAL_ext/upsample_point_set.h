@@ -32,10 +32,12 @@ struct No_spacing_map {};
 /// With a spacing map, the points whose local spacing exceeds theirs by this factor are the stretched ones.
 constexpr double stretched_spacing = 1.25;
 
-template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename SpacingMap, typename OutputIterator,
-          typename NamedParameters>
-Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexRange* region, const SpacingMap& spacing_map,
-                                          const Upsampling_settings& settings, OutputIterator output, const NamedParameters& np)
+template <typename ConcurrencyTag, typename PointRange, typename IndexRange, typename SpacingMap,
+          typename OutputIterator, typename NamedParameters>
+Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexRange* region,
+                                          const SpacingMap& spacing_map, const Upsampling_settings& settings,
+                                          OutputIterator output, const NamedParameters& np,
+                                          bool surroundings_only = true) // false: the whole set (for the tests)
 {
   using CGAL::parameters::choose_parameter;
   using CGAL::parameters::get_parameter;
@@ -46,38 +48,78 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   settings.validate();
   const std::function<bool(double)> callback =
     choose_parameter(get_parameter(np, CGAL::internal_np::callback), std::function<bool(double)>());
-  const Spatial_point_cloud cloud = make_spatial_point_cloud<ConcurrencyTag>(points, NP_helper::get_const_point_map(points, np), who);
-  const std::size_t k = settings.neighbors;
-  check_neighbor_count(k, cloud.size(), who);
+  using SC_point = CGAL::Simple_cartesian<double>::Point_3;
+  std::vector<SC_point> copy = copy_points(points, NP_helper::get_const_point_map(points, np), who);
+  const std::size_t n = copy.size(), k = settings.neighbors;
+  check_neighbor_count(k, n, who);
   if(!has_given_normals<NamedParameters>(points))
     throw Invalid_input(std::string(who) + ": the points need normals (normal_map): hole detection and the new "
-                        "samples' surface come from them");
+                                           "samples' surface come from them");
+  // The spacing each input point should have: the caller's (what it had before an edit), the settings', or
+  // its local spacing. New points take the one interpolated along their gap.
+  constexpr bool spacing_given = !std::is_same<SpacingMap, No_spacing_map>::value;
+  std::vector<double> given_spacing;
+  if constexpr(spacing_given) {
+    given_spacing.reserve(n);
+    for(const auto& item : points) {
+      const double h = double(get(spacing_map, item));
+      if(!(h > 0) || !std::isfinite(h))
+        throw Invalid_input(std::string(who) + ": the spacing of point " + std::to_string(given_spacing.size()) +
+                            " is not a positive number");
+      given_spacing.push_back(h);
+    }
+  }
+  std::vector<int> region_points;
+  if(region) {
+    std::vector<int> identity(n);
+    std::iota(identity.begin(), identity.end(), 0);
+    region_points = rows_of_indices(*region, identity, who, "region");
+  }
+  // With a region whose spacings are known before any search, only its surroundings take part: the points within
+  // `max_rounds` holes (and a fit's reach beyond each) of it, at the region's widest spacing; a small region of a
+  // large scan then costs what its surroundings cost (doc/upsampling.md, "A region's surroundings").
+  Spatial_point_cloud cloud;
+  double widest = settings.detection.spacing;
+  if constexpr(spacing_given)
+    for(const int i : region_points) widest = std::max(widest, given_spacing[std::size_t(i)]);
+  if(surroundings_only && !region_points.empty() && widest > 0) {
+    const std::vector<int> near =
+      points_near(copy, region_points, settings.max_rounds * (settings.detection.max_hole_size + 2) * widest);
+    if(near.size() < n && near.size() > k) {
+      std::vector<SC_point> kept;
+      kept.reserve(near.size());
+      for(const int i : near) kept.push_back(copy[std::size_t(i)]);
+      try {
+        cloud = sort_spatially<ConcurrencyTag>(kept, who);
+        for(int& i : cloud.input_index) i = near[std::size_t(i)];
+      } catch(const Invalid_input&) {
+        cloud = Spatial_point_cloud(); // the surroundings lie on a line: the whole set instead
+      }
+    }
+  }
+  if(cloud.size() == 0) cloud = sort_spatially<ConcurrencyTag>(copy, who);
+  std::vector<SC_point>().swap(copy);
+  std::vector<int> row_of(n, -1);
+  for(std::size_t s = 0; s < cloud.size(); ++s) row_of[std::size_t(cloud.input_index[s])] = int(s);
   const Matrix_n3 input_normals = gather_normals(points, NP_helper::get_normal_map(points, np), cloud, who);
   const Position_tree input_tree(cloud.positions, ConcurrencyTag());
 
   Upsampling_result result;
-  // The spacing each input point should have: the caller's (what it had before an edit), the settings', or
-  // its local spacing. New points take the one interpolated along their gap.
   std::vector<double> all_spacing;
-  if constexpr(std::is_same<SpacingMap, No_spacing_map>::value) {
-    all_spacing = spacings<ConcurrencyTag>(cloud.positions, input_tree, settings.detection.spacing, who);
-  } else {
+  if constexpr(spacing_given) {
     all_spacing.resize(cloud.size());
-    const std::vector<int> row_of = cloud.spatial_index();
-    std::size_t i = 0;
-    for(const auto& item : points) {
-      const double h = double(get(spacing_map, item));
-      if(!(h > 0) || !std::isfinite(h))
-        throw Invalid_input(std::string(who) + ": the spacing of point " + std::to_string(i) + " is not a positive number");
-      all_spacing[std::size_t(row_of[i++])] = h;
-    }
+    for(std::size_t s = 0; s < cloud.size(); ++s) all_spacing[s] = given_spacing[std::size_t(cloud.input_index[s])];
+    result.spacing = median(given_spacing);
+  } else {
+    all_spacing = spacings<ConcurrencyTag>(cloud.positions, input_tree, settings.detection.spacing, who);
+    result.spacing = median(all_spacing);
   }
-  result.spacing = median(all_spacing);
   Progress progress(callback);
 
   std::vector<int> examine;
-  if(region) examine = rows_of_indices(*region, cloud.spatial_index(), who, "region");
-  if constexpr(!std::is_same<SpacingMap, No_spacing_map>::value) {
+  for(const int i : region_points) examine.push_back(row_of[std::size_t(i)]);
+  std::sort(examine.begin(), examine.end());
+  if constexpr(spacing_given) {
     // Only what grew sparser than it was: a region point whose local spacing is now more than 25 % above the
     // given one (an edit stretched it). A part that moved rigidly, or a sampling's own irregular gaps, stay.
     const std::vector<double> now = local_spacings<ConcurrencyTag>(cloud.positions, input_tree, &examine);
@@ -86,10 +128,10 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
                   examine.end());
   }
   std::vector<Eigen::Vector3d> new_points, new_normals;
-  if(!fill_holes<ConcurrencyTag>(cloud.positions, input_normals, input_tree, settings, region != nullptr, std::move(examine),
-                                 std::move(all_spacing),
-                                 std::is_same<SpacingMap, No_spacing_map>::value && settings.detection.spacing == 0,
-                                 progress, result, new_points, new_normals))
+  if(!fill_holes<ConcurrencyTag>(cloud.positions, input_normals, input_tree, settings, region != nullptr,
+                                 std::move(examine), std::move(all_spacing),
+                                 !spacing_given && settings.detection.spacing == 0, progress, result, new_points,
+                                 new_normals))
     return {};
   if(!progress.report(1.0)) return {};
   // In the order of their coordinates: the output is then the same whoever computes which of the points (a tiled
@@ -145,7 +187,10 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
   Another also takes `spacing_map` (a `ReadablePropertyMap` to `double`): the spacing each point should have,
   such as its local spacing before an edit (`compute_local_spacing` on the unedited points); then gaps are
   looked for only from the region's points whose local spacing now exceeds it by more than 25 % (what the
-  edit stretched), and filled at that spacing (doc/upsampling.md, "Local spacing").
+  edit stretched), and filled at that spacing (doc/upsampling.md, "Local spacing"). With a region and spacings
+  given (a spacing map, or `settings.detection.spacing`), only the points within `max_rounds * (max_hole_size + 2)`
+  times the region's largest spacing of it take part, so a small region of a large set costs what its surroundings
+  cost (doc/upsampling.md, "A region's surroundings").
 
   \return the spacing used, the number of new points and rounds; converts to `false` (and nothing is
           written) when the callback cancelled.

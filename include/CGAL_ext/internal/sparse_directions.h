@@ -31,6 +31,26 @@ struct Hole_gap
   int from, across;
 };
 
+/// The rows of two arrays read as one, `first`'s then `second`'s (rows `first.rows()` on): up-sampling's input
+/// samples and the samples it added, without copying the input each round.
+class Stacked_rows
+{
+public:
+  Stacked_rows(const Matrix_n3& first) : m_first(first), m_second(nullptr) {}
+  Stacked_rows(const Matrix_n3& first, const Matrix_n3& second) : m_first(first), m_second(&second) {}
+
+  Eigen::Index rows() const { return m_first.rows() + (m_second ? m_second->rows() : 0); }
+  Eigen::RowVector3d row(Eigen::Index i) const
+  {
+    return i < m_first.rows() ? Eigen::RowVector3d(m_first.row(i))
+                              : Eigen::RowVector3d(m_second->row(i - m_first.rows()));
+  }
+
+private:
+  const Matrix_n3& m_first;
+  const Matrix_n3* m_second;
+};
+
 /// The typical spacing of a sampling: the median over points of their mean distance to their 6 nearest
 /// neighbours (`CGAL::compute_average_spacing`'s measure, with a median against outliers). The nearest
 /// neighbour alone underestimates a jittered sampling, whose natural gaps would then look like holes.
@@ -185,13 +205,14 @@ std::vector<double> empty_radii(const Matrix_n3& positions, const Matrix_n3& nor
 /// The hole gaps of the points `rows` (all when null; doc/upsampling.md, "Finding holes"): for each sparse
 /// quarter of a point's tangent plane (empty within the point's `empty_radius`), the first sample that
 /// reappears along it within `max_hole_size` spacings, if any. `spacing` and `empty_radius` have one entry per
-/// row of `positions`.
+/// row of `positions`; `tree` holds those rows.
 /// `sparse` receives the examined points with a sparse quarter, increasing. Gaps come out ordered by point,
 /// then quarter, so any thread count gives the same list.
 template <typename ConcurrencyTag>
-std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree,
-                                std::size_t k, const std::vector<double>& spacing, const std::vector<double>& empty_radius,
-                                double max_hole_size, const std::vector<int>* rows, std::vector<int>& sparse)
+std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_rows& normals, const Position_tree& tree,
+                                std::size_t k, const std::vector<double>& spacing,
+                                const std::vector<double>& empty_radius, double max_hole_size,
+                                const std::vector<int>* rows, std::vector<int>& sparse)
 {
   const std::size_t n = rows ? rows->size() : std::size_t(positions.rows());
   // Enough candidates to see across a gap of max_hole_size spacings: about the samples of that disc.
@@ -216,7 +237,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
     auto gather = [&](std::size_t count) {
       candidates.clear();
       same_sheet.clear();
-      tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
+      tree.nearest(tree[i], count, [&](int j, double) {
         if(std::size_t(j) == i) return;
         Eigen::Vector3d d = positions.row(j).transpose() - p;
         const double height = d.dot(normal);
@@ -285,7 +306,7 @@ std::vector<Hole_gap> hole_gaps(const Matrix_n3& positions, const Matrix_n3& nor
   EXTERN template std::vector<double> empty_radii<Tag>(const Matrix_n3&, const Matrix_n3&, const Position_tree&,       \
                                                        std::size_t, const std::vector<double>&, bool);                 \
   EXTERN template std::vector<Hole_gap> hole_gaps<Tag>(                                                                \
-    const Matrix_n3&, const Matrix_n3&, const Position_tree&, std::size_t, const std::vector<double>&,                 \
+    const Stacked_rows&, const Stacked_rows&, const Position_tree&, std::size_t, const std::vector<double>&,           \
     const std::vector<double>&, double, const std::vector<int>*, std::vector<int>&);
 CGAL_EXT_DECLARE_COMPILED_INSTANCES(CGAL_EXT_SPARSE_DIRECTIONS_INSTANCES)
 

@@ -16,6 +16,7 @@
 #include <CGAL/number_type_config.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -74,6 +75,68 @@ private:
   std::unordered_map<Key, std::vector<int>, Hash> m_members;
 };
 
+/// The indices of the points of `copy` within `reach` of one of the points `region` (indices into `copy`, at least
+/// one), with some farther ones (whole cells of a grid are taken, so up to about 2.6 reach), increasing: a function
+/// of the positions alone. Cells of reach / 2 (larger when the box would need more than 2^21 of them) are marked
+/// where a region point lies, then grown by the cells a reach spans along each axis.
+inline std::vector<int> points_near(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy,
+                                    const std::vector<int>& region, double reach)
+{
+  const auto at = [&](int i) {
+    return Eigen::Array3d(copy[std::size_t(i)].x(), copy[std::size_t(i)].y(), copy[std::size_t(i)].z());
+  };
+  Eigen::Array3d low = at(region.front()), high = low;
+  for(const int i : region) {
+    low = low.min(at(i));
+    high = high.max(at(i));
+  }
+  low -= reach;
+  high += reach;
+  const Eigen::Array3d extent = high - low;
+  const double cell = std::max(0.5 * reach, std::cbrt(extent.prod() / double(1 << 21)));
+  if(!std::isfinite(cell) || !(cell > 0)) { // a reach or a box too large for a grid: every point
+    std::vector<int> all(copy.size());
+    std::iota(all.begin(), all.end(), 0);
+    return all;
+  }
+  const long margin = long(std::ceil(reach / cell));
+  std::array<long, 3> dims;
+  for(int d = 0; d < 3; ++d) dims[std::size_t(d)] = long(extent[d] / cell) + 1;
+  std::vector<char> marked(std::size_t(dims[0] * dims[1] * dims[2]), 0);
+  const auto cell_of = [&](const Eigen::Array3d& p) {
+    long c[3];
+    for(int d = 0; d < 3; ++d) c[d] = std::min(dims[std::size_t(d)] - 1, long((p[d] - low[d]) / cell));
+    return std::size_t((c[0] * dims[1] + c[1]) * dims[2] + c[2]);
+  };
+  for(const int i : region) marked[cell_of(at(i))] = 1;
+  // Grown along each axis in turn: a cell is marked when one within `margin` cells along the axis was.
+  const std::array<long, 3> stride{dims[1] * dims[2], dims[2], 1};
+  std::vector<char> line;
+  for(int d = 0; d < 3; ++d) {
+    const int a = (d + 1) % 3, b = (d + 2) % 3;
+    const long length = dims[std::size_t(d)], step = stride[std::size_t(d)];
+    for(long ia = 0; ia < dims[std::size_t(a)]; ++ia)
+      for(long ib = 0; ib < dims[std::size_t(b)]; ++ib) {
+        char* cells = marked.data() + ia * stride[std::size_t(a)] + ib * stride[std::size_t(b)];
+        line.assign(std::size_t(length), 0);
+        for(long c = 0, last = -margin - 1; c < length; ++c) {
+          if(cells[c * step]) last = c;
+          line[std::size_t(c)] = c - last <= margin;
+        }
+        for(long c = length - 1, last = length + margin; c >= 0; --c) {
+          if(cells[c * step]) last = c;
+          cells[c * step] = line[std::size_t(c)] || last - c <= margin;
+        }
+      }
+  }
+  std::vector<int> near;
+  for(std::size_t i = 0; i < copy.size(); ++i) {
+    const Eigen::Array3d p = at(int(i));
+    if((p >= low).all() && (p <= high).all() && marked[cell_of(p)]) near.push_back(int(i));
+  }
+  return near;
+}
+
 /// The order in which new samples are kept, from their coordinates alone (a splitmix64 hash of their bits): which
 /// of two close candidates is kept then depends on those two, not on how the points are numbered or which points
 /// a tile of a larger scan holds. Unlike an order along an axis, it starts no chain of decisions running across
@@ -105,7 +168,8 @@ using Ranked_rows = std::vector<std::pair<double, int>>;
 /// Orders the rows of `near` that lie at one distance by their coordinates: sums over them then come in an order
 /// of the points alone. Tree searches break such ties by row, and a new point halfway across a gap is often exactly
 /// as far from both ends, whose rows depend on which points a tile of a larger scan holds.
-inline void break_ties_by_coordinates(const Matrix_n3& samples, Ranked_rows& near)
+template <typename Rows>
+void break_ties_by_coordinates(const Rows& samples, Ranked_rows& near)
 {
   for(std::size_t a = 0; a < near.size();) {
     std::size_t b = a + 1;
@@ -197,9 +261,11 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
                 std::vector<Eigen::Vector3d>& new_points, std::vector<Eigen::Vector3d>& new_normals)
 {
   const std::size_t k = settings.neighbors;
-  // All samples so far: the input first, then the new ones (rows n..).
+  // All samples so far: the input first, then the new ones (rows n.., `added`), read as one without copying the
+  // input.
   const std::size_t n = std::size_t(positions.rows());
-  Matrix_n3 all = positions, all_normals = input_normals;
+  Matrix_n3 added(0, 3), added_normals(0, 3);
+  const Stacked_rows all(positions, added), all_normals(input_normals, added_normals);
   // New samples fill quarters; they empty one only by turning a point's principal axes, which is rare: after
   // the first round, only the points that were sparse and the new points are examined again.
   std::vector<int> sparse;
@@ -219,9 +285,7 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     if(!progress.report(0.0)) return false;
     // The first round's samples are the input: its tree serves; later rounds add a tree of the new samples to it.
     std::unique_ptr<Position_tree> round_tree;
-    if(round > 0)
-      round_tree = std::make_unique<Position_tree>(input_tree, Matrix_n3(all.bottomRows(all.rows() - Eigen::Index(n))),
-                                                   ConcurrencyTag());
+    if(round > 0) round_tree = std::make_unique<Position_tree>(input_tree, added, ConcurrencyTag());
     const Position_tree& tree = round > 0 ? *round_tree : input_tree;
     const std::vector<Hole_gap> gaps = hole_gaps<ConcurrencyTag>(all, all_normals, tree, k, all_spacing, empty_radius,
                                                                  settings.detection.max_hole_size,
@@ -330,7 +394,7 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
         if(iteration < settings.relaxation_iterations) {
           Eigen::Vector3d push = Eigen::Vector3d::Zero();
           thread_local Ranked_rows pushing;
-          auto repel = [&push, &x, radius](const Matrix_n3& from) {
+          auto repel = [&push, &x, radius](const auto& from) {
             break_ties_by_coordinates(from, pushing);
             for(const auto& [d2, j] : pushing) {
               const double d = std::sqrt(d2);
@@ -390,11 +454,11 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
     new_normals.insert(new_normals.end(), round_normals.begin(), round_normals.end());
     all_spacing.insert(all_spacing.end(), round_spacing.begin(), round_spacing.end());
     all_empty_factor.insert(all_empty_factor.end(), round_empty_factor.begin(), round_empty_factor.end());
-    all.conservativeResize(Eigen::Index(n + new_points.size()), 3);
-    all_normals.conservativeResize(all.rows(), 3);
+    added.conservativeResize(Eigen::Index(new_points.size()), 3);
+    added_normals.conservativeResize(added.rows(), 3);
     for(std::size_t m = 0; m < new_points.size(); ++m) {
-      all.row(Eigen::Index(n + m)) = new_points[m].transpose();
-      all_normals.row(Eigen::Index(n + m)) = new_normals[m].transpose();
+      added.row(Eigen::Index(m)) = new_points[m].transpose();
+      added_normals.row(Eigen::Index(m)) = new_normals[m].transpose();
     }
   }
   return true;
