@@ -215,11 +215,16 @@ public:
     const Position_tree::Point at(x.x(), x.y(), x.z());
     int* candidates = m_candidates.data() + point * m_reach;
     if(m_radius[point] >= 0) {
-      ranked.clear();
-      for(std::size_t c = 0; c < m_reach; ++c)
-        ranked.emplace_back(Position_tree::squared_distance(at, m_tree[std::size_t(candidates[c])]), candidates[c]);
-      std::nth_element(ranked.begin(), ranked.begin() + std::ptrdiff_t(k - 1), ranked.end());
-      std::sort(ranked.begin(), ranked.begin() + std::ptrdiff_t(k - 1));
+      // The rows are kept in the order of the last ranking and the point moved little since: an insertion sort
+      // ranks them again in about one pass.
+      ranked.resize(m_reach);
+      for(std::size_t c = 0; c < m_reach; ++c) {
+        const Ranked_row row(Position_tree::squared_distance(at, m_tree[std::size_t(candidates[c])]), candidates[c]);
+        std::size_t e = c;
+        for(; e > 0 && row < ranked[e - 1]; --e) ranked[e] = ranked[e - 1];
+        ranked[e] = row;
+      }
+      for(std::size_t c = 0; c < m_reach; ++c) candidates[c] = ranked[c].second;
       const double moved = (x - m_anchor[point]).norm();
       // A relative margin for the rounding of the distances.
       if(std::sqrt(ranked[k - 1].first) + moved < m_radius[point] * (1 - 1e-9)) {
