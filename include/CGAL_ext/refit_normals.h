@@ -90,18 +90,12 @@ std::size_t refit_normals(const PointRange& points, const IndexRange& indices, u
     }
     low.array() -= reach;
     high.array() += reach;
-    std::vector<SC_point> kept;
-    std::vector<int> kept_index;
+    std::vector<int> kept;
     for(std::size_t i = 0; i < n; ++i) {
       const Eigen::RowVector3d p = position(i);
-      if((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) {
-        kept.push_back(copy[i]);
-        kept_index.push_back(int(i));
-      }
+      if((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) kept.push_back(int(i));
     }
-    internal::Spatial_point_cloud cloud = internal::sort_spatially<ConcurrencyTag>(kept, who);
-    for(int& i : cloud.input_index) i = kept_index[std::size_t(i)];
-    return cloud;
+    return internal::sort_spatially<ConcurrencyTag>(copy, kept, who);
   };
   double reach = std::numeric_limits<double>::infinity();
   if(moved.size() >= fit_size && moved.size() < n) {

@@ -86,12 +86,8 @@ Upsampling_result upsample_point_set_impl(const PointRange& points, const IndexR
     const std::vector<int> near =
       points_near(copy, region_points, settings.max_rounds * (settings.detection.max_hole_size + 2) * widest);
     if(near.size() < n && near.size() > k) {
-      std::vector<SC_point> kept;
-      kept.reserve(near.size());
-      for(const int i : near) kept.push_back(copy[std::size_t(i)]);
       try {
-        cloud = sort_spatially<ConcurrencyTag>(kept, who);
-        for(int& i : cloud.input_index) i = near[std::size_t(i)];
+        cloud = sort_spatially<ConcurrencyTag>(copy, near, who);
       } catch(const Invalid_input&) {
         cloud = Spatial_point_cloud(); // the surroundings lie on a line: the whole set instead
       }

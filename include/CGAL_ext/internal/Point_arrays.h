@@ -198,6 +198,20 @@ std::vector<CGAL::Simple_cartesian<double>::Point_3> copy_points(const PointRang
   return copy;
 }
 
+/// The cloud of the points `subset` of `copy` (increasing indices into it), sorted along a Hilbert curve; its
+/// `input_index` refers to `copy`. A region's surroundings sorted alone: the whole set's order is not needed.
+template <typename ConcurrencyTag>
+Spatial_point_cloud sort_spatially(const std::vector<CGAL::Simple_cartesian<double>::Point_3>& copy,
+                                   const std::vector<int>& subset, const char* who)
+{
+  std::vector<CGAL::Simple_cartesian<double>::Point_3> kept;
+  kept.reserve(subset.size());
+  for(const int i : subset) kept.push_back(copy[std::size_t(i)]);
+  Spatial_point_cloud cloud = sort_spatially<ConcurrencyTag>(kept, who);
+  for(int& i : cloud.input_index) i = subset[std::size_t(i)];
+  return cloud;
+}
+
 /// Copies and validates the points of `points` (in range order) and sorts them spatially.
 /// `who` names the calling algorithm in error messages.
 template <typename ConcurrencyTag, typename PointRange, typename PointMap>
