@@ -253,6 +253,40 @@ TEST(UpsamplePointSet, ARegionLimitsWhereGapsAreFilled)
                CGAL_ext::Invalid_input);
 }
 
+/// Two planes 400 x 40 spacings, `gap` apart along z (a jittered grid, or an exact lattice), the lower one's normals
+/// (0, 0, `lower_normal_z`), the upper one's +z, with their middle strip |x| < 5 stretched threefold along x (and
+/// what lies beyond it shifted): the points, their local spacings before the stretch and the lower plane's strip.
+struct Stretched_sheets
+{
+  Oriented_points points;
+  std::vector<double> spacing_before;
+  std::vector<std::size_t> strip;
+};
+
+inline Stretched_sheets stretched_sheets(double gap, bool lattice, double lower_normal_z)
+{
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+  Stretched_sheets out;
+  Oriented_points& sheets = out.points;
+  for(const double z : {0.0, gap})
+    for(double x = -199.5; x < 200; x += 1)
+      for(double y = -19.5; y < 20; y += 1) {
+        const double dx = lattice ? 0 : jitter(rng), dy = lattice ? 0 : jitter(rng);
+        sheets.points.emplace_back(x + dx, y + dy, z);
+        sheets.normals.emplace_back(0, 0, z == 0 ? lower_normal_z : 1);
+      }
+  out.spacing_before.resize(sheets.points.size());
+  CGAL_ext::compute_local_spacing(sheets.indices(), CGAL::make_property_map(out.spacing_before), sheets.points_only());
+  for(std::size_t i = 0; i < sheets.points.size(); ++i) {
+    const Point& p = sheets.points[i];
+    if(std::abs(p.x()) < 5 && p.z() == 0) out.strip.push_back(i);
+    const double x = p.x() < -5 ? p.x() - 10 : p.x() > 5 ? p.x() + 10 : 3 * p.x();
+    sheets.points[i] = Point(x, p.y(), p.z());
+  }
+  return out;
+}
+
 TEST(UpsamplePointSet, ARegionsSurroundingsGiveTheWholeSetsNewPoints)
 {
   // With a region and the spacings before an edit, only the points near the region take part (the studio's Fill
@@ -260,28 +294,12 @@ TEST(UpsamplePointSet, ARegionsSurroundingsGiveTheWholeSetsNewPoints)
   // a jittered grid and an exact lattice (whose ties the numbering breaks), each with its middle strip |x| < 5
   // stretched threefold along x; the region is the strip of the lower plane.
   for(const bool lattice : {false, true}) {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> jitter(-0.2, 0.2);
-    Oriented_points planes;
-    for(const double z : {0.0, 20.0})
-      for(double x = -199.5; x < 200; x += 1)
-        for(double y = -19.5; y < 20; y += 1) {
-          const double dx = lattice ? 0 : jitter(rng), dy = lattice ? 0 : jitter(rng);
-          planes.points.emplace_back(x + dx, y + dy, z);
-          planes.normals.emplace_back(0, 0, 1);
-        }
-    std::vector<double> before(planes.points.size());
-    CGAL_ext::compute_local_spacing(planes.indices(), CGAL::make_property_map(before), planes.points_only());
-    std::vector<std::size_t> strip;
-    for(std::size_t i = 0; i < planes.points.size(); ++i) {
-      const Point& p = planes.points[i];
-      if(std::abs(p.x()) < 5 && p.z() == 0) strip.push_back(i);
-      const double x = p.x() < -5 ? p.x() - 10 : p.x() > 5 ? p.x() + 10 : 3 * p.x();
-      planes.points[i] = Point(x, p.y(), p.z());
-    }
+    const Stretched_sheets sheets = stretched_sheets(20, lattice, 1);
+    const Oriented_points& planes = sheets.points;
+    const std::vector<std::size_t>& strip = sheets.strip;
     Inserted surroundings, whole;
     const CGAL_ext::Upsampling_settings settings;
-    const auto spacing = CGAL::make_property_map(before);
+    const auto spacing = CGAL::make_property_map(sheets.spacing_before);
     CGAL_ext::upsample_point_set(planes.indices(), strip, spacing, settings, std::back_inserter(surroundings),
                                  planes.np());
     CGAL_ext::internal::upsample_point_set_impl<CGAL::Parallel_if_available_tag>(
@@ -292,6 +310,59 @@ TEST(UpsamplePointSet, ARegionsSurroundingsGiveTheWholeSetsNewPoints)
     EXPECT_GT(whole.size(), 400u) << (lattice ? "lattice" : "jittered");
     EXPECT_TRUE(surroundings == whole) << (lattice ? "lattice: " : "jittered: ") << surroundings.size()
                                        << " new points from the surroundings against " << whole.size();
+  }
+}
+
+TEST(UpsamplePointSet, AThinPlateFillsLikeAnOpenSheet)
+{
+  // A plate 400 x 40 spacings, its two sides 3 spacings apart with outward normals, its lower side's middle strip
+  // stretched threefold: the lower side must fill as if the upper one were far away, and on its own plane. A fit
+  // or an emptiness test that took samples of the other side (their normals face away) would land between the
+  // sides or leave the strip half empty.
+  for(const bool lattice : {false, true}) {
+    std::size_t far_count = 0;
+    for(const double thickness : {20.0, 3.0}) {
+      const Stretched_sheets plate = stretched_sheets(thickness, lattice, -1);
+      Inserted inserted;
+      CGAL_ext::upsample_point_set(plate.points.indices(), plate.strip, CGAL::make_property_map(plate.spacing_before),
+                                   CGAL_ext::Upsampling_settings(), std::back_inserter(inserted), plate.points.np());
+      std::size_t off_the_side = 0;
+      for(const auto& p : inserted) off_the_side += std::abs(p.first.z()) > 1e-6 || p.second.z() > -0.999;
+      const char* which = lattice ? "lattice" : "jittered";
+      EXPECT_EQ(off_the_side, 0u) << which << ", thickness " << thickness << ": of " << inserted.size();
+      if(thickness == 20) {
+        far_count = inserted.size();
+      } else {
+        EXPECT_NEAR(double(inserted.size()), double(far_count), 0.05 * double(far_count))
+          << which << ": a plate 3 spacings thick against one 20 thick";
+      }
+    }
+    EXPECT_GT(far_count, 400u);
+  }
+}
+
+TEST(UpsamplePointSet, AHoleInOneSideOfAThinPlateIsFilled)
+{
+  // The jittered grid with a hole of radius 2.6 as the lower side of a plate 3 spacings thick, the upper side
+  // whole, outward normals, local spacings: the hole fills about as on the grid alone (19 points), on its plane.
+  // Counted as neighbours, the upper side's samples filled the hole's quarters, and it got none.
+  Inserted alone, in_plate;
+  const Oriented_points grid = plane_with_hole(2.6);
+  CGAL_ext::upsample_point_set(grid.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(alone), grid.np());
+  Oriented_points plate = grid;
+  for(Vector& n : plate.normals) n = Vector(0, 0, -1);
+  const Oriented_points whole = plane_with_hole(0);
+  for(const Point& p : whole.points) {
+    plate.points.emplace_back(p.x(), p.y(), 3);
+    plate.normals.emplace_back(0, 0, 1);
+  }
+  CGAL_ext::upsample_point_set(plate.indices(), CGAL_ext::Upsampling_settings(), std::back_inserter(in_plate),
+                               plate.np());
+  EXPECT_GE(alone.size(), 15u);
+  EXPECT_GE(in_plate.size() + 3, alone.size());
+  for(const auto& p : in_plate) {
+    EXPECT_NEAR(p.first.z(), 0.0, 1e-9);
+    EXPECT_LT(std::hypot(p.first.x() - 20, p.first.y() - 20), 3.6) << "outside the hole";
   }
 }
 
@@ -320,7 +391,9 @@ TEST(UpsamplePointSet, TheSurroundingsHoldEveryPointWithinTheirReachWhateverTheO
       ++within;
       EXPECT_TRUE(kept[i]) << "point " << i << " at " << nearest << " from the region";
     }
-    if(nearest > 1.5 * std::sqrt(3.0) * reach) EXPECT_FALSE(kept[i]) << "point " << i << " at " << nearest;
+    if(nearest > 1.5 * std::sqrt(3.0) * reach) {
+      EXPECT_FALSE(kept[i]) << "point " << i << " at " << nearest;
+    }
   }
   EXPECT_GT(within, 1000u);
   EXPECT_LT(near.size(), points.size() / 2);

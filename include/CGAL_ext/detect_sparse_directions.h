@@ -58,8 +58,9 @@ double compute_local_spacing(const PointRange& points, SpacingMap spacing_map,
   \ingroup PkgCGALExtAlgorithms
   Finds the points on the boundary of holes (Miao et al. 2007, Sect. 6.3, Fig. 9a): for each point, the
   quarters of its tangent plane around the principal axes `±e1`, `±e2` of its projected neighbours that hold no
-  sample within two spacings, and among them the ones across which samples reappear within
-  `settings.max_hole_size` spacings (a hole, not an open border).
+  sample within two spacings (samples whose normals face away, the other side of a thin part, do not count),
+  and among them the ones across which samples reappear within `settings.max_hole_size` spacings (a hole, not an
+  open border).
 
   \tparam SparseDirectionMap a model of `WritablePropertyMap` whose value type is the kernel's `Vector_3`.
 

@@ -143,7 +143,8 @@ Eigen::Vector3d principal_tangent_axis(std::size_t count, const OffsetOf& offset
 /// Each point's largest quarter gap: over the four quarters of its tangent plane around the principal axes of its
 /// k nearest projected neighbours, the largest distance to the nearest neighbour within the quarter (the
 /// smallest empty radius under which the point has no sparse quarter); a quarter with none among the 24
-/// nearest counts the farthest of them.
+/// nearest counts the farthest of them. Neighbours whose normals face away (the other side of a thin part) are
+/// left out, as in `hole_gaps`.
 template <typename ConcurrencyTag>
 std::vector<double> largest_quarter_gaps(const Matrix_n3& positions, const Matrix_n3& normals, const Position_tree& tree, std::size_t k)
 {
@@ -154,7 +155,7 @@ std::vector<double> largest_quarter_gaps(const Matrix_n3& positions, const Matri
     offsets.clear();
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
-      if(std::size_t(j) == i) return;
+      if(std::size_t(j) == i || normals.row(j).dot(normal.transpose()) <= 0) return;
       Eigen::Vector3d d = positions.row(j).transpose() - p;
       offsets.push_back(d - d.dot(normal) * normal);
     });
@@ -204,7 +205,8 @@ std::vector<double> empty_radii(const Matrix_n3& positions, const Matrix_n3& nor
 
 /// The hole gaps of the points `rows` (all when null; doc/upsampling.md, "Finding holes"): for each sparse
 /// quarter of a point's tangent plane (empty within the point's `empty_radius`), the first sample that
-/// reappears along it within `max_hole_size` spacings, if any. `spacing` and `empty_radius` have one entry per
+/// reappears along it within `max_hole_size` spacings, if any. Samples whose normals face away from the point's
+/// (the other side of a thin part) fill no quarter. `spacing` and `empty_radius` have one entry per
 /// row of `positions`; `tree` holds those rows.
 /// `sparse` receives the examined points with a sparse quarter, increasing. Gaps come out ordered by point,
 /// then quarter, so any thread count gives the same list.
@@ -231,6 +233,7 @@ std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_row
       int row;
       Eigen::Vector3d offset; // tangent
       double length;          // of the offset
+      bool facing;            // its normal on the side of this point's
     };
     thread_local std::vector<Candidate> candidates;
     thread_local std::vector<char> same_sheet; // whether a sample across a gap may continue this point's surface
@@ -242,11 +245,11 @@ std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_row
         Eigen::Vector3d d = positions.row(j).transpose() - p;
         const double height = d.dot(normal);
         d -= height * normal;
-        candidates.push_back({j, d, d.norm()});
+        const double facing = normals.row(j).dot(normal.transpose());
+        candidates.push_back({j, d, d.norm(), facing > 0});
         // Within 30 degrees of the tangent plane, facing the same way: not a sample of another sheet (the body
         // under an arm), whose bridge would cross empty space.
-        same_sheet.push_back(std::abs(height) <= tan_sheet * candidates.back().length &&
-                             normals.row(j).dot(normal.transpose()) > 0.5);
+        same_sheet.push_back(std::abs(height) <= tan_sheet * candidates.back().length && facing > 0.5);
       });
     };
     // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter
@@ -262,7 +265,7 @@ std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_row
     int seen = 0;
     for(const Eigen::Vector3d& d : directions)
       for(const Candidate& candidate : candidates)
-        if(candidate.length > 0 && candidate.length < empty_within &&
+        if(candidate.facing && candidate.length > 0 && candidate.length < empty_within &&
            candidate.offset.dot(d) > std::sqrt(0.5) * candidate.length) {
           ++seen;
           break;
@@ -274,10 +277,13 @@ std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_row
       bool empty = true;
       double best = max_gap;
       for(std::size_t c = 0; c < candidates.size(); ++c) {
-        const auto& [j, offset, length] = candidates[c];
+        const auto& [j, offset, length, facing] = candidates[c];
         if(!(length > 0)) continue;
         const double along = offset.dot(d) / length;
-        if(length < empty_within && along > std::sqrt(0.5)) { empty = false; break; } // inside the quarter
+        if(facing && length < empty_within && along > std::sqrt(0.5)) { // a sample inside the quarter
+          empty = false;
+          break;
+        }
         if(length >= empty_within && length < best && along > cos_cone && same_sheet[c]) {
           best = length;
           across[r][std::size_t(q)] = j;

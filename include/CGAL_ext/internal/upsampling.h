@@ -188,17 +188,21 @@ void break_ties_by_coordinates(const Rows& samples, Ranked_rows& near)
 /// so the fit takes the nearest k / 8 samples in each of 8 directions around `x` (among the about
 /// 3 pi (d / h)^2 samples of a disc of radius 2 d), which surround the hole, and a degree-3 surface through
 /// them interpolates the rim: a wave's inflection across a hole is then followed, not flattened.
+/// Either fit leaves out the samples whose normals (`normals`) face away from `normal`: across a thin part (a
+/// plate, a finger) they lie on its other side, and a fit through both sides would land between them.
 /// `tree` holds the samples; `nearest` keeps its nearest samples to the new point `point`, which `x` is, and
 /// `nearest_in_hole` more of them for the fits inside a hole.
-inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& tree, Moving_neighbors& nearest,
-                                 Moving_neighbors& nearest_in_hole, std::size_t point, std::size_t k, double h,
-                                 Eigen::Vector3d& x, Eigen::Vector3d& normal)
+inline void project_onto_surface(const Matrix_n3& samples, const Matrix_n3& normals, const Position_tree& tree,
+                                 Moving_neighbors& nearest, Moving_neighbors& nearest_in_hole, std::size_t point,
+                                 std::size_t k, double h, Eigen::Vector3d& x, Eigen::Vector3d& normal)
 {
   thread_local Ranked_rows near;
   near.clear();
   const Position_tree::Point query(x.x(), x.y(), x.z());
   double nearest2 = 0;
+  const auto facing = [&](int j) { return normals.row(j).dot(normal.transpose()) > 0; };
   nearest.nearest(point, x, k, [&](int j, double d2) {
+    if(!facing(j)) return;
     if(near.empty()) nearest2 = d2;
     near.emplace_back(d2, j);
   });
@@ -212,6 +216,7 @@ inline void project_onto_surface(const Matrix_n3& samples, const Position_tree& 
     const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
     std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     const auto take = [&](int j, double d2) {
+      if(!facing(j)) return;
       const Eigen::Vector3d d = samples.row(j).transpose() - x;
       const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
       std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
@@ -417,13 +422,15 @@ bool fill_holes(const Matrix_n3& positions, const Matrix_n3& input_normals, cons
           if(push.norm() > 0.3 * h) push *= 0.3 * h / push.norm();
           x += push;
         }
-        project_onto_surface(positions, input_tree, near_input, near_input_in_hole, m, 2 * k, h, x, normal);
+        project_onto_surface(positions, input_normals, input_tree, near_input, near_input_in_hole, m, 2 * k, h, x,
+                             normal);
         if(iteration == settings.relaxation_iterations) {
           // A projection onto the surface should be a fixed point: projecting the result again must not move
           // it. Where the fit is unstable (a cubic across a tear, in a frame that tilts with the normal) it
           // does, and the point is dropped rather than written off the surface.
           Eigen::Vector3d again = x, again_normal = normal;
-          project_onto_surface(positions, input_tree, near_input, near_input_in_hole, m, 2 * k, h, again, again_normal);
+          project_onto_surface(positions, input_normals, input_tree, near_input, near_input_in_hole, m, 2 * k, h, again,
+                               again_normal);
           settled[m] = (again - x).squaredNorm() <= 0.0625 * h * h; // a quarter spacing
         }
         moved[m] = x;
