@@ -31,6 +31,14 @@ struct Hole_gap
   int from, across;
 };
 
+/// Whether the normal of row `j` of `normals` faces away from `normal`: across a thin part, the row is a sample of
+/// its other side, which no neighbourhood on this side takes (doc/upsampling.md, "Thin parts").
+template <typename Normals>
+bool faces_away(const Normals& normals, Eigen::Index j, const Eigen::Vector3d& normal)
+{
+  return normals.row(j).dot(normal.transpose()) <= 0;
+}
+
 /// The rows of two arrays read as one, `first`'s then `second`'s (rows `first.rows()` on): up-sampling's input
 /// samples and the samples it added, without copying the input each round.
 class Stacked_rows
@@ -155,7 +163,7 @@ std::vector<double> largest_quarter_gaps(const Matrix_n3& positions, const Matri
     offsets.clear();
     const Eigen::Vector3d p = positions.row(Eigen::Index(i)).transpose(), normal = normals.row(Eigen::Index(i)).transpose();
     tree.nearest(Position_tree::point(positions, Eigen::Index(i)), count, [&](int j, double) {
-      if(std::size_t(j) == i || normals.row(j).dot(normal.transpose()) <= 0) return;
+      if(std::size_t(j) == i || faces_away(normals, j, normal)) return;
       Eigen::Vector3d d = positions.row(j).transpose() - p;
       offsets.push_back(d - d.dot(normal) * normal);
     });
@@ -245,11 +253,11 @@ std::vector<Hole_gap> hole_gaps(const Stacked_rows& positions, const Stacked_row
         Eigen::Vector3d d = positions.row(j).transpose() - p;
         const double height = d.dot(normal);
         d -= height * normal;
-        const double facing = normals.row(j).dot(normal.transpose());
-        candidates.push_back({j, d, d.norm(), facing > 0});
+        candidates.push_back({j, d, d.norm(), !faces_away(normals, j, normal)});
         // Within 30 degrees of the tangent plane, facing the same way: not a sample of another sheet (the body
         // under an arm), whose bridge would cross empty space.
-        same_sheet.push_back(std::abs(height) <= tan_sheet * candidates.back().length && facing > 0.5);
+        same_sheet.push_back(std::abs(height) <= tan_sheet * candidates.back().length &&
+                             normals.row(j).dot(normal.transpose()) > 0.5);
       });
     };
     // A few neighbours decide most points: the search across a gap needs the wide query only where a quarter

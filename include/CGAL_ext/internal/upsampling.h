@@ -200,9 +200,8 @@ inline void project_onto_surface(const Matrix_n3& samples, const Matrix_n3& norm
   near.clear();
   const Position_tree::Point query(x.x(), x.y(), x.z());
   double nearest2 = 0;
-  const auto facing = [&](int j) { return normals.row(j).dot(normal.transpose()) > 0; };
   nearest.nearest(point, x, k, [&](int j, double d2) {
-    if(!facing(j)) return;
+    if(faces_away(normals, j, normal)) return;
     if(near.empty()) nearest2 = d2;
     near.emplace_back(d2, j);
   });
@@ -216,7 +215,7 @@ inline void project_onto_surface(const Matrix_n3& samples, const Matrix_n3& norm
     const std::size_t per_direction = (k + 7) / 8, candidates = k + std::size_t(std::ceil(3 * pi * nearest2 / (h * h)));
     std::size_t taken[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     const auto take = [&](int j, double d2) {
-      if(!facing(j)) return;
+      if(faces_away(normals, j, normal)) return;
       const Eigen::Vector3d d = samples.row(j).transpose() - x;
       const double turn = std::atan2(d.dot(v), d.dot(u)) / (2 * pi) + 0.5; // in [0, 1]
       std::size_t& in_direction = taken[std::min(7, int(turn * 8))];
