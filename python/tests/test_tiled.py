@@ -239,7 +239,7 @@ def test_enhancement_matches_the_one_process_call(scan, client, tmp_path):
     # within a fraction of the displacement that falls with the margin (the base surface is a global solve). On
     # these 100,000 points the default of 80 radii covers the sphere: margins of 10 and 30, tiles reading part.
     moved = cgal_ext.enhance_geometric_details(scan.small_points, scan.small_normals, s=2)
-    tiled.run("enhance", scan.small, tmp_path / "whole.ply", client=client, tiles=8, s=2, margin=1e4)
+    tiled.run("enhance", scan.small, tmp_path / "whole.ply", client=client, tiles=2, s=2, margin=1e4)
     assert np.abs(columns(read_output(tmp_path / "whole.ply"), "xyz") - moved).max() <= 1e-12
     rms = np.sqrt((np.linalg.norm(moved - scan.small_points, axis=1) ** 2).mean())
     errors = {}
