@@ -233,7 +233,7 @@ def browser_costs(folder, name, frame_seconds, budgets, renders=5):
 
 
 def main():
-    reexecute_tuned([sys.executable] + sys.argv)
+    reexecute_tuned([sys.executable] + sys.argv, keep_memory=True)  # as the studio command runs
     args = harness_arguments()
     server_sizes, browser_sizes = ([100000], [100000]) if args.quick else ([1000000, 4000000],
                                                                            [100000, 1000000, 4000000, 10000000])

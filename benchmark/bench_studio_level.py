@@ -87,7 +87,7 @@ def save_costs(folder, name, options):
 
 
 def main():
-    reexecute_tuned([sys.executable] + sys.argv)
+    reexecute_tuned([sys.executable] + sys.argv, keep_memory=True)  # as the studio command runs
     args = harness_arguments()
     n, above, level = (600_000, 400_000, 60_000) if args.quick else (100_000_000, 20_000_000, 1_000_000)
     options = ["--level-of-detail-above", str(above), "--level-points", str(level)]

@@ -409,3 +409,28 @@ def test_a_scan_over_the_limit_opens_as_its_level_of_detail_and_saves_through_th
         session.save("again")
     assert sorted(p.name for p in tmp_path.iterdir()) == before
     assert level_of_detail.cache_folder(tmp_path / "sphere.ply").is_dir()
+
+
+def test_the_command_restarts_itself_on_huge_pages_keeping_its_memory(monkeypatch):
+    """`python3 -m cgal_ext.studio` restarts itself with glibc's malloc on huge pages and keeping what it frees (the
+    malloc tunables other than hugetlb do not show in /proc/PID/environ: glibc takes them out)."""
+    import os
+    import sys
+    from cgal_ext._process import KEPT_MEMORY
+    from cgal_ext.studio import __main__ as command
+
+    class Restarted(Exception):
+        pass
+
+    def execve(path, argv, environ):
+        raise Restarted(path, argv, environ)
+
+    monkeypatch.delenv("GLIBC_TUNABLES", raising=False)
+    monkeypatch.delenv("POINT_DETAIL_HUGE_PAGES", raising=False)
+    monkeypatch.setattr(os, "execve", execve)
+    monkeypatch.setattr(sys, "argv", ["studio", "scan.ply", "--port", "0"])
+    with pytest.raises(Restarted) as restarted:
+        command.main()
+    path, argv, environ = restarted.value.args
+    assert path == sys.executable and argv == [sys.executable, "-m", "cgal_ext.studio", "scan.ply", "--port", "0"]
+    assert environ["GLIBC_TUNABLES"].split(":") == ["glibc.malloc.hugetlb=1", *KEPT_MEMORY]

@@ -124,6 +124,33 @@ def test_the_tuned_environment_adds_huge_pages_once():
     assert tuned_environment({"POINT_DETAIL_HUGE_PAGES": "0"}) == {}
 
 
+def test_a_session_keeps_its_memory_and_its_workers_do_not(monkeypatch):
+    """The studio's process keeps what it frees for its next call, whichever thread allocates it; the Dask workers
+    it starts run as point-detail does."""
+    from cgal_ext._process import KEPT_MEMORY, tuned_environment
+    session = tuned_environment({}, keep_memory=True)["GLIBC_TUNABLES"]
+    assert session == ":".join(("glibc.malloc.hugetlb=1",) + KEPT_MEMORY)
+    assert tuned_environment({"GLIBC_TUNABLES": session}, keep_memory=True) == {}
+    chosen = "glibc.malloc.arena_max=4:glibc.malloc.hugetlb=0"  # the user's choices stand
+    assert tuned_environment({"GLIBC_TUNABLES": chosen}, keep_memory=True)["GLIBC_TUNABLES"] == \
+        ":".join((chosen,) + KEPT_MEMORY[1:])
+    monkeypatch.setenv("GLIBC_TUNABLES", session)
+    assert tiled.worker_environment()["GLIBC_TUNABLES"] == "glibc.malloc.hugetlb=1"
+    # 256 MiB freed by one thread, then asked for by another: only the kept memory serves it without new pages.
+    code = ("import resource, threading, numpy as np\n"
+            "def touch(): a = np.ones(1 << 25); del a\n"
+            "touch(); thread = threading.Thread(target=touch)\n"
+            "before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt; thread.start(); thread.join()\n"
+            "print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)")
+    faults = {}
+    for keep in (False, True):
+        environ = {k: v for k, v in os.environ.items() if k != "GLIBC_TUNABLES"}
+        environ.update(tuned_environment(environ, keep_memory=keep))
+        faults[keep] = int(subprocess.run([sys.executable, "-c", code], env=environ, check=True,
+                                          capture_output=True, text=True).stdout)
+    assert faults[False] >= 100 and faults[True] < 20, faults
+
+
 @pytest.fixture(scope="module")
 def scan(tmp_path_factory):
     folder = tmp_path_factory.mktemp("tiled")

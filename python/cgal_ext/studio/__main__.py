@@ -12,8 +12,8 @@ from .session import StudioError
 
 
 def main(argv=None):
-    if argv is None:  # the command: its large arrays on huge pages, as point-detail's
-        reexecute_tuned([sys.executable, "-m", "cgal_ext.studio", *sys.argv[1:]])
+    if argv is None:  # the command: its large arrays on huge pages, as point-detail's, and its freed memory kept
+        reexecute_tuned([sys.executable, "-m", "cgal_ext.studio", *sys.argv[1:]], keep_memory=True)
     parser = argparse.ArgumentParser(prog="python3 -m cgal_ext.studio",
                                      description="Paint a region and handles on a scan, drag, keep its details, save. "
                                                  "Files are read and written only inside the scan's folder.")

@@ -18,7 +18,7 @@ import shutil
 import uuid
 from pathlib import Path
 
-from .._process import tuned_environment
+from .._process import KEPT_MEMORY, tuned_environment
 from . import edit, fill, ops, simplify
 from .runner import Passes, Run, timed
 from .store import TiledError, checked_output, open_source
@@ -159,12 +159,17 @@ def worker_environment():
     MALLOC_TRIM_THRESHOLD_ it adds, and with glibc's malloc on huge pages, as point-detail runs. A trim threshold
     turns off glibc's adaptive mmap threshold: each of a tile's arrays would then be a fresh mapping, faulted in
     page by page (doc/scaling.md, "Worker processes"). The workers inherit the rest of this process's environment,
-    a trim threshold set in it included. Asked once distributed is imported (its defaults join Dask's
-    configuration then)."""
+    a trim threshold set in it included, but not the malloc that keeps what it frees of a studio's process
+    (KEPT_MEMORY): a worker's memory is Dask's to count and give back. Asked once distributed is imported (its
+    defaults join Dask's configuration then)."""
     import dask
     environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
     environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-    environ.update(tuned_environment())
+    own = os.environ.get("GLIBC_TUNABLES", "")
+    tunables = ":".join(t for t in own.split(":") if t and t not in KEPT_MEMORY)
+    if tunables != own:
+        environ["GLIBC_TUNABLES"] = tunables
+    environ.update(tuned_environment({**os.environ, **environ}))
     return environ
 
 
