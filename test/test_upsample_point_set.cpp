@@ -344,7 +344,7 @@ TEST(UpsamplePointSet, AThinPlateFillsLikeAnOpenSheet)
 TEST(UpsamplePointSet, AHoleInOneSideOfAThinPlateIsFilled)
 {
   // The jittered grid with a hole of radius 2.6 as the lower side of a plate 3 spacings thick, the upper side
-  // whole, outward normals, local spacings: the hole fills about as on the grid alone (19 points), on its plane.
+  // whole, outward normals, local spacings: the hole fills about as on the grid alone, on its plane.
   // Counted as neighbours, the upper side's samples filled the hole's quarters, and it got none.
   Inserted alone, in_plate;
   const Oriented_points grid = plane_with_hole(2.6);

@@ -136,7 +136,7 @@ def test_a_session_keeps_its_memory_and_its_workers_do_not(monkeypatch):
         ":".join((chosen,) + KEPT_MEMORY[1:])
     monkeypatch.setenv("GLIBC_TUNABLES", session)
     assert tiled.worker_environment()["GLIBC_TUNABLES"] == "glibc.malloc.hugetlb=1"
-    # 256 MiB freed by one thread, then asked for by another: only the kept memory serves it without new pages.
+    # A large array freed by one thread, then asked for by another: only the kept memory serves it without new pages.
     code = ("import resource, threading, numpy as np\n"
             "def touch(): a = np.ones(1 << 25); del a\n"
             "touch(); thread = threading.Thread(target=touch)\n"
